@@ -1,0 +1,34 @@
+# fsi-lab: the two set-up commands are `make demo` and `make test`.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+export QT_QPA_PLATFORM ?= offscreen
+
+.PHONY: demo test bench venv clean
+
+# A venv with the package (editable) and the given extras; rebuilt when pyproject.toml changes.
+$(VENV)/.installed-%: pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[$*]'
+	touch $@
+
+# h5dump reads run files in the crash-safety tests; install it where we may.
+h5dump-tool:
+	@command -v h5dump >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    (apt-get update -qq && apt-get install -y -qq hdf5-tools) >/dev/null; \
+	  else echo "h5dump is missing: install your distribution's hdf5-tools package" >&2; exit 1; fi; }
+
+demo: $(VENV)/.installed-gui
+	$(BIN)/fsi-lab run profiles/wet-beam-sim.toml --out runs
+
+test: $(VENV)/.installed-dev,gui h5dump-tool
+	$(BIN)/python -m pytest
+
+bench: $(VENV)/.installed-dev,gui
+	$(BIN)/python -m pip install --quiet pysdkit  # the reference HVD, benchmark environment only
+	$(BIN)/python -m bench
+
+clean:
+	rm -rf $(VENV) runs build *.egg-info

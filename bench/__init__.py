@@ -1,0 +1,1 @@
+"""Benchmarks run by `make bench` (not unit tests: nothing here asserts on timings)."""

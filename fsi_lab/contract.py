@@ -1,0 +1,273 @@
+"""What a plugin provides: descriptors for the three plugin kinds and the instrument roles.
+
+A plugin module implements one or more hooks of :mod:`fsi_lab.hookspecs`, each returning a list
+of the descriptors below. The core checks every descriptor (see :func:`check_descriptor`) and
+skips, with the reason, those that break the contract.
+"""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from fsi_lab.params import Param
+
+KINDS = ("instrument", "excitation", "analysis")
+ROLES = ("source", "amplifier", "vibrometer", "acquisition")
+
+
+# --------------------------------------------------------------------------- instruments
+class Instrument(abc.ABC):
+    """Common interface of every instrument role.
+
+    Instruments are context managers: leaving the ``with`` block puts them in their safe state
+    and closes the connection, whatever happened inside.
+    """
+
+    @abc.abstractmethod
+    def identify(self) -> str:
+        """Identity string as the instrument reports it (``*IDN?`` or equivalent)."""
+
+    @abc.abstractmethod
+    def safe_state(self) -> None:
+        """Put the instrument where it cannot move the shaker: output off, source at 0 V."""
+
+    @abc.abstractmethod
+    def read_state(self) -> dict[str, Any]:
+        """State read back from the instrument (e.g. ``{"output_enabled": False}``)."""
+
+    def settings(self) -> dict[str, Any]:
+        """Snapshot of the settings in force, stored in the run file."""
+        return {}
+
+    @abc.abstractmethod
+    def close(self) -> None:
+        """Release the connection. Must not raise if already closed."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        try:
+            self.safe_state()
+        finally:
+            self.close()
+
+
+class SignalSource(Instrument):
+    """Arbitrary waveform generator that produces the drive voltage."""
+
+    @abc.abstractmethod
+    def load_waveform(self, samples: np.ndarray, sample_rate: float) -> None:
+        """Upload ``samples`` (V) played at ``sample_rate`` (Hz), once per trigger."""
+
+    @abc.abstractmethod
+    def start(self) -> None:
+        """Enable the output and play the loaded waveform once."""
+
+
+class Amplifier(Instrument):
+    """Shaker power amplifier with interlocks."""
+
+    @abc.abstractmethod
+    def set_gain(self, gain: float) -> None:
+        """Set the voltage gain (V/V)."""
+
+    @abc.abstractmethod
+    def enable_output(self, enabled: bool) -> None:
+        """Switch the output stage on or off."""
+
+    @abc.abstractmethod
+    def interlocks(self) -> dict[str, bool]:
+        """Active interlocks by name (over_travel, supply_fault, ...); all False when clear."""
+
+
+class Vibrometer(Instrument):
+    """Laser vibrometer whose analogue output is digitised by the acquisition."""
+
+    @abc.abstractmethod
+    def sensitivity(self) -> float:
+        """Output sensitivity of the velocity channel in V per (m/s)."""
+
+    def delay(self) -> float:
+        """Signal delay of the sensor, s; the run shifts the channel's t0 by it."""
+        return 0.0
+
+
+class Acquisition(Instrument):
+    """Digitiser that streams calibrated-by-the-core voltage blocks."""
+
+    @abc.abstractmethod
+    def configure(self, inputs: Mapping[str, int], sample_rate: float, duration: float) -> float:
+        """Prepare to record the named ``inputs`` (name -> input number) for ``duration`` s.
+
+        Returns the sample rate actually used, Hz.
+        """
+
+    @abc.abstractmethod
+    def arm(self) -> None:
+        """Start recording (the first block starts at t = 0 of the run)."""
+
+    @abc.abstractmethod
+    def read_block(self, timeout: float) -> dict[str, np.ndarray] | None:
+        """Next block of samples in volts per input name; None when the record is complete.
+
+        Raises InstrumentError if no block arrives within ``timeout`` seconds.
+        """
+
+
+ROLE_INTERFACES: dict[str, type[Instrument]] = {
+    "source": SignalSource,
+    "amplifier": Amplifier,
+    "vibrometer": Vibrometer,
+    "acquisition": Acquisition,
+}
+
+
+@dataclass(frozen=True)
+class InstrumentPlugin:
+    """An instrument driver.
+
+    ``open(address, settings, bench)`` returns an object implementing the role interface;
+    ``settings`` has been validated against ``params``. ``bench`` is a dict shared by all
+    instruments of one run (simulated instruments use it to find each other), empty otherwise.
+    """
+
+    name: str
+    role: str
+    params: tuple[Param, ...]
+    open: Callable[[str, dict[str, Any], dict[str, Any]], Instrument]
+    help: str = ""
+
+
+# --------------------------------------------------------------------------- excitations
+@dataclass(frozen=True)
+class ExcitationPlugin:
+    """A drive waveform.
+
+    ``generate(params, sample_rate)`` returns the samples in volts at the source, starting at
+    t = 0. Its peak absolute value is the peak drive that the safety check compares with the
+    profile's limit.
+    """
+
+    name: str
+    params: tuple[Param, ...]
+    generate: Callable[[dict[str, Any], float], np.ndarray]
+    help: str = ""
+
+
+# --------------------------------------------------------------------------- analyses
+@dataclass(frozen=True)
+class ChannelData:
+    """One recorded channel, calibrated (``data`` in ``unit``)."""
+
+    name: str
+    data: np.ndarray
+    sample_rate: float
+    quantity: str
+    unit: str
+    t0: float = 0.0
+
+
+@dataclass
+class AnalysisResult:
+    """What an analysis returns for one channel.
+
+    Attributes
+    ----------
+    datasets
+        Arrays stored under ``/analysis/<channel>/<plugin>/<name>``.
+    units
+        Unit of each dataset, by name (stored as the dataset's ``units`` attribute).
+    attrs
+        Scalar results stored as attributes of the plugin's group.
+    summary
+        JSON-ready dictionary merged into the channel's summary (``fsi-lab analyze --json``);
+        a ``"components"`` list is merged with other plugins' entries by ``"index"``.
+    values
+        Any Python object handed to later analyses of the chain (``context.results``).
+    """
+
+    datasets: dict[str, np.ndarray] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+    attrs: dict[str, Any] = field(default_factory=dict)
+    summary: dict[str, Any] = field(default_factory=dict)
+    values: Any = None
+
+
+@dataclass
+class AnalysisContext:
+    """Everything an analysis may use besides its own parameters.
+
+    Attributes
+    ----------
+    channel
+        The channel being analysed.
+    channels
+        Every channel of the run by name (for transfer functions and the modal model).
+    results
+        Results of the analyses run earlier in the chain on this channel, by plugin name.
+    specimen
+        The beam and fluid (:class:`fsi_lab.specimen.Specimen`) when the run has one, else None.
+    mass_per_length
+        mu + M in kg/m given on the command line for data without a specimen, else None.
+    reference
+        Name of the reference (base acceleration) channel, or None.
+    progress
+        Callable taking a fraction 0..1 for long analyses.
+    """
+
+    channel: ChannelData
+    channels: Mapping[str, ChannelData]
+    results: Mapping[str, AnalysisResult]
+    specimen: Any = None
+    mass_per_length: float | None = None
+    reference: str | None = None
+    progress: Callable[[float], None] = lambda fraction: None
+
+
+@dataclass(frozen=True)
+class AnalysisPlugin:
+    """An analysis step of the chain.
+
+    ``run(context, params)`` returns an :class:`AnalysisResult` or raises
+    :class:`fsi_lab.errors.AnalysisError` with a message naming the condition that prevents it.
+    ``requires`` names analyses that must have run earlier on the same channel.
+    """
+
+    name: str
+    params: tuple[Param, ...]
+    run: Callable[[AnalysisContext, dict[str, Any]], AnalysisResult]
+    help: str = ""
+    requires: tuple[str, ...] = ()
+
+
+DESCRIPTORS = {
+    "instrument": InstrumentPlugin,
+    "excitation": ExcitationPlugin,
+    "analysis": AnalysisPlugin,
+}
+
+
+def check_descriptor(kind: str, descriptor: Any) -> None:
+    """Raise TypeError or ValueError if ``descriptor`` breaks the contract of ``kind``."""
+    expected = DESCRIPTORS[kind]
+    if not isinstance(descriptor, expected):
+        raise TypeError(f"returned {type(descriptor).__name__}, expected {expected.__name__}")
+    if not isinstance(descriptor.name, str) or not descriptor.name:
+        raise ValueError("has no name")
+    if not all(isinstance(p, Param) for p in descriptor.params):
+        raise TypeError(f"{descriptor.name}: params must be a tuple of fsi_lab.params.Param")
+    names = [p.name for p in descriptor.params]
+    if len(set(names)) != len(names):
+        raise ValueError(f"{descriptor.name}: a parameter is declared twice")
+    for attr in ("open", "generate", "run"):
+        if hasattr(descriptor, attr) and not callable(getattr(descriptor, attr)):
+            raise TypeError(f"{descriptor.name}: {attr} is not callable")
+    if kind == "instrument" and descriptor.role not in ROLES:
+        raise ValueError(
+            f"{descriptor.name}: role {descriptor.role!r} is not one of {', '.join(ROLES)}"
+        )

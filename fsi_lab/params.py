@@ -1,0 +1,234 @@
+"""Typed parameter schemas.
+
+Every plugin declares its parameters once, as a tuple of :class:`Param`. That one declaration
+drives validation of profile values, parsing of ``--set key=value`` strings, the generated
+documentation and the GUI forms.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+from fsi_lab.errors import ParameterError
+
+_TYPES: dict[str, type | tuple[type, ...]] = {
+    "float": (int, float),
+    "int": int,
+    "bool": bool,
+    "str": str,
+    "floats": (list, tuple),
+}
+
+
+class _Required:
+    """Marker for a parameter that has no default and must be given."""
+
+    def __repr__(self) -> str:
+        return "REQUIRED"
+
+
+REQUIRED: Any = _Required()
+
+
+@dataclass(frozen=True)
+class Param:
+    """One declared parameter of a plugin.
+
+    Parameters
+    ----------
+    name
+        Key used in profiles and with ``--set`` (for example ``components``).
+    type
+        One of ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"floats"`` (a list of numbers,
+        bounds apply to each element).
+    unit
+        SI unit of the value (``"V"``, ``"Hz"``, ``"s"``, ``"m"``), empty for plain numbers.
+    default
+        Value used when the profile does not give one; :data:`REQUIRED` if it must be given,
+        ``None`` if the parameter is optional and "unset" has a meaning (for example
+        "choose automatically").
+    minimum, maximum
+        Inclusive bounds for numbers.
+    choices
+        Allowed values for strings (or numbers).
+    help
+        One sentence shown in docs, ``fsi-lab plugins`` and as GUI tooltip.
+    """
+
+    name: str
+    type: str
+    unit: str = ""
+    default: Any = REQUIRED
+    minimum: float | None = None
+    maximum: float | None = None
+    choices: tuple[Any, ...] | None = None
+    help: str = ""
+    exclusive_minimum: bool = field(default=False)
+
+    def __post_init__(self) -> None:
+        if self.type not in _TYPES:
+            raise ParameterError(
+                f"parameter {self.name!r} has type {self.type!r}; allowed types are "
+                f"{', '.join(_TYPES)}"
+            )
+
+    @property
+    def required(self) -> bool:
+        return self.default is REQUIRED
+
+    def describe(self) -> str:
+        """What values are accepted, in words (used in error messages and docs)."""
+        unit = f" {self.unit}" if self.unit else ""
+        if self.choices is not None:
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        text = {"float": "a number", "int": "an integer", "bool": "true or false",
+                "str": "a string", "floats": "a list of numbers each"}[self.type]
+        lo = self.minimum
+        hi = self.maximum
+        low_word = ">" if self.exclusive_minimum else ">="
+        if lo is not None and hi is not None:
+            text += f" {low_word} {lo:g}{unit} and <= {hi:g}{unit}"
+        elif lo is not None:
+            text += f" {low_word} {lo:g}{unit}"
+        elif hi is not None:
+            text += f" <= {hi:g}{unit}"
+        elif unit:
+            text += f" in{unit}"
+        return text
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-friendly description of the parameter."""
+        return {
+            "name": self.name,
+            "type": self.type,
+            "unit": self.unit,
+            "default": None if self.required else self.default,
+            "required": self.required,
+            "minimum": self.minimum,
+            "maximum": self.maximum,
+            "choices": list(self.choices) if self.choices is not None else None,
+            "help": self.help,
+        }
+
+    def check(self, value: Any, where: str) -> Any:
+        """Return ``value`` converted to this parameter's type, or raise ParameterError.
+
+        ``where`` is the key path used in the message (``excitation.amplitude``).
+        """
+        if value is None and self.default is None:
+            return None
+        expected = _TYPES[self.type]
+        # bool is an int subclass: refuse True where a number is expected, and vice versa.
+        if isinstance(value, bool) != (self.type == "bool") or not isinstance(value, expected):
+            raise ParameterError(
+                f"{where}: got {value!r} ({type(value).__name__}); expected {self.describe()}"
+            )
+        if self.type == "floats":
+            items = []
+            for i, item in enumerate(value):
+                if isinstance(item, bool) or not isinstance(item, (int, float)):
+                    raise ParameterError(
+                        f"{where}[{i}]: got {item!r}; expected {self.describe()}"
+                    )
+                items.append(self._check_number(float(item), f"{where}[{i}]"))
+            return items
+        if self.choices is not None and value not in self.choices:
+            raise ParameterError(f"{where}: got {value!r}; expected {self.describe()}")
+        if self.type == "float":
+            value = float(value)
+        if self.type in ("float", "int"):
+            value = self._check_number(value, where)
+        return value
+
+    def _check_number(self, value: float, where: str) -> float:
+        if not math.isfinite(value):
+            raise ParameterError(f"{where}: got {value!r}; expected a finite number")
+        too_low = self.minimum is not None and (
+            value <= self.minimum if self.exclusive_minimum else value < self.minimum
+        )
+        too_high = self.maximum is not None and value > self.maximum
+        if too_low or too_high:
+            raise ParameterError(
+                f"{where}: {value!r} is out of bounds; expected {self.describe()}"
+            )
+        return value
+
+    def parse(self, text: str, where: str) -> Any:
+        """Parse a command-line string (``--set``) into a checked value."""
+        text = text.strip()
+        try:
+            if self.type == "bool":
+                lowered = text.lower()
+                if lowered not in ("true", "false", "1", "0", "yes", "no", "on", "off"):
+                    raise ValueError
+                value: Any = lowered in ("true", "1", "yes", "on")
+            elif self.type == "int":
+                value = int(text)
+            elif self.type == "float":
+                value = float(text)
+            elif self.type == "floats":
+                value = [float(item) for item in text.strip("[]").split(",") if item.strip()]
+            else:
+                value = text
+        except ValueError:
+            raise ParameterError(
+                f"{where}: cannot read {text!r}; expected {self.describe()}"
+            ) from None
+        if self.default is None and text.lower() in ("none", "auto", ""):
+            return None
+        return self.check(value, where)
+
+
+Schema = Sequence[Param]
+
+
+def validate(schema: Schema, values: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """Check ``values`` against ``schema`` and fill in defaults.
+
+    Parameters
+    ----------
+    schema
+        The declared parameters.
+    values
+        Values given by a profile or a caller.
+    where
+        Key path prefix for error messages, e.g. ``"analysis.hvd"``.
+
+    Returns
+    -------
+    dict
+        One entry per declared parameter, converted and bounds-checked.
+
+    Raises
+    ------
+    ParameterError
+        Unknown key, missing required key, wrong type or out-of-bounds value; the message
+        names the full key path and what is accepted.
+    """
+    by_name = {p.name: p for p in schema}
+    unknown = sorted(set(values) - set(by_name))
+    if unknown:
+        allowed = ", ".join(sorted(by_name)) or "no parameters"
+        raise ParameterError(
+            f"{where}.{unknown[0]}: unknown key; allowed keys are {allowed}"
+        )
+    result: dict[str, Any] = {}
+    for param in schema:
+        key = f"{where}.{param.name}"
+        if param.name in values:
+            result[param.name] = param.check(values[param.name], key)
+        elif param.required:
+            raise ParameterError(f"{key}: missing; expected {param.describe()}")
+        else:
+            result[param.name] = param.default
+    return result
+
+
+def find(schema: Schema, name: str) -> Param | None:
+    """Return the parameter called ``name``, or None."""
+    for param in schema:
+        if param.name == name:
+            return param
+    return None

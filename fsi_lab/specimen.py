@@ -1,0 +1,58 @@
+"""The specimen section of a profile: beam geometry, material and the surrounding fluid.
+
+The defaults are the paper's steel cantilever (SCIENCE.md): E = 240 GPa, rho = 7200 kg/m^3,
+L = 80 mm, H = 12.75 mm, thickness 0.08 mm, velocity measured at x = 80 mm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+from fsi_lab.params import Param, validate
+
+#: Density of the fluids a profile may name, kg/m^3.
+FLUID_DENSITY = {"air": 1.26, "water": 997.0}
+
+SPECIMEN_PARAMS: tuple[Param, ...] = (
+    Param("length", "float", "m", 0.08, minimum=0.0, exclusive_minimum=True,
+          help="Free length of the cantilever from the clamp to the tip."),
+    Param("width", "float", "m", 12.75e-3, minimum=0.0, exclusive_minimum=True,
+          help="Beam width H (the dimension facing the flow)."),
+    Param("thickness", "float", "m", 0.08e-3, minimum=0.0, exclusive_minimum=True,
+          help="Beam thickness in the direction of vibration."),
+    Param("youngs_modulus", "float", "Pa", 240e9, minimum=0.0, exclusive_minimum=True,
+          help="Young's modulus E of the beam material."),
+    Param("density", "float", "kg/m^3", 7200.0, minimum=0.0, exclusive_minimum=True,
+          help="Density of the beam material."),
+    Param("fluid", "str", "", "water", choices=tuple(FLUID_DENSITY),
+          help="Fluid around the beam: 'air' (dry) or 'water' (wet)."),
+    Param("drag_coefficient", "float", "", 1.8, minimum=0.0,
+          help="Drag coefficient C_d for the theoretical quadratic damping C_f = rho C_d H / 2."),
+    Param("measurement_point", "float", "m", 0.08, minimum=0.0,
+          help="Distance from the clamp to the point where the vibrometer measures."),
+)
+
+
+@dataclass(frozen=True)
+class Specimen:
+    """Validated beam and fluid description (SI units throughout)."""
+
+    length: float
+    width: float
+    thickness: float
+    youngs_modulus: float
+    density: float
+    fluid: str
+    drag_coefficient: float
+    measurement_point: float
+
+    @classmethod
+    def from_mapping(cls, values: Mapping[str, Any], where: str = "specimen") -> "Specimen":
+        """Validate a profile's ``[specimen]`` table (raises ParameterError)."""
+        return cls(**validate(SPECIMEN_PARAMS, values, where))
+
+    @property
+    def fluid_density(self) -> float:
+        """Density of the surrounding fluid, kg/m^3."""
+        return FLUID_DENSITY[self.fluid]

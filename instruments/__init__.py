@@ -1,0 +1,1 @@
+"""Instrument plugins shipped with fsi-lab (installed as ``fsi_lab.instruments``)."""

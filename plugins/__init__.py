@@ -1,0 +1,1 @@
+"""Excitation and analysis plugins shipped with fsi-lab (installed as ``fsi_lab.plugins``)."""

@@ -1,0 +1,1 @@
+"""Analysis plugins: the identification chain of the paper, one module per plugin."""

@@ -1,0 +1,1 @@
+"""Excitation plugins: drive waveforms in volts at the signal source."""
