@@ -19,6 +19,7 @@ _TYPES: dict[str, type | tuple[type, ...]] = {
     "bool": bool,
     "str": str,
     "floats": (list, tuple),
+    "strs": (list, tuple),
 }
 
 
@@ -42,7 +43,7 @@ class Param:
         Key used in profiles and with ``--set`` (for example ``components``).
     type
         One of ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"floats"`` (a list of numbers,
-        bounds apply to each element).
+        bounds apply to each element) or ``"strs"`` (a list of strings, choices apply to each).
     unit
         SI unit of the value (``"V"``, ``"Hz"``, ``"s"``, ``"m"``), empty for plain numbers.
     default
@@ -82,9 +83,11 @@ class Param:
         """What values are accepted, in words (used in error messages and docs)."""
         unit = f" {self.unit}" if self.unit else ""
         if self.choices is not None:
-            return "one of " + ", ".join(repr(c) for c in self.choices)
+            prefix = "a list of " if self.type == "strs" else ""
+            return prefix + "one of " + ", ".join(repr(c) for c in self.choices)
         text = {"float": "a number", "int": "an integer", "bool": "true or false",
-                "str": "a string", "floats": "a list of numbers each"}[self.type]
+                "str": "a string", "floats": "a list of numbers each",
+                "strs": "a list of strings"}[self.type]
         lo = self.minimum
         hi = self.maximum
         low_word = ">" if self.exclusive_minimum else ">="
@@ -134,6 +137,15 @@ class Param:
                     )
                 items.append(self._check_number(float(item), f"{where}[{i}]"))
             return items
+        if self.type == "strs":
+            for i, item in enumerate(value):
+                if not isinstance(item, str) or (
+                    self.choices is not None and item not in self.choices
+                ):
+                    raise ParameterError(
+                        f"{where}[{i}]: got {item!r}; expected {self.describe()}"
+                    )
+            return list(value)
         if self.choices is not None and value not in self.choices:
             raise ParameterError(f"{where}: got {value!r}; expected {self.describe()}")
         if self.type == "float":
@@ -170,6 +182,8 @@ class Param:
                 value = float(text)
             elif self.type == "floats":
                 value = [float(item) for item in text.strip("[]").split(",") if item.strip()]
+            elif self.type == "strs":
+                value = [item.strip() for item in text.strip("[]").split(",") if item.strip()]
             else:
                 value = text
         except ValueError:

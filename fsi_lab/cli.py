@@ -1,0 +1,346 @@
+"""The ``fsi-lab`` command: the headless runner and its companions.
+
+With ``--json`` exactly one JSON object goes to stdout (schemas: docs/json-output.md); logs and
+progress bars go to stderr. Errors print one message naming the file, key or channel concerned
+and exit non-zero (2 for bad input, 1 for a failed run, 130 for an aborted one).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+from fsi_lab.errors import FsiLabError, InputFileError
+from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
+
+EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "aborted": 130}
+LEVELS = {"DEBUG": 10, "INFO": 20, "WARNING": 30, "ERROR": 40}
+
+
+# --------------------------------------------------------------------------- rendering
+class Console:
+    """Renders events on stderr: log lines, and a progress bar on a terminal."""
+
+    def __init__(self, quiet: bool, verbose: bool) -> None:
+        self.level = LEVELS["DEBUG"] if verbose else LEVELS["WARNING"] if quiet else LEVELS["INFO"]
+        self.bar = None
+        if not quiet and sys.stderr.isatty():
+            from rich.console import Console as RichConsole
+            from rich.progress import Progress as RichProgress
+
+            self.bar = RichProgress(console=RichConsole(stderr=True), transient=True)
+            self.bar.start()
+            self.tasks: dict[str, Any] = {}
+
+    def __call__(self, event) -> None:
+        if isinstance(event, LogRecord):
+            if LEVELS.get(event.level, 20) >= self.level:
+                self._print(f"[{event.level.lower()}] {event.message}")
+        elif isinstance(event, StateChanged):
+            if self.level <= LEVELS["INFO"]:
+                self._print(f"[state] {event.state}" + (f": {event.detail}" if event.detail else ""))
+        elif isinstance(event, Progress) and self.bar is not None:
+            task = self.tasks.get(event.stage)
+            if task is None:
+                task = self.tasks[event.stage] = self.bar.add_task(event.stage, total=1.0)
+            self.bar.update(task, completed=event.fraction, description=event.message or event.stage)
+        elif isinstance(event, DataBlock):
+            pass  # the headless runner has no live plot
+
+    def _print(self, text: str) -> None:
+        if self.bar is not None:
+            self.bar.console.print(text, markup=False, highlight=False)
+        else:
+            print(text, file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
+def _emit_json(obj: dict[str, Any]) -> None:
+    print(json.dumps(obj, indent=2, default=_json_default, allow_nan=False))
+
+
+def _json_default(value):
+    try:
+        import numpy as np
+
+        if isinstance(value, np.ndarray):
+            return value.tolist()
+        if isinstance(value, np.generic):
+            return value.item()
+    except ImportError:  # pragma: no cover
+        pass
+    return str(value)
+
+
+def _clean(obj):
+    """Replace NaN and infinities (not valid JSON) by None."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    return obj
+
+
+def _registry():
+    from fsi_lab.registry import load_registry
+
+    registry = load_registry()
+    for record in registry.records:
+        if record.status in ("failed", "invalid"):
+            print(f"[warning] plugin {record.name} ({record.distribution}) skipped: "
+                  f"{record.error}", file=sys.stderr)
+    return registry
+
+
+# --------------------------------------------------------------------------- commands
+def cmd_run(args) -> int:
+    from fsi_lab.profile import load_profile
+    from fsi_lab.runner import Runner
+
+    registry = _registry()
+    profile = load_profile(args.profile, registry, args.set)
+    bus = EventBus()
+    console = Console(args.quiet or args.json, args.verbose)
+    bus.subscribe(console)
+    try:
+        runner = Runner(profile, registry, args.out, bus=bus, analyze=not args.no_analysis)
+        outcome = runner.run()
+    finally:
+        console.close()
+    if args.json:
+        _emit_json(_clean(outcome.as_json()))
+    else:
+        print(f"run file:    {outcome.path}")
+        print(f"exit status: {outcome.exit_status}" + (f" ({outcome.error})" if outcome.error else ""))
+        if outcome.summary:
+            print(format_summary(outcome.summary))
+    return EXIT_FOR_STATUS[outcome.exit_status]
+
+
+def cmd_analyze(args) -> int:
+    from fsi_lab.chain import DEFAULT_CHAIN, analyse_and_store
+    from fsi_lab.profile import parse_profile
+    from fsi_lab.runfile import read_run
+
+    registry = _registry()
+    run = read_run(args.run)
+    text = run.profile_text
+    if not text.strip():
+        chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
+        text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
+    profile = parse_profile(text, f"{args.run}:/profile", registry, args.set,
+                            sections=("analysis", "specimen"))
+    if args.mass_per_length is not None and not (args.mass_per_length > 0):
+        raise InputFileError(f"--mass-per-length {args.mass_per_length}: expected kg/m > 0")
+    bus = EventBus()
+    console = Console(args.quiet or args.json, args.verbose)
+    bus.subscribe(console)
+    try:
+        summary = analyse_and_store(Path(args.run), run.channels, profile.analysis,
+                                    profile.analysis_params, registry, profile.specimen,
+                                    args.mass_per_length, bus)
+    finally:
+        console.close()
+    if args.json:
+        _emit_json(_clean(summary))
+    else:
+        print(format_summary(summary))
+    return 0
+
+
+def cmd_import(args) -> int:
+    from fsi_lab.csv_import import import_csv
+
+    out = import_csv(args.csv, args.output, args.rate)
+    if args.json:
+        _emit_json({"run": str(out)})
+    else:
+        print(f"wrote {out}")
+    return 0
+
+
+def cmd_show(args) -> int:
+    from fsi_lab.runfile import read_analysis_summary, read_run
+
+    run = read_run(args.run, load_data=False)
+    summary = read_analysis_summary(args.run)
+    attrs = {k: v for k, v in run.attrs.items() if k not in ("profile", "traceback")}
+    with_lengths = {}
+    import h5py
+
+    with h5py.File(args.run, "r") as handle:
+        for name in run.channels:
+            with_lengths[name] = {**run.channel_attrs[name],
+                                  "samples": int(handle["channels"][name].shape[0])}
+    info = {"run": str(args.run), "attrs": attrs, "instruments": run.instruments,
+            "channels": with_lengths,
+            "excitation": {k: v for k, v in (run.excitation or {}).items() if k != "waveform"}
+            or None,
+            "analysis": summary}
+    if args.json:
+        _emit_json(_clean(info))
+        return 0
+    print(f"run file:    {args.run}")
+    for key in ("kind", "uuid", "start_time", "stop_time", "exit_status", "error",
+                "software_version"):
+        if attrs.get(key) not in (None, ""):
+            print(f"{key + ':':<13}{attrs[key]}")
+    for role, inst in run.instruments.items():
+        final = inst.get("final_state", {})
+        print(f"instrument {role}: {inst.get('identity', '?')}; final state {final}")
+    for name, meta in with_lengths.items():
+        rate = float(meta["sample_rate"])
+        print(f"channel {name}: {meta['quantity']} [{meta['units']}], {meta['samples']} samples "
+              f"at {rate:g} Hz ({meta['samples'] / rate:.3f} s)")
+    if summary:
+        print(format_summary(summary))
+    return 0
+
+
+def cmd_plugins(args) -> int:
+    registry = _registry()
+    records = [r.as_dict() for r in registry.records]
+    for record in records:
+        descriptor = registry.descriptors.get(record["kind"] or "", {}).get(record["name"])
+        record["params"] = [p.as_dict() for p in descriptor.params] if descriptor else []
+        record["help"] = getattr(descriptor, "help", "") if descriptor else ""
+    if args.json:
+        _emit_json({"plugins": records})
+        return 0
+    for record in records:
+        line = f"{record['kind'] or '-':<11} {record['name']:<24} {record['status']:<8} " \
+               f"{record['distribution']} {record['version']}"
+        print(line + (f"  ({record['error']})" if record["error"] else ""))
+        if args.verbose:
+            for p in record["params"]:
+                unit = f" [{p['unit']}]" if p["unit"] else ""
+                print(f"    {p['name']}{unit} = {p['default']!r}: {p['help']}")
+    return 0
+
+
+def cmd_profile_check(args) -> int:
+    from fsi_lab.profile import load_profile
+    from fsi_lab.runner import check_safety
+
+    registry = _registry()
+    profile = load_profile(args.profile, registry, args.set)
+    result: dict[str, Any] = {"profile": str(args.profile), "valid": True, "safety": None}
+    if profile.can_run:
+        _, _, report = check_safety(profile, registry)
+        result["safety"] = report.as_dict()
+    if args.json:
+        _emit_json(_clean(result))
+    else:
+        print(f"{args.profile}: valid")
+        if result["safety"]:
+            s = result["safety"]
+            print(f"safety: peak drive {s['peak_drive_v']:.4g} V (max {s['max_drive_v']:g}), "
+                  f"gain {s['gain']:g} (max {s['max_gain']:g}), predicted stroke "
+                  f"{s['predicted_stroke_mm']:.3g} mm (max {s['max_stroke_mm']:g}): "
+                  + ("ok" if s["ok"] else "REFUSED: " + "; ".join(s["problems"])))
+    return 0 if not result["safety"] or result["safety"]["ok"] else 2
+
+
+def format_summary(summary: dict[str, Any]) -> str:
+    """The analysis summary as a few readable lines."""
+    lines = []
+    for channel, info in summary.get("channels", {}).items():
+        peaks = info.get("spectrum_peaks_hz")
+        lines.append(f"channel {channel}" + (
+            f": spectrum peaks {', '.join(f'{p:.2f}' for p in peaks[:6])} Hz" if peaks else ""))
+        for component in info.get("components", []):
+            text = f"  component {component['index']}"
+            if component.get("frequency_hz") is not None:
+                text += f" at {component['frequency_hz']:.3f} Hz"
+            eq = component.get("equivalent_damping")
+            if eq and eq.get("c_i") is not None:
+                text += (f": C_i = {eq['c_i']:.4g} {eq.get('c_i_ci95', '')}, "
+                         f"C_f = {eq['c_f']:.4g} {eq.get('c_f_ci95', '')}, R^2 = {eq['r2']:.3f}")
+            lines.append(text)
+        for error in info.get("errors", []):
+            lines.append(f"  failed {error['plugin']}: {error['message']}")
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- parser
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="fsi-lab", description="Run and analyse vibration experiments on beams in fluid.")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    def common(p, json_help=True):
+        if json_help:
+            p.add_argument("--json", action="store_true",
+                           help="print one JSON object on stdout (docs/json-output.md)")
+        p.add_argument("-q", "--quiet", action="store_true", help="no progress bars, warnings only")
+        p.add_argument("-v", "--verbose", action="store_true", help="debug messages on stderr")
+
+    p = sub.add_parser("run", help="run a profile on its bench and analyse the record")
+    p.add_argument("profile", type=Path)
+    p.add_argument("--out", type=Path, default=Path("runs"), help="directory of the run file")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a profile parameter, e.g. excitation.amplitude=0.5")
+    p.add_argument("--no-analysis", action="store_true", help="acquire only")
+    common(p)
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("analyze", help="(re)run the analysis chain on a run file")
+    p.add_argument("run", type=Path)
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override an analysis parameter, e.g. analysis.hvd.components=2")
+    p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
+                   help="mu + M for data without a specimen (kg/m)")
+    common(p)
+    p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser("import", help="turn a CSV file ('name [unit]' header) into a run file")
+    p.add_argument("csv", type=Path)
+    p.add_argument("--rate", type=float, metavar="HZ", help="sample rate without a time column")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="RUN.h5")
+    common(p)
+    p.set_defaults(func=cmd_import)
+
+    p = sub.add_parser("show", help="describe a run file")
+    p.add_argument("run", type=Path)
+    common(p)
+    p.set_defaults(func=cmd_show)
+
+    p = sub.add_parser("plugins", help="list the plugins found and their status")
+    common(p)
+    p.set_defaults(func=cmd_plugins)
+
+    p = sub.add_parser("profile", help="profile tools")
+    psub = p.add_subparsers(dest="profile_command", required=True, metavar="ACTION")
+    c = psub.add_parser("check", help="validate a profile and its safety limits")
+    c.add_argument("profile", type=Path)
+    c.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    common(c)
+    c.set_defaults(func=cmd_profile_check)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except FsiLabError as exc:
+        if getattr(args, "json", False):
+            _emit_json({"error": str(exc), "exit_code": exc.exit_code})
+        print(f"fsi-lab: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("fsi-lab: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

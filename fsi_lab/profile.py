@@ -1,0 +1,371 @@
+"""Profiles: TOML files that describe the bench, the specimen, the excitation, the analysis
+chain and the safety limits of a run.
+
+Loading validates everything against the declared schemas (the core's sections below and each
+named plugin's parameters) before anything is started or written. Every problem is reported as a
+:class:`~fsi_lab.errors.ProfileError` naming the file, the key path and what is allowed.
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping
+
+from fsi_lab.contract import ROLES
+from fsi_lab.errors import ParameterError, PluginError, ProfileError
+from fsi_lab.params import Param, Schema, find, validate
+from fsi_lab.registry import Registry
+from fsi_lab.specimen import SPECIMEN_PARAMS, Specimen
+from fsi_lab.units import QUANTITIES, QUANTITY_OF_UNIT
+
+RUN_PARAMS: tuple[Param, ...] = (
+    Param("name", "str", "", "", help="Free text describing the run."),
+    Param("duration", "float", "s", 10.0, minimum=0.0, exclusive_minimum=True, maximum=86400.0,
+          help="Length of the acquisition record."),
+    Param("sample_rate", "float", "Hz", 10000.0, minimum=1.0, maximum=204800.0,
+          help="Acquisition sample rate (the digitiser may round it)."),
+    Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=1.0,
+          help="Length of the blocks streamed from the digitiser into the run file."),
+)
+
+SAFETY_PARAMS: tuple[Param, ...] = (
+    Param("max_drive_v", "float", "V", minimum=0.0, exclusive_minimum=True, maximum=10.0,
+          help="Largest absolute source voltage the excitation may request."),
+    Param("max_gain", "float", "V/V", minimum=0.0, exclusive_minimum=True,
+          help="Largest amplifier gain the bench may be set to."),
+    Param("max_stroke_mm", "float", "mm", minimum=0.0, exclusive_minimum=True,
+          help="Largest base displacement (zero to peak) predicted by the shaker model."),
+)
+
+SHAKER_PARAMS: tuple[Param, ...] = (
+    Param("suspension_hz", "float", "Hz", 30.0, minimum=0.1,
+          help="Resonance of the shaker armature on its suspension, loaded (about 30 Hz with "
+               "the beam mount, 47 Hz unloaded)."),
+    Param("damping_ratio", "float", "", 0.08, minimum=0.001, maximum=2.0,
+          help="Damping ratio of the suspension resonance."),
+    Param("mm_per_volt", "float", "mm/V", 0.5, minimum=0.0, exclusive_minimum=True,
+          help="Static base displacement per volt at the amplifier output."),
+)
+
+CHANNEL_PARAMS: tuple[Param, ...] = (
+    Param("quantity", "str", "", choices=QUANTITIES, help="What the channel measures."),
+    Param("unit", "str", "", choices=tuple(QUANTITY_OF_UNIT),
+          help="Unit the calibrated channel is stored in."),
+    Param("sensitivity", "float", "V/unit", 1.0, minimum=0.0, exclusive_minimum=True,
+          help="Sensor sensitivity: volts at the digitiser per unit of the quantity."),
+    Param("input", "int", "", minimum=1, maximum=64, help="Digitiser input number."),
+    Param("sensor", "str", "", "",
+          help="Instrument role that sets this channel's sensitivity (e.g. 'vibrometer')."),
+)
+
+BENCH_PARAMS: tuple[Param, ...] = (
+    Param("embedded", "bool", "", False,
+          help="Start the simulated bench inside the fsi-lab process."),
+)
+
+ROLE_KEYS = ("plugin", "address")
+REQUIRED_ROLES = ("source", "amplifier", "acquisition")
+
+ANALYSIS_PARAMS: tuple[Param, ...] = (
+    Param("chain", "strs", "", default=[], help="Analysis plugins to run, in order."),
+    Param("channels", "strs", "", default=[],
+          help="Channels to analyse; empty means every velocity or displacement channel."),
+    Param("reference", "str", "", default=None,
+          help="Base-acceleration channel used by transfer functions and the modal model."),
+)
+
+SECTIONS = ("run", "safety", "shaker", "specimen", "bench", "channels", "excitation", "analysis")
+
+
+@dataclass(frozen=True)
+class RoleConfig:
+    """One instrument of the bench."""
+
+    role: str
+    plugin: str
+    address: str
+    settings: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class ChannelConfig:
+    """One acquisition channel."""
+
+    name: str
+    quantity: str
+    unit: str
+    sensitivity: float
+    input: int
+    sensor: str
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A validated profile. ``text`` is the file verbatim, stored in every run file."""
+
+    path: str
+    text: str
+    run: dict[str, Any]
+    safety: dict[str, Any] | None
+    shaker: dict[str, Any]
+    specimen: Specimen | None
+    bench: dict[str, Any]
+    roles: dict[str, RoleConfig]
+    channels: dict[str, ChannelConfig]
+    excitation_plugin: str | None
+    excitation: dict[str, Any]
+    analysis: dict[str, Any]
+    analysis_params: dict[str, dict[str, Any]]
+    overrides: tuple[str, ...] = ()
+
+    @property
+    def can_run(self) -> bool:
+        """True when the profile describes a bench and an excitation (not only an analysis)."""
+        return bool(self.roles) and self.excitation_plugin is not None
+
+
+def _table(raw: Mapping[str, Any], key: str, where: str) -> dict[str, Any]:
+    value = raw.get(key, {})
+    if not isinstance(value, dict):
+        raise ParameterError(f"{where}: expected a table ([{where}]), got {value!r}")
+    return value
+
+
+def _plugin_name(table: Mapping[str, Any], where: str) -> str:
+    name = table.get("plugin")
+    if not isinstance(name, str) or not name:
+        raise ParameterError(f"{where}.plugin: missing; expected the name of a plugin")
+    return name
+
+
+def _plugin(registry: Registry, kind: str, name: str, where: str):
+    try:
+        return registry.get(kind, name)
+    except PluginError as exc:
+        raise ParameterError(f"{where}.plugin: {exc}") from None
+
+
+def _role_schema(registry: Registry, role: str, table: Mapping[str, Any]) -> Schema:
+    where = f"bench.{role}"
+    descriptor = _plugin(registry, "instrument", _plugin_name(table, where), where)
+    if descriptor.role != role:
+        raise ParameterError(
+            f"{where}.plugin: {descriptor.name!r} is a {descriptor.role} driver, not a {role}"
+        )
+    return descriptor.params
+
+
+def schema_for(raw: Mapping[str, Any], path: list[str], registry: Registry) -> Param:
+    """The declared parameter at a dotted ``path`` of a profile (used by ``--set``)."""
+    where = ".".join(path)
+    section, rest = path[0], path[1:]
+    fixed = {"run": RUN_PARAMS, "safety": SAFETY_PARAMS, "shaker": SHAKER_PARAMS,
+             "specimen": SPECIMEN_PARAMS}
+    schema: Schema | None = None
+    name = rest[-1] if rest else ""
+    if section in fixed and len(rest) == 1:
+        schema = fixed[section]
+    elif section == "excitation" and len(rest) == 1:
+        table = _table(raw, "excitation", "excitation")
+        schema = _plugin(registry, "excitation", _plugin_name(table, "excitation"),
+                         "excitation").params
+    elif section == "analysis" and len(rest) == 1:
+        schema = ANALYSIS_PARAMS
+    elif section == "analysis" and len(rest) == 2:
+        schema = _plugin(registry, "analysis", rest[0], f"analysis.{rest[0]}").params
+    elif section == "bench" and len(rest) == 1:
+        schema = BENCH_PARAMS
+    elif section == "bench" and len(rest) == 2 and rest[0] in ROLES:
+        if rest[1] in ROLE_KEYS:
+            return Param(rest[1], "str")
+        bench = _table(raw, "bench", "bench")
+        schema = _role_schema(registry, rest[0], _table(bench, rest[0], f"bench.{rest[0]}"))
+    elif section == "channels" and len(rest) == 2:
+        schema = CHANNEL_PARAMS
+    if schema is None:
+        raise ParameterError(
+            f"{where}: no such parameter; use section.key (sections: {', '.join(SECTIONS)}), "
+            "analysis.<plugin>.key, bench.<role>.key or channels.<name>.key"
+        )
+    param = find(schema, name)
+    if param is None:
+        allowed = ", ".join(p.name for p in schema)
+        raise ParameterError(f"{where}: unknown key; allowed keys are {allowed}")
+    return param
+
+
+def apply_overrides(raw: dict[str, Any], overrides: list[str], registry: Registry) -> dict:
+    """Return a copy of ``raw`` with each ``key.path=value`` of ``overrides`` applied."""
+    raw = copy.deepcopy(raw)
+    for item in overrides:
+        key, sep, text = item.partition("=")
+        path = [part for part in key.strip().split(".") if part]
+        if not sep or len(path) < 2:
+            raise ParameterError(
+                f"--set {item!r}: expected key.path=value, e.g. excitation.amplitude=0.5"
+            )
+        param = schema_for(raw, path, registry)
+        value = param.parse(text, ".".join(path))
+        node = raw
+        for part in path[:-1]:
+            node = node.setdefault(part, {})
+        node[path[-1]] = value
+    return raw
+
+
+def load_profile(path: str | Path, registry: Registry, overrides: list[str] = ()) -> Profile:
+    """Read, override and validate a profile.
+
+    Parameters
+    ----------
+    path
+        The TOML file.
+    registry
+        Loaded plugins, whose schemas validate the plugin sections.
+    overrides
+        ``key.path=value`` strings from ``--set``.
+
+    Raises
+    ------
+    ProfileError
+        With the file name, the key path and what is allowed.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ProfileError(f"{path}: cannot read the profile ({exc.strerror})") from None
+    return parse_profile(text, str(path), registry, overrides)
+
+
+def parse_profile(text: str, path: str, registry: Registry, overrides: list[str] = (),
+                  sections: tuple[str, ...] | None = None) -> Profile:
+    """Validate profile ``text`` (``path`` names it in messages); see :func:`load_profile`.
+
+    With ``sections``, only those sections are kept and validated (``fsi-lab analyze`` keeps
+    ``analysis`` and ``specimen`` so that a run made with drivers not installed here can still
+    be analysed), and ``--set`` may address only them.
+    """
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ProfileError(f"{path}: TOML syntax error: {exc}") from None
+    if sections is not None:
+        raw = {key: value for key, value in raw.items() if key in sections}
+        for item in overrides:
+            if item.split(".", 1)[0] not in sections:
+                raise ProfileError(
+                    f"--set {item!r}: only {', '.join(sections)} parameters can be set here"
+                )
+    try:
+        raw = apply_overrides(raw, list(overrides), registry)
+        return _validate(raw, path, text, registry, tuple(overrides))
+    except ParameterError as exc:
+        raise ProfileError(f"{path}: {exc}") from None
+
+
+def _validate(raw, path, text, registry, overrides) -> Profile:
+    unknown = sorted(set(raw) - set(SECTIONS))
+    if unknown:
+        raise ParameterError(
+            f"{unknown[0]}: unknown section; allowed sections are {', '.join(SECTIONS)}"
+        )
+    run = validate(RUN_PARAMS, _table(raw, "run", "run"), "run")
+    shaker = validate(SHAKER_PARAMS, _table(raw, "shaker", "shaker"), "shaker")
+    specimen = (
+        Specimen.from_mapping(_table(raw, "specimen", "specimen"))
+        if "specimen" in raw else None
+    )
+
+    bench_raw = dict(_table(raw, "bench", "bench"))
+    role_tables = {role: bench_raw.pop(role) for role in ROLES if role in bench_raw}
+    bench = validate(BENCH_PARAMS, bench_raw, "bench")
+    roles: dict[str, RoleConfig] = {}
+    for role, table in role_tables.items():
+        where = f"bench.{role}"
+        if not isinstance(table, dict):
+            raise ParameterError(f"{where}: expected a table ([{where}]), got {table!r}")
+        schema = _role_schema(registry, role, table)
+        address = table.get("address", "")
+        if not isinstance(address, str):
+            raise ParameterError(f"{where}.address: expected a string (VISA resource or port)")
+        settings = {k: v for k, v in table.items() if k not in ROLE_KEYS}
+        roles[role] = RoleConfig(role, table["plugin"], address,
+                                 validate(schema, settings, where))
+
+    channels: dict[str, ChannelConfig] = {}
+    for name, table in _table(raw, "channels", "channels").items():
+        where = f"channels.{name}"
+        if not isinstance(table, dict):
+            raise ParameterError(f"{where}: expected a table ([{where}]), got {table!r}")
+        values = validate(CHANNEL_PARAMS, table, where)
+        implied = QUANTITY_OF_UNIT[values["unit"]]
+        if implied != values["quantity"]:
+            raise ParameterError(
+                f"{where}.unit: {values['unit']!r} is a unit of {implied}, but the channel's "
+                f"quantity is {values['quantity']!r}"
+            )
+        channels[name] = ChannelConfig(name=name, **values)
+
+    excitation_plugin = None
+    excitation: dict[str, Any] = {}
+    if "excitation" in raw:
+        table = dict(_table(raw, "excitation", "excitation"))
+        excitation_plugin = _plugin_name(table, "excitation")
+        descriptor = _plugin(registry, "excitation", excitation_plugin, "excitation")
+        table.pop("plugin")
+        excitation = validate(descriptor.params, table, "excitation")
+
+    analysis_raw = dict(_table(raw, "analysis", "analysis"))
+    plugin_tables = {k: analysis_raw.pop(k) for k in list(analysis_raw)
+                     if isinstance(analysis_raw[k], dict)}
+    analysis = validate(ANALYSIS_PARAMS, analysis_raw, "analysis")
+    analysis_params: dict[str, dict[str, Any]] = {}
+    for name in analysis["chain"]:
+        descriptor = _plugin(registry, "analysis", name, f"analysis.{name}")
+        analysis_params[name] = validate(descriptor.params, plugin_tables.pop(name, {}),
+                                         f"analysis.{name}")
+    if plugin_tables:
+        extra = sorted(plugin_tables)[0]
+        raise ParameterError(
+            f"analysis.{extra}: parameters for a plugin that is not in analysis.chain "
+            f"({', '.join(analysis['chain']) or 'empty'}); add it to the chain or remove the table"
+        )
+    for name in analysis["channels"] + ([analysis["reference"]] if analysis["reference"] else []):
+        if channels and name not in channels:
+            raise ParameterError(
+                f"analysis: channel {name!r} is not defined; channels are {', '.join(channels)}"
+            )
+
+    safety = None
+    if roles or excitation_plugin:
+        if "safety" not in raw:
+            raise ParameterError(
+                "safety: missing; a profile that drives a bench needs [safety] with "
+                "max_drive_v, max_gain and max_stroke_mm"
+            )
+        missing_roles = [r for r in REQUIRED_ROLES if r not in roles]
+        if missing_roles:
+            raise ParameterError(
+                f"bench.{missing_roles[0]}: missing; a runnable profile needs "
+                f"{', '.join('[bench.' + r + ']' for r in REQUIRED_ROLES)}"
+            )
+        if excitation_plugin is None:
+            raise ParameterError("excitation: missing; expected [excitation] with a plugin")
+        if not channels:
+            raise ParameterError("channels: missing; expected at least one [channels.<name>]")
+    if "safety" in raw:
+        safety = validate(SAFETY_PARAMS, _table(raw, "safety", "safety"), "safety")
+    if specimen is not None and specimen.measurement_point > specimen.length:
+        raise ParameterError(
+            f"specimen.measurement_point: {specimen.measurement_point} m lies beyond the beam "
+            f"(length {specimen.length} m); expected a point between 0 and the length"
+        )
+
+    return Profile(path=path, text=text, run=run, safety=safety, shaker=shaker,
+                   specimen=specimen, bench=bench, roles=roles, channels=channels,
+                   excitation_plugin=excitation_plugin, excitation=excitation,
+                   analysis=analysis, analysis_params=analysis_params, overrides=overrides)

@@ -1,0 +1,287 @@
+"""HDF5 run files: one file per run, written as the run goes (layout: docs/run-format.md)."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import time
+import uuid as _uuid
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+from typing import Any, Mapping
+
+import h5py
+import numpy as np
+
+from fsi_lab.contract import ChannelData
+from fsi_lab.errors import InputFileError
+
+FORMAT = "fsi-lab run"
+FORMAT_VERSION = 1
+EXIT_STATUSES = ("running", "completed", "aborted", "failed")
+FLUSH_INTERVAL_S = 0.5  # at most this long between flushes while data arrives
+CHUNK_SAMPLES = 16384
+
+
+def software_version() -> str:
+    """Installed version of fsi-lab."""
+    try:
+        return metadata.version("fsi-lab")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+def utc_now() -> str:
+    """Current time, ISO 8601 UTC with microseconds."""
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="microseconds")
+
+
+def new_run_path(out_dir: str | Path) -> tuple[Path, str, str]:
+    """A fresh run file path in ``out_dir``, the run's uuid and its start time (ISO, UTC).
+
+    Files are named ``YYYYmmdd-HHMMSS_<first 8 hex digits of the uuid>.h5``.
+    """
+    started = _dt.datetime.now(_dt.timezone.utc)
+    run_uuid = _uuid.uuid4().hex
+    name = f"{started:%Y%m%d-%H%M%S}_{run_uuid[:8]}.h5"
+    return Path(out_dir) / name, run_uuid, started.isoformat(timespec="microseconds")
+
+
+def _attr(value: Any) -> Any:
+    """A value HDF5 can store as an attribute (JSON text for anything structured)."""
+    if value is None:
+        return "null"
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, float, str, np.integer, np.floating)):
+        return value
+    if isinstance(value, (list, tuple)) and value and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) for v in value
+    ):
+        return np.asarray(value, dtype=float)
+    return json.dumps(value, default=str)
+
+
+def write_attrs(node: h5py.HLObject, values: Mapping[str, Any]) -> None:
+    """Store a flat mapping as attributes of ``node``."""
+    for key, value in values.items():
+        node.attrs[key] = _attr(value)
+
+
+def read_attrs(node: h5py.HLObject) -> dict[str, Any]:
+    """Attributes of ``node`` as plain Python values."""
+    out = {}
+    for key, value in node.attrs.items():
+        if isinstance(value, bytes):
+            value = value.decode()
+        if isinstance(value, str) and (value[:1] in "{[" and value or value == "null"):
+            try:
+                value = json.loads(value)
+            except ValueError:
+                pass
+        if isinstance(value, np.ndarray):
+            value = value.tolist()
+        elif isinstance(value, np.generic):
+            value = value.item()
+        out[key] = value
+    return out
+
+
+class RunFileWriter:
+    """Creates a run file and appends to it as blocks arrive.
+
+    Every append is followed by a flush when more than :data:`FLUSH_INTERVAL_S` passed since
+    the last one, so that a run killed at any moment leaves a file that opens with h5py and
+    h5dump and holds every block up to the last flush. The file uses the earliest HDF5 file
+    format (no SWMR): after a crash it opens without ``h5clear``.
+    """
+
+    def __init__(self, path: Path, attrs: Mapping[str, Any]) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._file = h5py.File(self.path, "x")
+        write_attrs(self._file, {"format": FORMAT, "format_version": FORMAT_VERSION,
+                                 "exit_status": "running", **attrs})
+        for group in ("instruments", "channels", "analysis"):
+            self._file.create_group(group)
+        self._last_flush = time.monotonic()
+        self.samples_flushed: dict[str, int] = {}
+        self._file.flush()
+
+    @property
+    def file(self) -> h5py.File:
+        return self._file
+
+    @property
+    def closed(self) -> bool:
+        return not self._file.id.valid
+
+    def write_instrument(self, role: str, info: Mapping[str, Any],
+                         settings: Mapping[str, Any]) -> None:
+        """``/instruments/<role>``: identity and plugin as attributes, settings as a group."""
+        group = self._file["instruments"].require_group(role)
+        write_attrs(group, info)
+        write_attrs(group.require_group("settings"), settings)
+
+    def write_final_state(self, role: str, state: Mapping[str, Any]) -> None:
+        """``/instruments/<role>/final_state``: what the instrument reported after safe state."""
+        group = self._file["instruments"].require_group(role)
+        write_attrs(group.require_group("final_state"), state)
+
+    def write_excitation(self, waveform: np.ndarray, sample_rate: float,
+                         attrs: Mapping[str, Any], params: Mapping[str, Any]) -> None:
+        """``/excitation``: the waveform sent (V), its rate (Hz) and parameters."""
+        group = self._file.create_group("excitation")
+        data = group.create_dataset("waveform", data=np.asarray(waveform, dtype=float))
+        data.attrs["units"] = "V"
+        write_attrs(group, {"sample_rate": float(sample_rate), **attrs})
+        write_attrs(group.create_group("params"), params)
+
+    def create_channel(self, name: str, attrs: Mapping[str, Any]) -> None:
+        """An empty resizable ``/channels/<name>`` with its calibration attributes."""
+        dataset = self._file["channels"].create_dataset(
+            name, shape=(0,), maxshape=(None,), dtype="f8", chunks=(CHUNK_SAMPLES,)
+        )
+        write_attrs(dataset, attrs)
+        self.samples_flushed[name] = 0
+
+    def append(self, name: str, block: np.ndarray) -> None:
+        """Append samples to ``/channels/<name>``."""
+        dataset = self._file["channels"][name]
+        start = dataset.shape[0]
+        dataset.resize((start + block.size,))
+        dataset[start:] = block
+
+    def flush_if_due(self) -> bool:
+        """Flush if the last flush is older than the interval; returns whether it flushed."""
+        if time.monotonic() - self._last_flush < FLUSH_INTERVAL_S:
+            return False
+        self.flush()
+        return True
+
+    def flush(self) -> None:
+        self._file.flush()
+        self._last_flush = time.monotonic()
+        for name, dataset in self._file["channels"].items():
+            self.samples_flushed[name] = dataset.shape[0]
+
+    def set_attrs(self, values: Mapping[str, Any]) -> None:
+        write_attrs(self._file, values)
+
+    def close(self) -> None:
+        if not self.closed:
+            self._file.flush()
+            self._file.close()
+
+
+# --------------------------------------------------------------------------- reading
+@dataclass
+class RunData:
+    """A run file read back: root attributes, channels, and the excitation if any."""
+
+    path: Path
+    attrs: dict[str, Any]
+    channels: dict[str, ChannelData]
+    channel_attrs: dict[str, dict[str, Any]]
+    instruments: dict[str, dict[str, Any]]
+    excitation: dict[str, Any] | None
+
+    @property
+    def profile_text(self) -> str:
+        return self.attrs.get("profile", "") or ""
+
+
+def _open_checked(path: Path, mode: str) -> h5py.File:
+    if not path.exists():
+        raise InputFileError(f"{path}: no such file; expected a run file (.h5)")
+    try:
+        handle = h5py.File(path, mode)
+    except OSError as exc:
+        raise InputFileError(
+            f"{path}: not a readable HDF5 file ({exc}); expected a run file written by fsi-lab"
+        ) from None
+    if handle.attrs.get("format") != FORMAT:
+        handle.close()
+        raise InputFileError(
+            f"{path}: not an fsi-lab run file (root attribute format is missing or not "
+            f"{FORMAT!r}); expected a file written by fsi-lab run, import or simulate"
+        )
+    return handle
+
+
+def read_run(path: str | Path, load_data: bool = True) -> RunData:
+    """Read a run file (channels fully loaded unless ``load_data`` is False).
+
+    Raises
+    ------
+    InputFileError
+        Missing file, not HDF5, not an fsi-lab run file, or a channel without its attributes.
+    """
+    path = Path(path)
+    with _open_checked(path, "r") as handle:
+        attrs = read_attrs(handle)
+        channels: dict[str, ChannelData] = {}
+        channel_attrs: dict[str, dict[str, Any]] = {}
+        for name, dataset in handle.get("channels", {}).items():
+            meta = read_attrs(dataset)
+            missing = [k for k in ("units", "quantity", "sample_rate") if k not in meta]
+            if missing:
+                raise InputFileError(
+                    f"{path}: /channels/{name} lacks attribute {missing[0]!r}; "
+                    "expected units, quantity and sample_rate on every channel"
+                )
+            channel_attrs[name] = meta
+            data = dataset[()] if load_data else np.empty(0)
+            channels[name] = ChannelData(name, data, float(meta["sample_rate"]),
+                                         meta["quantity"], meta["units"],
+                                         float(meta.get("t0", 0.0)))
+        instruments = {}
+        for role, group in handle.get("instruments", {}).items():
+            info = read_attrs(group)
+            for sub in ("settings", "final_state"):
+                if sub in group:
+                    info[sub] = read_attrs(group[sub])
+            instruments[role] = info
+        excitation = None
+        if "excitation" in handle:
+            group = handle["excitation"]
+            excitation = read_attrs(group)
+            excitation["params"] = read_attrs(group["params"]) if "params" in group else {}
+            excitation["waveform"] = group["waveform"][()] if load_data else np.empty(0)
+    return RunData(path, attrs, channels, channel_attrs, instruments, excitation)
+
+
+def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
+                   summary: Mapping[str, Any]) -> None:
+    """Replace ``/analysis`` with new results, leaving everything else untouched.
+
+    ``groups`` maps ``"<channel>/<plugin>"`` to a dict with ``datasets``, ``units``, ``attrs``
+    and ``params``. The new group is written beside the old one and swapped in at the end,
+    so a failure while writing keeps the previous results.
+    """
+    path = Path(path)
+    with _open_checked(path, "r+") as handle:
+        if "analysis.new" in handle:
+            del handle["analysis.new"]
+        root = handle.create_group("analysis.new")
+        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
+        for key, content in groups.items():
+            group = root.create_group(key)
+            for name, array in content.get("datasets", {}).items():
+                dataset = group.create_dataset(name, data=np.asarray(array))
+                unit = content.get("units", {}).get(name)
+                if unit is not None:
+                    dataset.attrs["units"] = unit
+            write_attrs(group, content.get("attrs", {}))
+            write_attrs(group.create_group("params"), content.get("params", {}))
+        if "analysis" in handle:
+            del handle["analysis"]
+        handle.move("analysis.new", "analysis")
+
+
+def read_analysis_summary(path: str | Path) -> dict[str, Any] | None:
+    """The summary stored by the last analysis, or None if the run was never analysed."""
+    with _open_checked(Path(path), "r") as handle:
+        text = handle.get("analysis", {}).attrs.get("summary") if "analysis" in handle else None
+    return json.loads(text) if text else None

@@ -1,0 +1,365 @@
+"""Run orchestration: configure -> arm -> excite and acquire -> finalize -> analyze.
+
+Whatever ends a run (success, an error, Ctrl+C, SIGTERM, an instrument that stops answering,
+an abort from the GUI), the amplifier output is disabled and the source set to 0 V first; then
+the instruments' state is read back and the run file is finalized with its exit status.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fsi_lab.chain import analyse_and_store
+from fsi_lab.contract import ROLE_INTERFACES, Instrument
+from fsi_lab.errors import FsiLabError, InstrumentError, ProfileError, RunAborted
+from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
+from fsi_lab.profile import Profile
+from fsi_lab.registry import Registry
+from fsi_lab.runfile import RunFileWriter, new_run_path, read_run, software_version, utc_now
+from fsi_lab.safety import SafetyReport, assess, require_safe
+
+#: Instruments are put in their safe state in this order: the amplifier first.
+SAFE_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
+OPEN_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
+INTERLOCK_POLL_S = 0.2
+
+
+@dataclass
+class RunOutcome:
+    """How a run ended."""
+
+    path: Path | None
+    exit_status: str
+    error: str | None = None
+    traceback: str = ""
+    safety: SafetyReport | None = None
+    summary: dict[str, Any] | None = None
+    final_states: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "run": str(self.path) if self.path else None,
+            "exit_status": self.exit_status,
+            "error": self.error,
+            "safety": self.safety.as_dict() if self.safety else None,
+            "final_state": self.final_states,
+            "analysis": self.summary,
+        }
+
+
+def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray, float]:
+    """Generate the profile's drive waveform (V) and its sample rate (Hz)."""
+    descriptor = registry.get("excitation", profile.excitation_plugin)
+    rate = float(profile.roles["source"].settings.get("sample_rate") or profile.run["sample_rate"])
+    waveform = np.asarray(descriptor.generate(dict(profile.excitation), rate), dtype=float)
+    if waveform.ndim != 1 or waveform.size == 0:
+        raise ProfileError(
+            f"{profile.path}: excitation {profile.excitation_plugin!r} produced no samples "
+            f"with {profile.excitation}; check its parameters"
+        )
+    return waveform, rate
+
+
+def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, float, SafetyReport]:
+    """Generate the waveform and assess it against ``[safety]`` (does not raise)."""
+    waveform, rate = prepare_excitation(profile, registry)
+    gain = profile.roles["amplifier"].settings.get("gain")
+    if gain is None:
+        raise ProfileError(
+            f"{profile.path}: bench.amplifier: plugin {profile.roles['amplifier'].plugin!r} "
+            "declares no 'gain' parameter, so the gain limit cannot be checked"
+        )
+    report = assess(waveform, rate, float(gain), profile.safety, profile.shaker)
+    return waveform, rate, report
+
+
+class _Signals:
+    """Turns SIGTERM into RunAborted and can hold signals back while finalizing."""
+
+    def __init__(self) -> None:
+        self.active = threading.current_thread() is threading.main_thread()
+        self._saved: dict[int, Any] = {}
+        self.pending: list[int] = []
+
+    def install(self) -> None:
+        if not self.active:
+            return
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            self._saved[signum] = signal.getsignal(signum)
+        signal.signal(signal.SIGTERM, self._raise)
+
+    def _raise(self, signum, frame):
+        raise RunAborted(f"received {signal.Signals(signum).name}")
+
+    def _defer(self, signum, frame):
+        self.pending.append(signum)
+
+    @contextlib.contextmanager
+    def held(self):
+        """Within this block Ctrl+C and SIGTERM are noted, not raised (safe state, final write)."""
+        if self.active:
+            signal.signal(signal.SIGINT, self._defer)
+            signal.signal(signal.SIGTERM, self._defer)
+        try:
+            yield
+        finally:
+            if self.active:
+                signal.signal(signal.SIGTERM, self._raise)
+                signal.signal(signal.SIGINT, self._saved[signal.SIGINT])
+
+    def restore(self) -> None:
+        for signum, handler in self._saved.items():
+            signal.signal(signum, handler)
+
+
+class Runner:
+    """Runs one profile on its bench and writes one run file.
+
+    Parameters
+    ----------
+    profile
+        A validated, runnable profile.
+    registry
+        Loaded plugins.
+    out_dir
+        Directory of the run file.
+    bus
+        Event bus; the CLI renders it, the GUI subscribes to it.
+    analyze
+        Run the analysis chain after a completed acquisition.
+    """
+
+    def __init__(self, profile: Profile, registry: Registry, out_dir: str | Path,
+                 bus: EventBus | None = None, analyze: bool = True) -> None:
+        if not profile.can_run:
+            raise ProfileError(f"{profile.path}: describes no bench and excitation to run")
+        self.profile = profile
+        self.registry = registry
+        self.out_dir = Path(out_dir)
+        self.bus = bus or EventBus()
+        self.analyze = analyze
+        self._abort = threading.Event()
+        self.instruments: dict[str, Instrument] = {}
+        self.bench_context: dict[str, Any] = {}
+
+    def abort(self) -> None:
+        """Ask the run to stop as soon as possible and go to the safe state (thread-safe)."""
+        self._abort.set()
+
+    # ------------------------------------------------------------------ the run
+    def run(self) -> RunOutcome:
+        """Carry out the run. Raises only for problems found before anything was started
+        (bad profile, safety limits); every later problem ends up in the outcome."""
+        waveform, rate, report = check_safety(self.profile, self.registry)
+        require_safe(report, self.profile.path)
+        self.bus.log("INFO", f"safety check passed: peak drive {report.peak_drive_v:.3g} V, "
+                             f"gain {report.gain:g}, predicted stroke "
+                             f"{report.predicted_stroke_mm:.3g} mm")
+        signals = _Signals()
+        signals.install()
+        outcome = RunOutcome(path=None, exit_status="failed", safety=report)
+        writer: RunFileWriter | None = None
+        try:
+            path, run_uuid, started = new_run_path(self.out_dir)
+            outcome.path = path
+            writer = RunFileWriter(path, self._root_attrs(run_uuid, started))
+            self.bus.log("INFO", f"writing {path}")
+            writer.write_excitation(waveform, rate, {
+                "plugin": self.profile.excitation_plugin,
+                "plugin_version": self.registry.version_of("excitation",
+                                                           self.profile.excitation_plugin),
+                "peak_drive_v": report.peak_drive_v,
+                "predicted_stroke_mm": report.predicted_stroke_mm,
+            }, self.profile.excitation)
+            self._acquire(writer, waveform, rate)
+            outcome.exit_status = "completed"
+        except (KeyboardInterrupt, RunAborted) as exc:
+            outcome.exit_status = "aborted"
+            outcome.error = str(exc) or "interrupted (Ctrl+C)"
+        except Exception as exc:  # noqa: BLE001 - any failure ends in the safe state
+            outcome.exit_status = "failed"
+            outcome.error = str(exc) if isinstance(exc, FsiLabError) else (
+                f"{type(exc).__name__}: {exc}")
+            outcome.traceback = traceback.format_exc()
+        finally:
+            with signals.held():
+                outcome.final_states = self._safe_state_all(writer)
+                self._finalize(writer, outcome)
+            signals.restore()
+        self.bus.emit(StateChanged(outcome.exit_status, outcome.error or ""))
+        if signals.pending:
+            self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
+        elif outcome.exit_status == "completed" and self.analyze and self.profile.analysis["chain"]:
+            outcome.summary = self._analyse(outcome.path)
+        return outcome
+
+    def _root_attrs(self, run_uuid: str, started: str) -> dict[str, Any]:
+        versions = {r.name: f"{r.distribution} {r.version}" for r in self.registry.records
+                    if r.status == "loaded"}
+        return {
+            "uuid": run_uuid,
+            "start_time": started,
+            "kind": "measured",
+            "run_name": self.profile.run["name"],
+            "software_version": software_version(),
+            "plugin_versions": versions,
+            "profile": self.profile.text,
+            "profile_path": self.profile.path,
+            "overrides": list(self.profile.overrides),
+        }
+
+    def _open_instruments(self, writer: RunFileWriter) -> None:
+        for role in OPEN_ORDER:
+            config = self.profile.roles.get(role)
+            if config is None:
+                continue
+            self.bus.emit(Progress("configure", 0.0, f"opening {role} ({config.plugin})"))
+            descriptor = self.registry.get("instrument", config.plugin)
+            instrument = descriptor.open(config.address, dict(config.settings),
+                                         self.bench_context)
+            interface = ROLE_INTERFACES[role]
+            if not isinstance(instrument, interface):
+                raise InstrumentError(
+                    f"bench.{role}: plugin {config.plugin!r} returned "
+                    f"{type(instrument).__name__}, which is not a {interface.__name__}"
+                )
+            self.instruments[role] = instrument
+            if role == "amplifier":  # nothing may drive the shaker before we arm
+                instrument.safe_state()
+            identity = instrument.identify()
+            writer.write_instrument(role, {
+                "identity": identity, "plugin": config.plugin, "address": config.address,
+                "plugin_version": self.registry.version_of("instrument", config.plugin),
+            }, {**config.settings, **instrument.settings()})
+            self.bus.log("INFO", f"{role}: {identity}")
+
+    def _acquire(self, writer: RunFileWriter, waveform: np.ndarray, rate: float) -> None:
+        profile = self.profile
+        self.bus.emit(StateChanged("configuring"))
+        self._open_instruments(writer)
+        source, amplifier = self.instruments["source"], self.instruments["amplifier"]
+        acquisition = self.instruments["acquisition"]
+        vibrometer = self.instruments.get("vibrometer")
+        source.load_waveform(waveform, rate)
+        amplifier.set_gain(float(profile.roles["amplifier"].settings["gain"]))
+        inputs = {name: c.input for name, c in profile.channels.items()}
+        sample_rate = acquisition.configure(inputs, profile.run["sample_rate"],
+                                            profile.run["duration"])
+        sensitivities: dict[str, float] = {}
+        for name, channel in profile.channels.items():
+            sensitivity, t0 = channel.sensitivity, 0.0
+            if channel.sensor == "vibrometer" and vibrometer is not None:
+                sensitivity, t0 = vibrometer.sensitivity(), -vibrometer.delay()
+            sensitivities[name] = sensitivity
+            writer.create_channel(name, {
+                "units": channel.unit, "quantity": channel.quantity,
+                "sample_rate": sample_rate, "t0": t0, "sensitivity": sensitivity,
+                "sensitivity_units": f"V/({channel.unit})", "input": channel.input,
+                "source_instrument": channel.sensor or "acquisition",
+            })
+        writer.flush()
+        self._check_abort()
+
+        acquisition.arm()
+        amplifier.enable_output(True)
+        self.bus.emit(StateChanged("armed"))
+        self._check_abort()
+        source.start()
+        self.bus.emit(StateChanged("running"))
+        duration = profile.run["duration"]
+        timeout = max(2.0, 4 * profile.run["block_duration"])
+        samples = 0
+        last_poll = 0.0
+        while True:
+            self._check_abort()
+            block = acquisition.read_block(timeout)
+            if block is None:
+                break
+            calibrated = {}
+            for name, volts in block.items():
+                if name not in sensitivities:
+                    continue
+                values = np.asarray(volts, dtype=float) / sensitivities[name]
+                writer.append(name, values)
+                calibrated[name] = values
+            t0 = samples / sample_rate
+            samples += len(next(iter(block.values()))) if block else 0
+            if writer.flush_if_due():
+                self.bus.log("DEBUG", f"flushed {samples} samples per channel")
+            self.bus.emit(DataBlock(t0, sample_rate, calibrated))
+            self.bus.emit(Progress("acquire", min(1.0, samples / (duration * sample_rate)),
+                                   f"{samples / sample_rate:.2f} s of {duration:g} s"))
+            now = time.monotonic()
+            if now - last_poll >= INTERLOCK_POLL_S:
+                last_poll = now
+                tripped = [name for name, on in amplifier.interlocks().items() if on]
+                if tripped:
+                    raise InstrumentError(
+                        f"amplifier interlock tripped: {', '.join(tripped)}; the output was "
+                        "switched off by the amplifier"
+                    )
+        writer.flush()
+
+    def _check_abort(self) -> None:
+        if self._abort.is_set():
+            raise RunAborted("aborted by the operator")
+
+    def _safe_state_all(self, writer: RunFileWriter | None) -> dict[str, dict[str, Any]]:
+        """Safe state for every opened instrument, amplifier first; then read their state back."""
+        self.bus.emit(StateChanged("finalizing"))
+        errors: dict[str, str] = {}
+        for role in SAFE_ORDER:
+            instrument = self.instruments.get(role)
+            if instrument is None:
+                continue
+            try:
+                instrument.safe_state()
+            except Exception as exc:  # noqa: BLE001 - keep going: the others must be safed too
+                errors[role] = f"safe state failed: {type(exc).__name__}: {exc}"
+                self.bus.log("ERROR", f"{role}: {errors[role]}")
+        states: dict[str, dict[str, Any]] = {}
+        for role in SAFE_ORDER:
+            instrument = self.instruments.get(role)
+            if instrument is None:
+                continue
+            try:
+                states[role] = dict(instrument.read_state())
+            except Exception as exc:  # noqa: BLE001
+                states[role] = {"error": f"could not read state: {type(exc).__name__}: {exc}"}
+            if role in errors:
+                states[role]["safe_state_error"] = errors[role]
+            try:
+                instrument.close()
+            except Exception as exc:  # noqa: BLE001
+                self.bus.log("WARNING", f"{role}: close failed: {exc}")
+            if writer is not None and not writer.closed:
+                writer.write_final_state(role, states[role])
+        return states
+
+    def _finalize(self, writer: RunFileWriter | None, outcome: RunOutcome) -> None:
+        if writer is None or writer.closed:
+            return
+        writer.set_attrs({
+            "stop_time": utc_now(),
+            "exit_status": outcome.exit_status,
+            "error": outcome.error or "",
+            "traceback": outcome.traceback,
+        })
+        writer.close()
+        self.bus.log("INFO", f"run {outcome.exit_status}: {outcome.path}")
+
+    def _analyse(self, path: Path) -> dict[str, Any]:
+        self.bus.emit(StateChanged("analyzing"))
+        run = read_run(path)
+        return analyse_and_store(path, run.channels, self.profile.analysis,
+                                 self.profile.analysis_params, self.registry,
+                                 specimen=self.profile.specimen, bus=self.bus)
