@@ -1,0 +1,133 @@
+"""Profiles: every kind of bad profile is refused with one clear message and exit code 2."""
+
+import pytest
+from conftest import PROFILES, cli, cli_json
+
+from fsi_lab.errors import ProfileError
+from fsi_lab.profile import load_profile
+
+GOOD = PROFILES / "wet-beam-sim.toml"
+
+
+def _variant(tmp_path, old, new, name="bad.toml"):
+    text = GOOD.read_text()
+    assert old in text, f"test setup: {old!r} not in the profile"
+    path = tmp_path / name
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+def test_shipped_profile_is_valid(registry):
+    profile = load_profile(GOOD, registry)
+    assert profile.can_run
+    assert profile.roles["amplifier"].settings["gain"] == 2.0
+    assert profile.channels["tip_velocity"].sensor == "vibrometer"
+    assert profile.specimen.fluid == "water"
+    assert profile.text == GOOD.read_text()
+
+
+BAD_CASES = [
+    ("syntax", "[run]\n", "[run\n", "TOML syntax error"),
+    ("unknown key", "duration = 10.0", "duraton = 10.0",
+     "run.duraton: unknown key; allowed keys are block_duration, duration, name, sample_rate"),
+    ("unknown section", "\n[shaker]\n", "\n[shakr]\n", "shakr: unknown section; allowed sections are"),
+    ("wrong type", "gain = 2.0", 'gain = "high"',
+     "bench.amplifier.gain: got 'high' (str); expected a number >= 0 V/V and <= 100 V/V"),
+    ("out of bounds", "sample_rate = 10000.0", "sample_rate = 1e6",
+     "run.sample_rate: 1000000.0 is out of bounds; expected a number >= 1 Hz and <= 204800 Hz"),
+    ("missing required", "max_gain = 10.0", "",
+     "safety.max_gain: missing; expected a number > 0 V/V"),
+    ("unknown plugin", 'plugin = "ramp-derivative"', 'plugin = "ramp"',
+     "excitation.plugin: unknown excitation plugin 'ramp'; installed excitation plugins:"),
+    ("unknown instrument", 'plugin = "inprocess-amplifier"', 'plugin = "pa25e"',
+     "bench.amplifier.plugin: unknown instrument plugin 'pa25e'"),
+    ("wrong role", 'plugin = "inprocess-amplifier"', 'plugin = "inprocess-source"',
+     "bench.amplifier.plugin: 'inprocess-source' is a source driver, not a amplifier"),
+    ("bad choice", 'fluid = "water"', 'fluid = "oil"',
+     "specimen.fluid: got 'oil'; expected one of 'air', 'water'"),
+    ("unit mismatch", 'unit = "m/s^2"', 'unit = "m/s"',
+     "channels.base_acceleration.unit: 'm/s' is a unit of velocity"),
+    ("unknown analysis", "chain = []", 'chain = ["hilbert"]',
+     "analysis.hilbert.plugin: unknown analysis plugin 'hilbert'"),
+    ("negative geometry", "length = 0.08", "length = -0.08",
+     "specimen.length: -0.08 is out of bounds; expected a number > 0 m"),
+]
+
+
+@pytest.mark.parametrize("case, old, new, fragment", BAD_CASES, ids=[c[0] for c in BAD_CASES])
+def test_bad_profile_is_refused_and_nothing_is_written(tmp_path, case, old, new, fragment):
+    path = _variant(tmp_path, old, new)
+    out = tmp_path / "runs"
+    proc = cli("run", str(path), "--out", str(out))
+    assert proc.returncode == 2, proc.stderr
+    assert str(path) in proc.stderr
+    assert fragment in proc.stderr
+    assert proc.stderr.count("fsi-lab: error:") == 1, proc.stderr  # one message
+    assert "Traceback" not in proc.stderr
+    assert not out.exists()
+
+    check = cli("profile", "check", str(path))
+    assert check.returncode == 2 and fragment in check.stderr
+
+
+def test_json_error_is_one_object(tmp_path):
+    path = _variant(tmp_path, "duration = 10.0", "duration = -1.0")
+    data, proc = cli_json("profile", "check", str(path))
+    assert proc.returncode == 2
+    assert data["exit_code"] == 2 and "run.duration" in data["error"]
+
+
+def test_missing_file_is_named(tmp_path):
+    proc = cli("profile", "check", str(tmp_path / "nope.toml"))
+    assert proc.returncode == 2
+    assert "nope.toml: cannot read the profile" in proc.stderr
+
+
+def test_set_overrides_any_parameter_by_path(registry):
+    profile = load_profile(GOOD, registry, ["excitation.height=0.02", "bench.amplifier.gain=3",
+                                           "run.duration=2", "specimen.fluid=air",
+                                           "analysis.channels=tip_velocity,drive"])
+    assert profile.excitation["height"] == 0.02
+    assert profile.roles["amplifier"].settings["gain"] == 3.0
+    assert profile.run["duration"] == 2.0
+    assert profile.specimen.fluid == "air"
+    assert profile.analysis["channels"] == ["tip_velocity", "drive"]
+    assert profile.overrides[0] == "excitation.height=0.02"
+
+
+@pytest.mark.parametrize("override, fragment", [
+    ("excitation.hieght=1", "excitation.hieght: unknown key; allowed keys are height,"),
+    ("run.duration=long", "run.duration: cannot read 'long'; expected a number"),
+    ("bench.amplifier.gain=1000", "bench.amplifier.gain: 1000.0 is out of bounds"),
+    ("nonsense=1", "expected key.path=value"),
+    ("excitation.height", "expected key.path=value"),
+    ("widget.size=1", "widget.size: no such parameter"),
+])
+def test_bad_set_is_refused(registry, override, fragment):
+    with pytest.raises(ProfileError) as info:
+        load_profile(GOOD, registry, [override])
+    assert fragment in str(info.value) and str(GOOD) in str(info.value)
+
+
+def test_safety_limits_refuse_before_anything_is_written(tmp_path):
+    out = tmp_path / "runs"
+    proc = cli("run", str(GOOD), "--out", str(out), "--set", "excitation.height=0.1")
+    assert proc.returncode == 2
+    assert "peak drive 5 V exceeds safety.max_drive_v = 2 V" in proc.stderr
+    assert "refused before anything was sent" in proc.stderr
+    assert not out.exists()
+
+    proc = cli("run", str(GOOD), "--out", str(out), "--set", "bench.amplifier.gain=9.5",
+               "--set", "safety.max_stroke_mm=1")
+    assert proc.returncode == 2
+    assert "predicted stroke" in proc.stderr and "exceeds safety.max_stroke_mm = 1 mm" in proc.stderr
+    assert not out.exists()
+
+
+def test_profile_check_reports_the_safety_verdict():
+    data, proc = cli_json("profile", "check", str(GOOD))
+    assert proc.returncode == 0
+    safety = data["safety"]
+    assert safety["ok"] is True
+    assert safety["peak_drive_v"] == pytest.approx(0.5)  # 0.01 V*s over 0.02 s
+    assert 0 < safety["predicted_stroke_mm"] < safety["max_stroke_mm"]

@@ -1,0 +1,73 @@
+"""Plugin discovery through the fsi_lab entry-point group, with a real installed distribution."""
+
+import pytest
+from conftest import cli_json
+
+from fsi_lab.errors import PluginError
+from fsi_lab.registry import load_registry
+
+BUILT_IN_INSTRUMENTS = {"inprocess-source", "inprocess-amplifier", "inprocess-vibrometer",
+                        "inprocess-acquisition"}
+
+
+def _by_name(plugins):
+    return {p["name"]: p for p in plugins}
+
+
+def test_built_ins_are_loaded_through_entry_points(registry):
+    assert BUILT_IN_INSTRUMENTS <= set(registry.names("instrument"))
+    assert {"step", "ramp-derivative"} <= set(registry.names("excitation"))
+    record = next(r for r in registry.records if r.name == "step")
+    assert (record.distribution, record.status, record.kind) == ("fsi-lab", "loaded", "excitation")
+
+
+def test_external_distribution_is_discovered_and_broken_ones_isolated(example_plugin_dir):
+    data, proc = cli_json("plugins", env={"PYTHONPATH": str(example_plugin_dir)})
+    assert proc.returncode == 0, proc.stderr
+    plugins = _by_name(data["plugins"])
+    for name in ("chirp", "rms", "crossings"):
+        assert plugins[name]["status"] == "loaded"
+        assert plugins[name]["distribution"] == "fsi-lab-example-plugin"
+        assert plugins[name]["version"] == "1.2.3"
+    assert plugins["chirp"]["kind"] == "excitation"
+    assert plugins["rms"]["kind"] == "analysis"
+    chirp_params = {p["name"]: p for p in plugins["chirp"]["params"]}
+    assert chirp_params["amplitude"]["unit"] == "V" and chirp_params["amplitude"]["maximum"] == 5.0
+
+    broken = plugins["example-broken"]
+    assert broken["status"] == "failed"
+    assert "ModuleNotFoundError" in broken["error"]
+    assert "fsi_lab_example_missing_dependency" in broken["error"]
+    bad = plugins["example-bad-contract"]
+    assert bad["status"] == "invalid"
+    assert "expected ExcitationPlugin" in bad["error"]
+    # the rest keep working
+    assert BUILT_IN_INSTRUMENTS <= {n for n, p in plugins.items() if p["status"] == "loaded"}
+    assert "skipped" in proc.stderr and "example-broken" in proc.stderr
+
+
+def test_every_record_has_the_documented_keys(example_plugin_dir):
+    data, _ = cli_json("plugins", env={"PYTHONPATH": str(example_plugin_dir)})
+    for plugin in data["plugins"]:
+        assert {"name", "kind", "version", "distribution", "status", "error"} <= set(plugin)
+        assert plugin["kind"] in ("instrument", "excitation", "analysis", None)
+
+
+def test_autoload_can_be_disabled_with_an_allow_list(with_example_plugin, monkeypatch):
+    monkeypatch.setenv("FSI_LAB_DISABLE_PLUGIN_AUTOLOAD", "1")
+    monkeypatch.setenv("FSI_LAB_PLUGINS", "example,step")
+    registry = load_registry()
+    assert registry.names("excitation") == ["chirp", "step"]
+    assert registry.names("instrument") == []
+    disabled = {r.entry_point for r in registry.records if r.status == "disabled"}
+    assert {"inprocess", "ramp-derivative", "example-broken"} <= disabled
+
+
+def test_a_disabled_plugin_is_reported_as_unknown_with_the_choices(with_example_plugin,
+                                                                     monkeypatch):
+    monkeypatch.setenv("FSI_LAB_DISABLE_PLUGIN_AUTOLOAD", "1")
+    monkeypatch.setenv("FSI_LAB_PLUGINS", "step")
+    registry = load_registry()
+    with pytest.raises(PluginError, match="unknown excitation plugin 'chirp'; installed "
+                                          "excitation plugins: step"):
+        registry.get("excitation", "chirp")

@@ -1,0 +1,161 @@
+"""Run orchestration: lifecycle, events, and the safe state on every exit path."""
+
+import re
+import shutil
+import signal
+import subprocess
+import threading
+
+import h5py
+import numpy as np
+import pytest
+from conftest import LineReader, start_cli
+
+from fsi_lab.events import DataBlock, EventBus, StateChanged
+from fsi_lab.profile import load_profile
+from fsi_lab.runfile import read_run
+from fsi_lab.runner import Runner
+
+
+def _run(profile_path, registry, out, **runner_kwargs):
+    bus = EventBus()
+    events = []
+    bus.subscribe(events.append)
+    profile = load_profile(profile_path, registry)
+    runner = Runner(profile, registry, out, bus=bus, **runner_kwargs)
+    return runner, runner.run, events
+
+
+def _assert_safe(path):
+    run = read_run(path, load_data=False)
+    amplifier = run.instruments["amplifier"]["final_state"]
+    source = run.instruments["source"]["final_state"]
+    assert amplifier["output_enabled"] is False
+    assert source["output_enabled"] is False and source["level_v"] == 0.0
+    return run
+
+
+def test_completed_run_writes_everything(sim_profile, registry, tmp_path):
+    _, run, events = _run(sim_profile(duration=1.0), registry, tmp_path)
+    outcome = run()
+    assert outcome.exit_status == "completed" and outcome.error is None
+    assert re.fullmatch(r"\d{8}-\d{6}_[0-9a-f]{8}\.h5", outcome.path.name)
+    record = _assert_safe(outcome.path)
+    assert record.attrs["exit_status"] == "completed"
+    assert record.attrs["uuid"].startswith(outcome.path.name[16:24])
+    assert record.attrs["profile"].startswith("\n[run]")
+    assert "fsi-lab" in record.attrs["plugin_versions"]["step"]
+    assert record.attrs["stop_time"] > record.attrs["start_time"]
+    assert record.instruments["amplifier"]["settings"]["gain"] == 2.0
+    assert "SIM0001" in record.instruments["vibrometer"]["identity"]
+
+    run_data = read_run(outcome.path)
+    velocity = run_data.channels["tip_velocity"]
+    assert velocity.data.shape == (2000,) and velocity.sample_rate == 2000.0
+    assert run_data.channel_attrs["tip_velocity"]["sensitivity"] == pytest.approx(8.0)  # 125 mm/s/V
+    assert run_data.channel_attrs["base_acceleration"]["units"] == "m/s^2"
+    # the step moved the base and the beam responded
+    assert np.max(np.abs(velocity.data)) > 1e-3
+    excitation = run_data.excitation
+    assert excitation["plugin"] == "step" and excitation["sample_rate"] == 2000.0
+    assert excitation["params"]["amplitude"] == 0.5
+    assert excitation["waveform"].max() == pytest.approx(0.5)
+
+    states = [e.state for e in events if isinstance(e, StateChanged)]
+    assert states == ["configuring", "armed", "running", "finalizing", "completed"]
+    blocks = [e for e in events if isinstance(e, DataBlock)]
+    assert sum(len(b.data["tip_velocity"]) for b in blocks) == 2000
+    assert np.allclose(np.concatenate([b.data["tip_velocity"] for b in blocks]), velocity.data)
+
+
+def test_dead_instrument_ends_failed_in_safe_state_with_data_kept(sim_profile, registry, tmp_path):
+    path = sim_profile(duration=5.0, realtime="true", acquisition_extra="fail_after_s = 0.6")
+    _, run, events = _run(path, registry, tmp_path)
+    outcome = run()
+    assert outcome.exit_status == "failed"
+    assert "no answer (simulated failure after 0.6 s)" in outcome.error
+    record = _assert_safe(outcome.path)
+    assert record.attrs["exit_status"] == "failed"
+    assert "InstrumentError" in record.attrs["traceback"]
+    kept = read_run(outcome.path).channels["tip_velocity"].data
+    assert 0 < kept.size < 10000
+
+
+def test_interlock_trip_ends_failed_and_safe(sim_profile, registry, tmp_path):
+    path = sim_profile(duration=5.0, realtime="true", amplifier_extra="interlock_after_s = 0.4")
+    _, run, _ = _run(path, registry, tmp_path)
+    outcome = run()
+    assert outcome.exit_status == "failed"
+    assert "amplifier interlock tripped: over_travel" in outcome.error
+    record = _assert_safe(outcome.path)
+    assert record.instruments["amplifier"]["final_state"]["interlocks"] == {"over_travel": True}
+
+
+def test_dead_amplifier_is_still_recorded(sim_profile, registry, tmp_path):
+    path = sim_profile(duration=5.0, realtime="true", amplifier_extra="fail_after_s = 0.4")
+    _, run, _ = _run(path, registry, tmp_path)
+    outcome = run()
+    assert outcome.exit_status == "failed" and "amplifier" in outcome.error
+    _assert_safe(outcome.path)
+
+
+def test_abort_from_another_thread(sim_profile, registry, tmp_path):
+    runner, run, events = _run(sim_profile(duration=20.0, realtime="true"), registry, tmp_path)
+    started = threading.Event()
+    runner.bus.subscribe(lambda e: isinstance(e, DataBlock) and started.set())
+    thread = threading.Thread(target=lambda: (started.wait(10), runner.abort()))
+    thread.start()
+    outcome = run()
+    thread.join(timeout=10)
+    assert outcome.exit_status == "aborted" and outcome.error == "aborted by the operator"
+    _assert_safe(outcome.path)
+
+
+@pytest.mark.parametrize("signum, expected_code", [(signal.SIGINT, 130), (signal.SIGTERM, 130)])
+def test_signal_aborts_the_run_in_safe_state(sim_profile, tmp_path, signum, expected_code):
+    out = tmp_path / "runs"
+    proc = start_cli("run", str(sim_profile(duration=30.0, realtime="true")), "--out", str(out),
+                     "--verbose")
+    try:
+        stderr = LineReader(proc.stderr)
+        stderr.wait_for(lambda line: line.startswith("[debug] flushed"), timeout=60)
+        proc.send_signal(signum)
+        assert proc.wait(timeout=30) == expected_code
+    finally:
+        proc.kill()
+        proc.wait(timeout=10)
+    path = next(out.glob("*.h5"))
+    record = _assert_safe(path)
+    assert record.attrs["exit_status"] == "aborted"
+    assert record.channels["tip_velocity"] is not None
+    with h5py.File(path, "r") as handle:
+        assert 0 < handle["channels/tip_velocity"].shape[0] < 60000
+
+
+def test_killed_run_leaves_a_readable_file(sim_profile, tmp_path):
+    out = tmp_path / "runs"
+    proc = start_cli("run", str(sim_profile(duration=30.0, realtime="true")), "--out", str(out),
+                     "--verbose")
+    try:
+        stderr = LineReader(proc.stderr)
+        line = ""
+        for _ in range(3):  # wait for the third flush
+            line = stderr.wait_for(lambda text: text.startswith("[debug] flushed"), timeout=60)
+        flushed = int(re.search(r"flushed (\d+) samples", line).group(1))
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=10)
+    finally:
+        proc.kill()
+        proc.wait(timeout=10)
+    path = next(out.glob("*.h5"))
+    with h5py.File(path, "r") as handle:
+        assert handle.attrs["exit_status"] == "running"
+        for name in ("tip_velocity", "base_acceleration"):
+            data = handle["channels"][name][()]
+            assert data.size >= flushed > 0
+            assert np.all(np.isfinite(data))
+    h5dump = shutil.which("h5dump")
+    assert h5dump, "h5dump (hdf5-tools) is needed; `make test` installs it"
+    dump = subprocess.run([h5dump, "-A", str(path)], capture_output=True, text=True, timeout=60)
+    assert dump.returncode == 0, dump.stderr
+    assert "tip_velocity" in dump.stdout and '"running"' in dump.stdout
