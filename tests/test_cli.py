@@ -1,0 +1,103 @@
+"""The `fsi-lab` command: analyze, show, run --json and file errors."""
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+from conftest import cli, cli_json
+
+from fsi_lab.runfile import read_run
+
+
+@pytest.fixture
+def imported_run(tmp_path):
+    t = np.arange(2000) / 1000.0
+    rows = zip(0.02 * np.sin(2 * np.pi * 9 * t), np.ones_like(t) * 0.3)
+    csv_path = tmp_path / "rec.csv"
+    csv_path.write_text("tip [m/s],flat [m/s]\n" + "\n".join(f"{a},{b}" for a, b in rows))
+    out = tmp_path / "rec.h5"
+    assert cli("import", str(csv_path), "--rate", "1000", "-o", str(out)).returncode == 0
+    return out
+
+
+def test_analyze_runs_the_chain_and_isolates_failures(imported_run, example_plugin_dir):
+    env = {"PYTHONPATH": str(example_plugin_dir)}
+    data, proc = cli_json("analyze", str(imported_run), "--set", "analysis.chain=rms,crossings",
+                          "--set", "analysis.rms.scale=2", env=env)
+    assert proc.returncode == 0, proc.stderr
+    tip, flat = data["channels"]["tip"], data["channels"]["flat"]
+    assert tip["rms"] == pytest.approx(2 * 0.02 / np.sqrt(2), rel=1e-3)
+    assert tip["components"] == [{"index": 0, "crossings": 36}]
+    # the constant channel fails in `crossings` only; its rms is still there
+    assert flat["rms"] == pytest.approx(0.0, abs=1e-12)
+    assert flat["errors"] == [{"plugin": "crossings", "message":
+                               "crossings: channel flat: 0 zero crossings, need at least 1"}]
+    assert "analysis crossings on channel flat" in proc.stderr
+
+    with h5py.File(imported_run, "r") as handle:
+        group = handle["analysis/tip/rms"]
+        assert group.attrs["status"] == "ok"
+        assert group.attrs["rms"] == pytest.approx(tip["rms"])
+        assert group["params"].attrs["scale"] == 2.0
+        assert group["squared"].attrs["units"] == "(unit)^2"
+        failed = handle["analysis/flat/crossings"]
+        assert failed.attrs["status"] == "failed" and "0 zero crossings" in failed.attrs["error"]
+        assert json.loads(handle["analysis"].attrs["summary"]) == data
+    # raw data untouched
+    assert read_run(imported_run).channels["tip"].data.size == 2000
+
+    # a new analysis replaces the old results only
+    data2, proc = cli_json("analyze", str(imported_run), "--set", "analysis.chain=rms", env=env)
+    assert proc.returncode == 0
+    with h5py.File(imported_run, "r") as handle:
+        assert "crossings" not in handle["analysis/tip"]
+        assert handle["channels/tip"].shape == (2000,)
+
+
+def test_analyze_refuses_settings_outside_analysis(imported_run):
+    proc = cli("analyze", str(imported_run), "--set", "run.duration=3")
+    assert proc.returncode == 2
+    assert "only analysis, specimen parameters can be set here" in proc.stderr
+
+
+def test_show_describes_a_run(imported_run):
+    data, proc = cli_json("show", str(imported_run))
+    assert proc.returncode == 0
+    assert data["channels"]["tip"]["samples"] == 2000
+    assert data["channels"]["tip"]["quantity"] == "velocity"
+    assert data["attrs"]["kind"] == "imported"
+    text = cli("show", str(imported_run)).stdout
+    assert "channel tip: velocity [m/s], 2000 samples at 1000 Hz (2.000 s)" in text
+
+
+@pytest.mark.parametrize("content, fragment", [
+    (b"not hdf5 at all", "not a readable HDF5 file"),
+    (None, "not an fsi-lab run file"),
+])
+def test_foreign_or_corrupt_files_are_refused(tmp_path, content, fragment):
+    path = tmp_path / "other.h5"
+    if content is None:
+        with h5py.File(path, "w") as handle:
+            handle["x"] = np.arange(3)
+    else:
+        path.write_bytes(content)
+    for command in ("show", "analyze"):
+        proc = cli(command, str(path))
+        assert proc.returncode == 2, proc.stderr
+        assert str(path) in proc.stderr and fragment in proc.stderr
+
+
+def test_run_json_is_one_object_with_path_status_and_safety(sim_profile, tmp_path,
+                                                             example_plugin_dir):
+    profile = sim_profile(analysis='[analysis]\nchain = ["rms"]\nchannels = ["tip_velocity"]\n')
+    data, proc = cli_json("run", str(profile), "--out", str(tmp_path / "runs"),
+                          env={"PYTHONPATH": str(example_plugin_dir)})
+    assert proc.returncode == 0, proc.stderr
+    assert data["exit_status"] == "completed"
+    assert data["final_state"]["amplifier"]["output_enabled"] is False
+    assert data["safety"]["ok"] is True
+    assert data["analysis"]["run"] == data["run"]
+    assert data["analysis"]["channels"]["tip_velocity"]["rms"] > 0
+    assert read_run(data["run"]).attrs["exit_status"] == "completed"
+    assert "[state] completed" not in proc.stdout  # logs stay on stderr

@@ -1,0 +1,80 @@
+"""`fsi-lab import`: CSV files recorded elsewhere become run files."""
+
+import numpy as np
+import pytest
+from conftest import cli, cli_json
+
+from fsi_lab.runfile import read_run
+from fsi_lab.units import STANDARD_GRAVITY
+
+
+def _write(path, header, rows):
+    path.write_text(",".join(header) + "\n" + "\n".join(",".join(map(str, r)) for r in rows) + "\n")
+    return path
+
+
+def test_import_with_rate(tmp_path):
+    t = np.arange(500) / 1000.0
+    v = 0.01 * np.sin(2 * np.pi * 17 * t)
+    a = 0.5 * np.cos(2 * np.pi * 17 * t)
+    csv_path = _write(tmp_path / "rec.csv", ["tip [m/s]", "base [g]", "drive [V]"],
+                      zip(v, a, np.ones_like(t)))
+    out = tmp_path / "rec.h5"
+    data, proc = cli_json("import", str(csv_path), "--rate", "1000", "-o", str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert data == {"run": str(out)}
+    run = read_run(out)
+    assert run.attrs["kind"] == "imported" and run.attrs["exit_status"] == "completed"
+    tip = run.channels["tip"]
+    assert (tip.quantity, tip.unit, tip.sample_rate) == ("velocity", "m/s", 1000.0)
+    np.testing.assert_allclose(tip.data, v, rtol=1e-12)
+    base = run.channels["base"]
+    assert (base.quantity, base.unit) == ("acceleration", "m/s^2")
+    np.testing.assert_allclose(base.data, a * STANDARD_GRAVITY, rtol=1e-12)
+    assert run.channel_attrs["base"]["original_units"] == "g"
+    assert run.channels["drive"].quantity == "voltage"
+
+
+def test_time_column_replaces_rate(tmp_path):
+    t = 2.0 + np.arange(100) / 250.0
+    csv_path = _write(tmp_path / "t.csv", ["time [s]", "x [m]"], zip(t, np.sin(t)))
+    out = tmp_path / "t.h5"
+    assert cli("import", str(csv_path), "-o", str(out)).returncode == 0
+    run = read_run(out)
+    assert run.channels["x"].sample_rate == pytest.approx(250.0)
+    assert run.channels["x"].t0 == pytest.approx(2.0)
+    assert run.channels["x"].quantity == "displacement"
+    assert "time" not in run.channels
+
+
+@pytest.mark.parametrize("header, rows, args, fragment", [
+    (["tip [mm/s]"], [[1], [2]], ["--rate", "10"],
+     "header column 1 (tip): unit 'mm/s' is not accepted; expected one of m, m/s, m/s^2, g, V"),
+    (["tip"], [[1], [2]], ["--rate", "10"], "header column 1 is 'tip'; expected 'name [unit]'"),
+    (["tip [m/s]", "tip [m]"], [[1, 2], [2, 3]], ["--rate", "10"],
+     "column name 'tip' appears twice"),
+    (["tip [m/s]"], [[1], ["x"]], ["--rate", "10"], "line 3, column 1 (tip): 'x' is not a number"),
+    (["tip [m/s]", "b [V]"], [[1, 2], [2]], ["--rate", "10"],
+     "line 3 has 1 values; the header has 2 columns"),
+    (["tip [m/s]"], [[1], [2]], [], "no 'time [s]' column; give the sample rate with --rate HZ"),
+    (["tip [m/s]"], [[1], [2]], ["--rate", "-5"], "--rate -5.0: expected a positive sample rate"),
+    (["time [s]", "tip [m/s]"], [[0, 1], [0.1, 2], [0.25, 3]], [],
+     "the time column is not uniformly sampled"),
+    (["tip [m/s]"], [[1], ["nan"]], ["--rate", "10"], "expected a finite number"),
+])
+def test_bad_csv_is_refused_with_file_and_place(tmp_path, header, rows, args, fragment):
+    csv_path = _write(tmp_path / "bad.csv", header, rows)
+    out = tmp_path / "bad.h5"
+    proc = cli("import", str(csv_path), "-o", str(out), *args)
+    assert proc.returncode == 2
+    assert fragment in proc.stderr
+    assert not out.exists()
+
+
+def test_existing_output_is_never_overwritten(tmp_path):
+    csv_path = _write(tmp_path / "a.csv", ["x [m]"], [[1], [2]])
+    out = tmp_path / "a.h5"
+    out.write_bytes(b"precious")
+    proc = cli("import", str(csv_path), "--rate", "10", "-o", str(out))
+    assert proc.returncode == 2 and "already exists" in proc.stderr
+    assert out.read_bytes() == b"precious"
