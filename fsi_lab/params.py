@@ -170,6 +170,8 @@ class Param:
     def parse(self, text: str, where: str) -> Any:
         """Parse a command-line string (``--set``) into a checked value."""
         text = text.strip()
+        if self.default is None and text.lower() in ("none", "auto", ""):
+            return None
         try:
             if self.type == "bool":
                 lowered = text.lower()
@@ -190,8 +192,6 @@ class Param:
             raise ParameterError(
                 f"{where}: cannot read {text!r}; expected {self.describe()}"
             ) from None
-        if self.default is None and text.lower() in ("none", "auto", ""):
-            return None
         return self.check(value, where)
 
 
