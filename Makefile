@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 export QT_QPA_PLATFORM ?= offscreen
 
-.PHONY: demo test bench venv clean
+.PHONY: demo test bench clean h5dump-tool
 
 # A venv with the package (editable) and the given extras; rebuilt when pyproject.toml changes.
 $(VENV)/.installed-%: pyproject.toml
@@ -26,9 +26,17 @@ demo: $(VENV)/.installed-gui
 test: $(VENV)/.installed-dev,gui h5dump-tool
 	$(BIN)/python -m pytest
 
-bench: $(VENV)/.installed-dev,gui
-	$(BIN)/python -m pip install --quiet pysdkit  # the reference HVD, benchmark environment only
-	$(BIN)/python -m bench
+# The benchmark environment has the references we compare with (pysdkit's HVD); they are
+# not dependencies of fsi-lab, so they live in a venv of their own.
+BENCH_VENV := .venv-bench
+$(BENCH_VENV)/.installed: pyproject.toml
+	test -x $(BENCH_VENV)/bin/python || $(PYTHON) -m venv $(BENCH_VENV)
+	$(BENCH_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(BENCH_VENV)/bin/python -m pip install --quiet -e '.[gui]' pysdkit
+	touch $@
+
+bench: $(BENCH_VENV)/.installed
+	$(BENCH_VENV)/bin/python -m bench
 
 clean:
-	rm -rf $(VENV) runs build *.egg-info
+	rm -rf $(VENV) $(BENCH_VENV) runs build *.egg-info
