@@ -409,7 +409,8 @@ class BeamModel:
         if not np.all(np.isfinite(x)) or np.any(x < 0) or np.any(x > self.length):
             bad = x[~(np.isfinite(x) & (x >= 0) & (x <= self.length))].ravel()[0]
             raise ParameterError(
-                f"position x = {float(bad)!r} m is not on the beam; expected 0 <= x <= {self.length:g} m")
+                f"position x = {float(bad)!r} m is not on the beam; "
+                f"expected 0 <= x <= {self.length:g} m")
         return x / self.length
 
     def mode_shape(self, x: Any, n: int, derivative: int = 0) -> np.ndarray:
