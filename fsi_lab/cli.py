@@ -250,6 +250,65 @@ def cmd_profile_check(args) -> int:
     return 0 if not result["safety"] or result["safety"]["ok"] else 2
 
 
+def _model_profile(args):
+    from fsi_lab.errors import ProfileError
+    from fsi_lab.profile import load_profile
+
+    registry = _registry()
+    profile = load_profile(args.profile, registry, args.set)
+    if profile.specimen is None:
+        raise ProfileError(f"{args.profile}: specimen: missing; the model needs [specimen]")
+    return registry, profile
+
+
+def cmd_model(args) -> int:
+    from fsi_lab.modelling import beam_model, model_summary
+
+    _, profile = _model_profile(args)
+    summary = model_summary(beam_model(profile.specimen, profile.model, args.modes))
+    if args.json:
+        _emit_json(summary)
+        return 0
+    print(f"fluid: {summary['fluid']}; added mass ratio M/mu = {summary['added_mass_ratio']:.2f}; "
+          f"theoretical C_f = {summary['c_f_theory']:.3g} kg/m^2")
+    for n, f in enumerate(summary["natural_frequencies_hz"], start=1):
+        print(f"  mode {n}: {f:.4f} Hz")
+    return 0
+
+
+def cmd_simulate(args) -> int:
+    from fsi_lab.errors import ProfileError
+    from fsi_lab.modelling import simulate_run
+    from fsi_lab.runfile import new_run_path, software_version
+    from fsi_lab.runner import prepare_excitation
+
+    registry, profile = _model_profile(args)
+    if profile.excitation_plugin is None:
+        raise ProfileError(f"{args.profile}: excitation: missing; simulate needs [excitation]")
+    for name, value, unit in (("--duration", args.duration, "s"), ("--rate", args.rate, "Hz")):
+        if not (math.isfinite(value) and value > 0):
+            raise InputFileError(f"{name} {value}: expected a positive number of {unit}")
+    if args.output.exists():
+        raise InputFileError(f"{args.output}: already exists; choose another output file")
+    waveform, rate = prepare_excitation(profile, registry)
+    _, run_uuid, started = new_run_path(args.output.parent)
+    bus = EventBus()
+    console = Console(args.quiet or args.json, args.verbose)
+    bus.subscribe(console)
+    try:
+        simulate_run(profile, waveform, rate, args.duration, args.rate, args.output, args.modes,
+                     {"uuid": run_uuid, "start_time": started, "profile": profile.text,
+                      "profile_path": profile.path, "software_version": software_version()},
+                     progress=lambda f: bus.emit(Progress("simulate", f, "simulating")))
+    finally:
+        console.close()
+    if args.json:
+        _emit_json({"run": str(args.output)})
+    else:
+        print(f"wrote {args.output}")
+    return 0
+
+
 def format_summary(summary: dict[str, Any]) -> str:
     """The analysis summary as a few readable lines."""
     lines = []
@@ -313,6 +372,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("run", type=Path)
     common(p)
     p.set_defaults(func=cmd_show)
+
+    p = sub.add_parser("model", help="natural frequencies and damping of the profile's beam model")
+    p.add_argument("profile", type=Path)
+    p.add_argument("--modes", type=int, help="number of modes (default: model.modes)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    common(p)
+    p.set_defaults(func=cmd_model)
+
+    p = sub.add_parser("simulate", help="write a run file of the beam model driven by the profile")
+    p.add_argument("profile", type=Path)
+    p.add_argument("--duration", type=float, required=True, metavar="S")
+    p.add_argument("--rate", type=float, required=True, metavar="HZ")
+    p.add_argument("--modes", type=int, help="number of modes (default: model.modes)")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT.h5")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    common(p)
+    p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("plugins", help="list the plugins found and their status")
     common(p)

@@ -133,7 +133,8 @@ class InstrumentPlugin:
 
     ``open(address, settings, bench)`` returns an object implementing the role interface;
     ``settings`` has been validated against ``params``. ``bench`` is a dict shared by all
-    instruments of one run (simulated instruments use it to find each other), empty otherwise.
+    instruments of one run; it holds the profile's ``specimen``, ``model`` and ``shaker`` sections,
+    which simulated instruments use for their physics, and is where they find each other.
     """
 
     name: str

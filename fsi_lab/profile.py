@@ -16,6 +16,7 @@ from typing import Any, Mapping
 
 from fsi_lab.contract import ROLES
 from fsi_lab.errors import ParameterError, PluginError, ProfileError
+from fsi_lab.modelling import MODEL_PARAMS
 from fsi_lab.params import Param, Schema, find, validate
 from fsi_lab.registry import Registry
 from fsi_lab.specimen import SPECIMEN_PARAMS, Specimen
@@ -77,7 +78,8 @@ ANALYSIS_PARAMS: tuple[Param, ...] = (
           help="Base-acceleration channel used by transfer functions and the modal model."),
 )
 
-SECTIONS = ("run", "safety", "shaker", "specimen", "bench", "channels", "excitation", "analysis")
+SECTIONS = ("run", "safety", "shaker", "specimen", "model", "bench", "channels", "excitation",
+            "analysis")
 
 
 @dataclass(frozen=True)
@@ -112,6 +114,7 @@ class Profile:
     safety: dict[str, Any] | None
     shaker: dict[str, Any]
     specimen: Specimen | None
+    model: dict[str, Any]
     bench: dict[str, Any]
     roles: dict[str, RoleConfig]
     channels: dict[str, ChannelConfig]
@@ -163,7 +166,7 @@ def schema_for(raw: Mapping[str, Any], path: list[str], registry: Registry) -> P
     where = ".".join(path)
     section, rest = path[0], path[1:]
     fixed = {"run": RUN_PARAMS, "safety": SAFETY_PARAMS, "shaker": SHAKER_PARAMS,
-             "specimen": SPECIMEN_PARAMS}
+             "specimen": SPECIMEN_PARAMS, "model": MODEL_PARAMS}
     schema: Schema | None = None
     name = rest[-1] if rest else ""
     if section in fixed and len(rest) == 1:
@@ -279,6 +282,7 @@ def _validate(raw, path, text, registry, overrides) -> Profile:
         Specimen.from_mapping(_table(raw, "specimen", "specimen"))
         if "specimen" in raw else None
     )
+    model = validate(MODEL_PARAMS, _table(raw, "model", "model"), "model")
 
     bench_raw = dict(_table(raw, "bench", "bench"))
     role_tables = {role: bench_raw.pop(role) for role in ROLES if role in bench_raw}
@@ -366,6 +370,6 @@ def _validate(raw, path, text, registry, overrides) -> Profile:
         )
 
     return Profile(path=path, text=text, run=run, safety=safety, shaker=shaker,
-                   specimen=specimen, bench=bench, roles=roles, channels=channels,
+                   specimen=specimen, model=model, bench=bench, roles=roles, channels=channels,
                    excitation_plugin=excitation_plugin, excitation=excitation,
                    analysis=analysis, analysis_params=analysis_params, overrides=overrides)

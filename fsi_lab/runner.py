@@ -149,7 +149,10 @@ class Runner:
         self.analyze = analyze
         self._abort = threading.Event()
         self.instruments: dict[str, Instrument] = {}
-        self.bench_context: dict[str, Any] = {}
+        # Shared by the instruments of this run; simulated ones find the physics here.
+        self.bench_context: dict[str, Any] = {
+            "specimen": profile.specimen, "model": profile.model, "shaker": profile.shaker,
+        }
 
     def abort(self) -> None:
         """Ask the run to stop as soon as possible and go to the safe state (thread-safe)."""

@@ -2,9 +2,9 @@
 
 They implement the same role interfaces as the hardware drivers, without any wire, so that the
 core (profiles, safety, orchestration, run files, analysis) can be rehearsed and tested with
-no hardware. The physics: source volts -> amplifier gain -> shaker armature on its suspension
--> base acceleration -> the beam's first mode in the fluid, with linear and quadratic damping ->
-tip velocity; every channel gets Gaussian noise.
+no hardware. The physics is the profile's own: source volts -> amplifier gain ->
+shaker armature on its suspension (``[shaker]``) -> base acceleration -> the beam-in-fluid model
+(``[specimen]`` and ``[model]``) -> tip velocity; every input gets Gaussian noise.
 
 Fault settings (``fail_after_s``, ``interlock_after_s``) make an instrument die or trip an
 interlock mid-run, for tests of the safe state.
@@ -16,11 +16,11 @@ import time
 from typing import Any, Mapping
 
 import numpy as np
-from scipy import signal
 
 from fsi_lab.contract import Acquisition, Amplifier, InstrumentPlugin, SignalSource, Vibrometer
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
+from fsi_lab.modelling import BenchPhysics, beam_model
 from fsi_lab.params import Param
 
 INTERLOCKS = ("over_travel", "supply_fault", "over_temperature", "over_current", "e_stop",
@@ -135,9 +135,17 @@ class InProcessVibrometer(_Base, Vibrometer):
 
 
 class InProcessAcquisition(_Base, Acquisition):
-    """Digitiser whose inputs carry 1: drive (V), 2: base acceleration, 3: tip velocity, 4: spare."""
+    """Digitiser whose inputs carry 1: drive (V), 2: base acceleration, 3: tip velocity, 4: spare.
+
+    The physics behind the inputs is the profile's: ``[shaker]`` for the base motion and
+    ``[specimen]`` with ``[model]`` for the beam (see :class:`fsi_lab.modelling.BenchPhysics`).
+    """
 
     SIGNALS = {1: "drive", 2: "base_acceleration", 3: "tip_velocity", 4: "spare"}
+
+    def __init__(self, name, address, settings, context) -> None:
+        super().__init__(name, address, settings, context)
+        self._context = context
 
     def configure(self, inputs: Mapping[str, int], sample_rate: float, duration: float) -> float:
         self._alive()
@@ -148,25 +156,21 @@ class InProcessAcquisition(_Base, Acquisition):
                 f"{self._name}: channel {name!r} uses input {number}; this digitiser has inputs "
                 f"1 to {len(self.SIGNALS)}"
             )
+        specimen = self._context.get("specimen")
+        if specimen is None:
+            raise InstrumentError(
+                f"{self._name}: the simulated bench needs the profile's [specimen] (the beam "
+                "whose response it simulates)"
+            )
         self._inputs = dict(inputs)
         self._rate = float(sample_rate)
         self._total = int(round(duration * sample_rate))
         self._block = max(1, int(round(self._settings["block_duration"] * sample_rate)))
         self._rng = np.random.default_rng(self._settings["seed"])
-        self._build_filters()
+        model = beam_model(specimen, self._context["model"])
+        self._physics = BenchPhysics(model, self._context["shaker"], self._rate,
+                                     specimen.measurement_point)
         return self._rate
-
-    def _build_filters(self) -> None:
-        s = self._settings
-        dt = 1.0 / self._rate
-        ws = 2 * np.pi * s["shaker_hz"]
-        # base acceleration per amplifier volt: s^2 ws^2 k / (s^2 + 2 zeta ws s + ws^2)
-        b, a, _ = signal.cont2discrete(
-            ([ws * ws * s["shaker_mm_per_volt"] * 1e-3, 0.0, 0.0],
-             [1.0, 2 * s["shaker_damping"] * ws, ws * ws]), dt, method="bilinear")
-        self._shaker = (np.ravel(b), np.ravel(a))
-        self._shaker_zi = np.zeros(max(len(a), len(b)) - 1)
-        self._beam_state = np.zeros(2)  # relative tip displacement (m) and velocity (m/s)
 
     def arm(self) -> None:
         self._alive()
@@ -181,50 +185,29 @@ class InProcessAcquisition(_Base, Acquisition):
             return np.zeros(n)
         return np.interp(t, np.arange(wave.size) / rate, wave, left=0.0, right=0.0)
 
-    def _beam(self, base_acc: np.ndarray) -> np.ndarray:
-        """Tip velocity relative to the base: first mode, linear + quadratic damping (RK2)."""
-        s = self._settings
-        w = 2 * np.pi * s["beam_hz"]
-        c1, c2 = 2 * s["beam_damping"] * w, s["beam_quadratic"]
-        dt = 1.0 / self._rate
-        x, v = self._beam_state
-        out = np.empty_like(base_acc)
-        for i, a_b in enumerate(base_acc):  # the in-process bench is small; clarity over speed
-            acc = -a_b - c1 * v - c2 * abs(v) * v - w * w * x
-            vm = v + 0.5 * dt * acc
-            xm = x + 0.5 * dt * v
-            accm = -a_b - c1 * vm - c2 * abs(vm) * vm - w * w * xm
-            x, v = x + dt * vm, v + dt * accm
-            out[i] = v
-        self._beam_state[:] = (x, v)
-        return out
-
     def read_block(self, timeout: float) -> dict[str, np.ndarray] | None:
         self._alive()
         if self._sent >= self._total:
             return None
         n = min(self._block, self._total - self._sent)
-        pace = self._settings["realtime"]
-        if pace:
-            due = self._t_start + (self._sent + n) / self._rate
-            wait = due - time.monotonic()
+        if self._settings["realtime"]:
+            wait = self._t_start + (self._sent + n) / self._rate - time.monotonic()
             if wait > timeout:
                 raise InstrumentError(f"{self._name}: no block within {timeout:g} s")
             if wait > 0:
                 time.sleep(wait)
         bench = self._bench
         drive = self._drive(self._sent, n)
-        amp_out = drive * bench["gain"] * bench["output_enabled"]
-        base, self._shaker_zi = signal.lfilter(*self._shaker, amp_out, zi=self._shaker_zi)
-        velocity = self._beam(base)
-        noise = self._settings["noise_v"]
+        motion = self._physics.advance(drive * bench["gain"] * bench["output_enabled"])
         volts = {
             "drive": drive,
-            "base_acceleration": base * self._settings["accelerometer_v_per_ms2"],
-            "tip_velocity": velocity * bench["velocity_sensitivity"],
+            "base_acceleration": motion["base_acceleration"]
+            * self._settings["accelerometer_v_per_ms2"],
+            "tip_velocity": motion["tip_velocity"] * bench["velocity_sensitivity"],
             "spare": np.zeros(n),
         }
         self._sent += n
+        noise = self._settings["noise_v"]
         return {name: volts[self.SIGNALS[i]] + noise * self._rng.standard_normal(n)
                 for name, i in self._inputs.items()}
 
@@ -269,14 +252,6 @@ PLUGINS = [
          Param("realtime", "bool", "", False, help="Pace blocks at the real acquisition rate."),
          Param("noise_v", "float", "V", 1e-4, minimum=0.0, help="RMS noise on every input."),
          Param("seed", "int", "", 0, help="Seed of the noise generator."),
-         Param("shaker_hz", "float", "Hz", 30.0, minimum=1.0, help="Shaker suspension resonance."),
-         Param("shaker_damping", "float", "", 0.08, minimum=0.0, help="Its damping ratio."),
-         Param("shaker_mm_per_volt", "float", "mm/V", 0.5, minimum=0.0,
-               help="Static base displacement per amplifier volt."),
-         Param("beam_hz", "float", "Hz", 2.8, minimum=0.1, help="Beam first mode in the fluid."),
-         Param("beam_damping", "float", "", 0.02, minimum=0.0, help="Its linear damping ratio."),
-         Param("beam_quadratic", "float", "1/m", 5.0, minimum=0.0,
-               help="Quadratic damping of the tip motion, c2/m."),
          Param("accelerometer_v_per_ms2", "float", "V/(m/s^2)", 0.0102, minimum=0.0,
                exclusive_minimum=True, help="Accelerometer sensitivity (100 mV/g)."), FAIL),
         lambda address, settings, ctx: InProcessAcquisition("acquisition", address, settings, ctx),

@@ -74,6 +74,13 @@ suspension_hz = 30.0
 damping_ratio = 0.08
 mm_per_volt = 0.5
 
+[specimen]
+fluid = "water"
+
+[model]
+c_i = 0.65
+c_f = 33.0
+
 [bench.source]
 plugin = "inprocess-source"
 
