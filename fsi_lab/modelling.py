@@ -46,8 +46,8 @@ def beam_model(specimen: Any, model: dict[str, Any], modes: int | None = None) -
 
     ``modes`` overrides ``model["modes"]``.
     """
-    provisional = BeamModel.from_specimen(specimen, modes=modes or model["modes"],
-                                          damping=Damping())
+    modes = model["modes"] if modes is None else modes
+    provisional = BeamModel.from_specimen(specimen, modes=modes, damping=Damping())
     c_f = provisional.c_f_theory if model["c_f"] is None else model["c_f"]
     ratios = model["damping_ratios"]
     damping = Damping(c_i=model["c_i"] or 0.0, c_f=c_f,

@@ -1,0 +1,62 @@
+"""`fsi-lab model` and `fsi-lab simulate`: the beam model as the profile describes it."""
+
+import numpy as np
+import pytest
+from conftest import PROFILES, cli, cli_json
+
+from fsi_lab.runfile import read_run
+
+WET = PROFILES / "wet-beam-sim.toml"
+PAPER_DRY_HZ = [11.5328, 72.2747, 202.3712, 396.5668]
+
+
+def test_model_json_reproduces_the_paper():
+    data, proc = cli_json("model", str(WET), "--set", "specimen.fluid=air")
+    assert proc.returncode == 0, proc.stderr
+    assert data["fluid"] == "air"
+    np.testing.assert_allclose(data["natural_frequencies_hz"], PAPER_DRY_HZ, rtol=5e-4)
+    wet, _ = cli_json("model", str(WET), "--modes", "2")
+    assert wet["added_mass_ratio"] == pytest.approx(17.33, abs=0.01)
+    assert wet["c_f_theory"] == pytest.approx(11.4, abs=0.05)
+    assert len(wet["natural_frequencies_hz"]) == 2
+    assert 16.5 < wet["natural_frequencies_hz"][1] < 17.5  # the second wet mode, near 17 Hz
+
+
+def test_simulate_writes_a_run_like_a_measured_one(tmp_path):
+    out = tmp_path / "sim.h5"
+    data, proc = cli_json("simulate", str(WET), "--duration", "3", "--rate", "5000", "-o",
+                          str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert data == {"run": str(out)}
+    run = read_run(out)
+    assert run.attrs["kind"] == "simulated" and run.attrs["exit_status"] == "completed"
+    assert set(run.channels) == {"drive", "base_acceleration", "tip_velocity"}
+    drive = run.channels["drive"].data
+    assert drive.size == 15000 and run.channels["tip_velocity"].sample_rate == 5000.0
+    # the excitation lasts 1 s: the record is padded with zeros after it
+    assert np.all(drive[5000:] == 0) and drive.max() == pytest.approx(0.5)
+    tip = run.channels["tip_velocity"].data
+    assert np.max(np.abs(tip)) > 1e-3 and np.all(np.isfinite(tip))
+    # the beam rings down after the pulse
+    assert np.max(np.abs(tip[-2500:])) < 0.5 * np.max(np.abs(tip))
+    assert run.excitation["plugin"] == "ramp-derivative"
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["--modes", "0"], "beam.modes"),
+    (["--rate", "100"], "sample_rate: 100 Hz cannot resolve mode"),
+    (["--duration", "-1"], "--duration -1.0: expected a positive number of s"),
+    (["--set", "specimen.thickness=0"], "specimen.thickness: 0.0 is out of bounds"),
+    (["--set", "specimen.fluid=oil"], "specimen.fluid: got 'oil'; expected one of 'air', 'water'"),
+])
+def test_bad_model_input_is_refused_before_integration(tmp_path, args, fragment):
+    out = tmp_path / "sim.h5"
+    base = {"--duration": "1", "--rate": "5000"}
+    for flag in ("--duration", "--rate"):
+        if flag in args:
+            base.pop(flag)
+    proc = cli("simulate", str(WET), *[x for kv in base.items() for x in kv], *args,
+               "-o", str(out))
+    assert proc.returncode == 2, proc.stderr
+    assert fragment in proc.stderr
+    assert not out.exists()
