@@ -331,6 +331,29 @@ def format_summary(summary: dict[str, Any]) -> str:
 
 
 # --------------------------------------------------------------------------- parser
+COMMANDS_GROUP = "fsi_lab.commands"
+
+
+def _add_plugin_commands(sub) -> None:
+    """Subcommands provided by plugins through the ``fsi_lab.commands`` entry-point group."""
+    from importlib import metadata
+
+    from fsi_lab.contract import CliCommand
+
+    for ep in sorted(metadata.entry_points(group=COMMANDS_GROUP), key=lambda e: e.name):
+        try:
+            command = ep.load()
+            if not isinstance(command, CliCommand):
+                raise TypeError(f"{ep.value} is a {type(command).__name__}, not a CliCommand")
+        except Exception as exc:  # noqa: BLE001 - a broken command must not break the others
+            print(f"[warning] command {ep.name} skipped: {type(exc).__name__}: {exc}",
+                  file=sys.stderr)
+            continue
+        parser = sub.add_parser(command.name, help=command.help)
+        command.configure(parser)
+        parser.set_defaults(func=command.run)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fsi-lab", description="Run and analyse vibration experiments on beams in fluid.")
@@ -393,6 +416,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("plugins", help="list the plugins found and their status")
     common(p)
     p.set_defaults(func=cmd_plugins)
+
+    _add_plugin_commands(sub)
 
     p = sub.add_parser("profile", help="profile tools")
     psub = p.add_subparsers(dest="profile_command", required=True, metavar="ACTION")

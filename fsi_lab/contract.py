@@ -133,8 +133,10 @@ class InstrumentPlugin:
 
     ``open(address, settings, bench)`` returns an object implementing the role interface;
     ``settings`` has been validated against ``params``. ``bench`` is a dict shared by all
-    instruments of one run; it holds the profile's ``specimen``, ``model`` and ``shaker`` sections,
-    which simulated instruments use for their physics, and is where they find each other.
+    instruments of one run: it holds the profile's ``specimen``, ``model``, ``shaker`` and
+    ``bench`` sections (simulated instruments take their physics from them, and an embedded
+    simulated bench is started by the first driver that needs it), and a ``cleanup`` list of
+    callables the runner calls after every instrument is safe and closed.
     """
 
     name: str
@@ -244,6 +246,21 @@ class AnalysisPlugin:
     run: Callable[[AnalysisContext, dict[str, Any]], AnalysisResult]
     help: str = ""
     requires: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class CliCommand:
+    """An extra ``fsi-lab`` subcommand, named by an entry point in the ``fsi_lab.commands``
+    group (e.g. ``fsi-lab bench``, which starts the simulated instruments).
+
+    ``configure(parser)`` adds the arguments to an argparse parser; ``run(args)`` does the work
+    and returns the exit code.
+    """
+
+    name: str
+    help: str
+    configure: Callable[[Any], None]
+    run: Callable[[Any], int]
 
 
 DESCRIPTORS = {

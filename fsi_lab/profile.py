@@ -64,7 +64,15 @@ CHANNEL_PARAMS: tuple[Param, ...] = (
 
 BENCH_PARAMS: tuple[Param, ...] = (
     Param("embedded", "bool", "", False,
-          help="Start the simulated bench inside the fsi-lab process."),
+          help="Start the simulated bench inside the fsi-lab process; instruments whose "
+               "address is 'embedded' connect to it."),
+    Param("fast", "bool", "", False,
+          help="Simulated bench only: run as fast as possible instead of in real time."),
+    Param("fault", "str", "", "none",
+          choices=("none", "timeout", "drop", "garble", "interlock", "overload"),
+          help="Simulated bench only: inject this fault (for rehearsing failures)."),
+    Param("fault_after_s", "float", "s", 1.0, minimum=0.0,
+          help="Simulated bench only: when the injected fault happens after the start."),
 )
 
 ROLE_KEYS = ("plugin", "address")

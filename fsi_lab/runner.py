@@ -149,9 +149,11 @@ class Runner:
         self.analyze = analyze
         self._abort = threading.Event()
         self.instruments: dict[str, Instrument] = {}
-        # Shared by the instruments of this run; simulated ones find the physics here.
+        # Shared by the instruments of this run; simulated ones find the physics here, and
+        # register in "cleanup" what must be stopped once every instrument is closed.
         self.bench_context: dict[str, Any] = {
             "specimen": profile.specimen, "model": profile.model, "shaker": profile.shaker,
+            "bench": dict(profile.bench), "cleanup": [],
         }
 
     def abort(self) -> None:
@@ -346,6 +348,11 @@ class Runner:
                 self.bus.log("WARNING", f"{role}: close failed: {exc}")
             if writer is not None and not writer.closed:
                 writer.write_final_state(role, states[role])
+        for cleanup in reversed(self.bench_context["cleanup"]):
+            try:
+                cleanup()
+            except Exception as exc:  # noqa: BLE001
+                self.bus.log("WARNING", f"bench cleanup failed: {exc}")
         return states
 
     def _finalize(self, writer: RunFileWriter | None, outcome: RunOutcome) -> None:
