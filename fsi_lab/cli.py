@@ -309,6 +309,17 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def cmd_gui(args) -> int:
+    try:
+        from fsi_lab.gui.app import main as gui_main
+    except ImportError as exc:
+        raise FsiLabError(
+            f"the GUI needs the 'gui' extra (PySide6, pyqtgraph): pip install 'fsi-lab[gui]' "
+            f"({exc})"
+        ) from None
+    return gui_main(args)
+
+
 def format_summary(summary: dict[str, Any]) -> str:
     """The analysis summary as a few readable lines."""
     lines = []
@@ -416,6 +427,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("plugins", help="list the plugins found and their status")
     common(p)
     p.set_defaults(func=cmd_plugins)
+
+    p = sub.add_parser("gui", help="open the desktop application")
+    p.add_argument("paths", type=Path, nargs="*", metavar="PROFILE|RUN.h5",
+                   help="a profile to run, or run files to open")
+    p.add_argument("--screenshot", type=Path, metavar="OUT.png",
+                   help="render the window with the given run's analysis, save it and exit")
+    p.set_defaults(func=cmd_gui)
 
     _add_plugin_commands(sub)
 

@@ -1,0 +1,4 @@
+"""The desktop application (PySide6 + pyqtgraph), imported only by ``fsi-lab gui``.
+
+It holds no logic of its own: it drives the same runner, events and plugins as the command line.
+"""
