@@ -2,3 +2,7 @@
 
 It holds no logic of its own: it drives the same runner, events and plugins as the command line.
 """
+
+from fsi_lab.gui.qt_compat import guard_singleton_refcounts
+
+guard_singleton_refcounts()

@@ -1,0 +1,924 @@
+"""Analysis views: what the analysis chain stored in a run file, drawn as the paper draws it.
+
+Views (each reads ``/analysis/<channel>/<plugin>/`` of the run file; a missing or failed group
+is shown as "not computed" or with its failure message, never as an exception):
+
+- HVD components with their envelopes (paper Fig. 6);
+- instantaneous frequency against time (HVD and zero crossings);
+- backbone: frequency against displacement and velocity amplitude (Figs. 14-16);
+- damping ratio against displacement and velocity amplitude (Figs. 19-20);
+- the equivalent damping C_q against displacement amplitude with its first-order fit, R^2 and
+  95 % intervals of C_i and C_f (Fig. 21);
+- the modal model overlaid on the measurement;
+- spectra and FRF; a table of the identified values; and every dataset of every plugin
+  (third-party ones included) in a browser.
+
+The parameter panel edits the chain's parameters with forms from the plugins' schemas; a change
+re-runs the analysis off the UI thread, as ``fsi-lab analyze RUN.h5 --set ...`` would (the
+chain runs in order because later plugins use earlier results), then the views reload.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtWidgets import (
+    QComboBox, QGroupBox, QHBoxLayout, QHeaderView, QLabel, QPushButton, QSplitter, QTabWidget,
+    QTableWidget, QTableWidgetItem, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget,
+)
+
+from fsi_lab.chain import DEFAULT_CHAIN, analyse_and_store
+from fsi_lab.errors import FsiLabError
+from fsi_lab.gui.forms import ParamForm, value_text
+from fsi_lab.gui.results import PluginResult, RunResults
+from fsi_lab.gui.worker import TaskPool
+from fsi_lab.profile import ANALYSIS_PARAMS, parse_profile
+from fsi_lab.registry import Registry
+from fsi_lab.runfile import read_run
+
+COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2",
+           "#17becf")
+MAX_COMPONENTS_DRAWN = 6
+
+# Names under which the analysis plugins store what each view draws (first found wins).
+TIME = ("time", "t", "times")
+HVD_COMPONENTS = ("components", "component", "waveforms")
+HVD_ENVELOPES = ("envelopes", "envelope", "amplitudes")
+HVD_FREQUENCIES = ("frequencies", "frequency", "frequency_hz", "instantaneous_frequency")
+HVD_EDGE = ("edge_mask", "edges", "untrusted")
+ZC_TIME = ("frequency_times", "times", "time", "t")
+ZC_FREQUENCY = ("frequency", "frequency_hz", "frequencies")
+DISPLACEMENT_AMPLITUDE = ("displacement_amplitude", "amplitude_displacement", "amplitude",
+                          "amplitudes", "amplitude_m")
+VELOCITY_AMPLITUDE = ("velocity_amplitude", "amplitude_velocity", "amplitude_m_s")
+FREQUENCY = ("frequency_hz", "frequency", "frequencies")
+ZETA = ("zeta", "damping_ratio", "damping")
+CQ = ("c_q", "cq", "C_q", "equivalent_damping")
+CQ_AMPLITUDE = ("displacement_amplitude", "modal_amplitude", "amplitude", "amplitudes")
+CQ_FIT = ("c_q_fit", "fit", "fitted")
+CQ_BAND_LOW = ("c_q_fit_low", "fit_low", "ci_low", "fit_lower")
+CQ_BAND_HIGH = ("c_q_fit_high", "fit_high", "ci_high", "fit_upper")
+SPECTRUM_FREQUENCY = ("frequency_hz", "frequency", "frequencies", "freqs")
+SPECTRUM_AMPLITUDE = ("amplitude", "spectrum", "magnitude")
+SPECTRUM_PEAKS = ("peaks_hz", "peak_frequencies", "peak_frequency_hz", "spectrum_peaks_hz")
+
+
+# --------------------------------------------------------------------------- data helpers
+def rows(array: np.ndarray | None) -> list[np.ndarray]:
+    """A 2-D dataset as its rows (components), a 1-D one as a single row."""
+    if array is None:
+        return []
+    array = np.asarray(array)
+    if array.ndim == 1:
+        return [array]
+    if array.ndim == 2:
+        if array.shape[0] > array.shape[1]:
+            array = array.T
+        return list(array)
+    return []
+
+
+def per_component(result: PluginResult | None, names: Sequence[str]) -> list[np.ndarray]:
+    """Per-component arrays: a 2-D dataset, a 1-D one, or ``<k>/<name>`` subgroups."""
+    if result is None:
+        return []
+    found = rows(result.get(*names))
+    if found:
+        return [np.asarray(r, dtype=float) for r in found]
+    nested: dict[str, np.ndarray] = {}
+    for key, value in result.datasets.items():
+        prefix, _, leaf = key.rpartition("/")
+        if prefix and leaf in names and prefix not in nested:
+            nested[prefix] = value
+    return [np.asarray(nested[k], dtype=float).ravel() for k in sorted(nested, key=_natural)]
+
+
+def _natural(key: str) -> tuple:
+    digits = "".join(ch for ch in key if ch.isdigit())
+    return (int(digits) if digits else 0, key)
+
+
+def summary_series(results: RunResults, channel: str, section: str, x: str, y: str
+                   ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(x, y)`` pairs per component from the summary's ``components[i][section]``."""
+    series = []
+    for component in results.components(channel):
+        block = component.get(section)
+        if not isinstance(block, dict):
+            continue
+        xs, ys = block.get(x), block.get(y)
+        if isinstance(xs, list) and isinstance(ys, list) and xs and len(xs) == len(ys):
+            series.append((np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)))
+    return series
+
+
+def time_axis(results: RunResults, channel: str, result: PluginResult | None, n: int
+              ) -> np.ndarray:
+    """Sample times of a dataset of ``n`` samples: its own time dataset or the channel's."""
+    if result is not None:
+        t = result.get(*TIME)
+        if t is not None and np.asarray(t).size == n:
+            return np.asarray(t, dtype=float)
+    data = results.channels.get(channel)
+    if data is not None and data.sample_rate > 0:
+        return data.t0 + np.arange(n) / data.sample_rate
+    return np.arange(n, dtype=float)
+
+
+def _format_ci(value: Any) -> str:
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        return f"[{value[0]:.4g}, {value[1]:.4g}]"
+    return "" if value is None else str(value)
+
+
+def reanalyse(path: str | Path, registry: Registry, overrides: list[str]) -> dict[str, Any]:
+    """Run the run file's analysis chain again with ``overrides`` and store it (worker thread).
+
+    The same steps as ``fsi-lab analyze RUN.h5 --set ...``.
+    """
+    run = read_run(path)
+    text = run.profile_text
+    if not text.strip():
+        chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
+        text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
+    profile = parse_profile(text, f"{path}:/profile", registry, overrides,
+                            sections=("analysis", "specimen"))
+    return analyse_and_store(Path(path), run.channels, profile.analysis,
+                             profile.analysis_params, registry, profile.specimen)
+
+
+def chain_of(results: RunResults, registry: Registry) -> tuple[dict[str, Any], dict[str, dict]]:
+    """The run's ``[analysis]`` values (chain, channels, reference) and the parameters its
+    plugins last ran with."""
+    params: dict[str, dict] = {}
+    analysis: dict[str, Any] = {"chain": [], "channels": [], "reference": None}
+    try:
+        profile = parse_profile(results.profile_text, f"{results.path}:/profile", registry,
+                                sections=("analysis", "specimen"))
+        analysis = dict(profile.analysis)
+        params = {k: dict(v) for k, v in profile.analysis_params.items()}
+    except FsiLabError:
+        pass
+    chain = list(analysis["chain"])
+    if not results.profile_text.strip() and not chain:
+        chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
+    for groups in results.analysis.values():
+        for plugin, result in groups.items():
+            if plugin not in chain and plugin in registry.descriptors["analysis"]:
+                chain.append(plugin)
+            if result.params:
+                params.setdefault(plugin, {}).update(result.params)
+    analysis["chain"] = chain
+    return analysis, params
+
+
+# --------------------------------------------------------------------------- views
+class View(QWidget):
+    """One figure of the analysis; ``filled`` tells whether it shows data."""
+
+    title = ""
+    plugins: tuple[str, ...] = ()
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.filled = False
+        self.note = QLabel()
+        self.note.setWordWrap(True)
+        self.note.setObjectName("view-note")
+        self.graphics = pg.GraphicsLayoutWidget()
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addWidget(self.note)
+        layout.addWidget(self.graphics, 1)
+
+    def clear(self) -> None:
+        self.graphics.clear()
+        self.filled = False
+
+    def show_results(self, results: RunResults, channel: str) -> None:
+        self.clear()
+        try:
+            self.filled = bool(self.draw(results, channel))
+        except Exception as exc:  # noqa: BLE001 - an odd dataset must not take the window down
+            self.clear()
+            self.note.setText(f"cannot draw this view: {type(exc).__name__}: {exc}")
+            self.note.setStyleSheet("color: #b00020;")
+            return
+        if not self.filled:
+            self.note.setText(self.missing(results, channel))
+            self.note.setStyleSheet("color: #666;")
+
+    def missing(self, results: RunResults, channel: str) -> str:
+        """Why nothing is drawn: failed with its message, or not computed."""
+        for plugin in self.plugins:
+            result = results.result(channel, plugin)
+            if result is not None and not result.ok:
+                return f"{plugin} failed on {channel}: {result.error}"
+        names = " / ".join(self.plugins)
+        return f"not computed: this run has no {names} results for channel {channel}"
+
+    def draw(self, results: RunResults, channel: str) -> bool:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def add_plot(self, row: int, col: int, left: str, bottom: str, left_units: str | None = None,
+                 bottom_units: str | None = None) -> pg.PlotItem:
+        plot = self.graphics.addPlot(row=row, col=col)
+        plot.setLabel("left", left, units=left_units)
+        plot.setLabel("bottom", bottom, units=bottom_units)
+        plot.showGrid(x=True, y=True, alpha=0.2)
+        plot.addLegend(offset=(-10, 10))
+        return plot
+
+    def set_note(self, text: str) -> None:
+        self.note.setText(text)
+        self.note.setStyleSheet("")
+
+
+def _line(plot: pg.PlotItem, x, y, colour: str, name: str | None = None, width: float = 1.2,
+          style=Qt.PenStyle.SolidLine) -> pg.PlotDataItem:
+    item = plot.plot(np.asarray(x, dtype=float), np.asarray(y, dtype=float),
+                     pen=pg.mkPen(colour, width=width, style=style), name=name,
+                     connect="finite")
+    item.setDownsampling(auto=True, method="peak")
+    item.setClipToView(True)
+    return item
+
+
+def _points(plot: pg.PlotItem, x, y, colour: str, name: str | None = None, size: int = 5
+            ) -> pg.PlotDataItem:
+    return plot.plot(np.asarray(x, dtype=float), np.asarray(y, dtype=float), pen=None,
+                     symbol="o", symbolSize=size, symbolBrush=colour, symbolPen=None, name=name)
+
+
+class HVDView(View):
+    title = "HVD components"
+    plugins = ("hvd",)
+
+    def draw(self, results: RunResults, channel: str) -> bool:
+        hvd = results.result(channel, "hvd")
+        if hvd is None or not hvd.ok:
+            return False
+        components = per_component(hvd, HVD_COMPONENTS)
+        envelopes = per_component(hvd, HVD_ENVELOPES)
+        if not components and not envelopes:
+            return False
+        n = (components or envelopes)[0].size
+        t = time_axis(results, channel, hvd, n)
+        unit = results.channels[channel].unit if channel in results.channels else ""
+        top = self.add_plot(0, 0, channel, "time", unit or None, "s")
+        measured = results.channels.get(channel)
+        if measured is not None and measured.data.size == n:
+            _line(top, t, measured.data, "#9e9e9e", "measured", 1.0)
+        if components:
+            _line(top, t, np.sum(components, axis=0), "#000000", "sum of components", 1.0,
+                  Qt.PenStyle.DashLine)
+        count = min(max(len(components), len(envelopes)), MAX_COMPONENTS_DRAWN)
+        for k in range(count):
+            colour = COLOURS[k % len(COLOURS)]
+            plot = self.add_plot(k + 1, 0, f"component {k + 1}", "time", unit or None, "s")
+            plot.setXLink(top)
+            if k < len(components):
+                _line(plot, t, components[k], colour, f"component {k + 1}", 1.0)
+            if k < len(envelopes):
+                _line(plot, t, envelopes[k], "#000000", "envelope", 1.4)
+                _line(plot, t, -envelopes[k], "#000000", None, 1.4)
+        cutoffs = hvd.get("cutoffs", "cutoff")
+        extra = f"; cut-offs {', '.join(f'{c:.3g}' for c in np.ravel(cutoffs))} Hz" \
+            if cutoffs is not None else ""
+        self.set_note(f"{count} components of {channel}, by decreasing amplitude{extra}")
+        return True
+
+
+class FrequencyView(View):
+    title = "Instantaneous frequency"
+    plugins = ("hvd", "instantaneous")
+
+    def draw(self, results: RunResults, channel: str) -> bool:
+        plot = self.add_plot(0, 0, "frequency", "time", "Hz", "s")
+        drawn = False
+        hvd = results.result(channel, "hvd")
+        if hvd is not None and hvd.ok:
+            freqs = per_component(hvd, HVD_FREQUENCIES)
+            edges = per_component(hvd, HVD_EDGE)
+            for k, f in enumerate(freqs[:MAX_COMPONENTS_DRAWN]):
+                f = np.array(f, dtype=float)
+                if k < len(edges) and edges[k].size == f.size:
+                    f[np.asarray(edges[k], dtype=bool)] = np.nan
+                t = time_axis(results, channel, hvd, f.size)
+                _line(plot, t, f, COLOURS[k % len(COLOURS)], f"HVD component {k + 1}", 1.4)
+                drawn = True
+        inst = results.result(channel, "instantaneous")
+        if inst is not None and inst.ok:
+            times = per_component(inst, ZC_TIME)
+            freqs = per_component(inst, ZC_FREQUENCY)
+            for k, (t, f) in enumerate(zip(times, freqs)):
+                if t.size == f.size and f.size:
+                    _points(plot, t, f, "#ff7f0e" if k == 0 else COLOURS[(k + 4) % len(COLOURS)],
+                            "zero crossings" if k == 0 else None, 4)
+                    drawn = True
+        if drawn:
+            self.set_note(f"instantaneous frequency of {channel}; record ends HVD does not "
+                          "trust are left out")
+        return drawn
+
+
+class _AmplitudeView(View):
+    """Two plots of a quantity against displacement and velocity amplitude."""
+
+    y_names: Sequence[str] = ()
+    y_label = ""
+    y_units: str | None = None
+    summary_section = ""
+    summary_y = ""
+
+    def draw(self, results: RunResults, channel: str) -> bool:
+        result = results.result(channel, self.plugins[0])
+        y = per_component(result, self.y_names) if result is not None and result.ok else []
+        disp = per_component(result, DISPLACEMENT_AMPLITUDE) if y else []
+        vel = per_component(result, VELOCITY_AMPLITUDE) if y else []
+        pairs_d = [(a, b) for a, b in zip(disp, y) if a.size == b.size and a.size]
+        pairs_v = [(a, b) for a, b in zip(vel, y) if a.size == b.size and a.size]
+        if not pairs_d:
+            pairs_d = summary_series(results, channel, self.summary_section, "amplitude",
+                                     self.summary_y)
+        if not pairs_v:
+            pairs_v = summary_series(results, channel, self.summary_section,
+                                     "velocity_amplitude", self.summary_y)
+        if not pairs_d and not pairs_v:
+            return False
+        left = self.add_plot(0, 0, self.y_label, "displacement amplitude", self.y_units, "m")
+        for k, (a, b) in enumerate(pairs_d[:MAX_COMPONENTS_DRAWN]):
+            self._series(left, a, b, k)
+        right = self.add_plot(0, 1, self.y_label, "velocity amplitude", self.y_units, "m/s")
+        for k, (a, b) in enumerate(pairs_v[:MAX_COMPONENTS_DRAWN]):
+            self._series(right, a, b, k)
+        if not pairs_v:
+            right.setTitle("velocity amplitude: not computed")
+        self.overlay_model(results, channel, left, right)
+        self.set_note(f"{self.title} of {channel}, {len(pairs_d or pairs_v)} component(s)")
+        return True
+
+    def _series(self, plot: pg.PlotItem, a: np.ndarray, b: np.ndarray, k: int) -> None:
+        colour = COLOURS[k % len(COLOURS)]
+        if a.size > 400:
+            _line(plot, a, b, colour, f"component {k + 1}", 1.4)
+        else:
+            _points(plot, a, b, colour, f"component {k + 1}", 5)
+
+    def overlay_model(self, results, channel, left, right) -> None:
+        model = results.result(channel, "modal-model")
+        if model is None or not model.ok:
+            return
+        y = per_component(model, self.y_names)
+        for plot, names in ((left, DISPLACEMENT_AMPLITUDE), (right, VELOCITY_AMPLITUDE)):
+            for k, (a, b) in enumerate(zip(per_component(model, names), y)):
+                if a.size == b.size and a.size:
+                    _line(plot, a, b, "#000000", "modal model" if k == 0 else None, 1.6,
+                          Qt.PenStyle.DashLine)
+
+
+class BackboneView(_AmplitudeView):
+    title = "Backbone"
+    plugins = ("backbone",)
+    y_names = FREQUENCY
+    y_label = "frequency"
+    y_units = "Hz"
+    summary_section = "backbone"
+    summary_y = "frequency_hz"
+
+
+class DampingView(_AmplitudeView):
+    title = "Damping"
+    plugins = ("damping",)
+    y_names = ZETA
+    y_label = "damping ratio ζ"
+    summary_section = "damping"
+    summary_y = "zeta"
+
+
+class EquivalentDampingView(View):
+    title = "Cq fit"
+    plugins = ("equivalent-damping",)
+
+    def draw(self, results: RunResults, channel: str) -> bool:
+        result = results.result(channel, "equivalent-damping")
+        summaries = [c.get("equivalent_damping") for c in results.components(channel)]
+        summaries = [s for s in summaries if isinstance(s, dict)]
+        if result is None or not result.ok:
+            return False
+        amplitudes = per_component(result, CQ_AMPLITUDE)
+        cqs = per_component(result, CQ)
+        fits = per_component(result, CQ_FIT)
+        lows = per_component(result, CQ_BAND_LOW)
+        highs = per_component(result, CQ_BAND_HIGH)
+        if not cqs:
+            return False
+        plot = self.add_plot(0, 0, "C_q", "displacement amplitude W", "kg/(m s)", "m")
+        lines = []
+        for k, (w, cq) in enumerate(zip(amplitudes, cqs)):
+            if w.size != cq.size or not w.size:
+                continue
+            colour = COLOURS[k % len(COLOURS)]
+            _points(plot, w, cq, colour, f"C_q, component {k + 1}", 5)
+            order = np.argsort(w)
+            if k < len(fits) and fits[k].size == w.size:
+                _line(plot, w[order], fits[k][order], "#000000",
+                      "first-order fit" if k == 0 else None, 1.8)
+            if k < len(lows) and k < len(highs) and lows[k].size == w.size == highs[k].size:
+                low = plot.plot(w[order], lows[k][order], pen=pg.mkPen("#00000040"))
+                high = plot.plot(w[order], highs[k][order], pen=pg.mkPen("#00000040"))
+                plot.addItem(pg.FillBetweenItem(low, high, brush=pg.mkBrush(0, 0, 0, 30)))
+            values = self._values(result, summaries, k)
+            if values:
+                lines.append(f"component {k + 1}: {values}")
+        if not lines and summaries:
+            lines = [f"component {k + 1}: {self._values(None, summaries, k)}"
+                     for k in range(len(summaries))]
+        text = "<br>".join(lines)
+        if text:
+            label = pg.LabelItem(text, justify="left", size="10pt")
+            self.graphics.addItem(label, row=1, col=0)
+        self.set_note("equivalent damping C_q = 2 ζ (μ + M) 2π f against displacement "
+                      "amplitude, and its first-order fit C_q = C_i + (8 C_f ω / 3π) W")
+        return True
+
+    @staticmethod
+    def _values(result: PluginResult | None, summaries: list[dict], k: int) -> str:
+        source: dict[str, Any] = {}
+        if k < len(summaries):
+            source.update(summaries[k])
+        if result is not None and not source:
+            for key in ("c_i", "c_f", "r2", "c_i_ci95", "c_f_ci95"):
+                value = result.scalar(key)
+                if isinstance(value, (list, tuple)) and k < len(value) and key in ("c_i", "c_f", "r2"):
+                    value = value[k]
+                if value is not None:
+                    source[key] = value
+        if source.get("c_i") is None:
+            return ""
+        parts = [f"C<sub>i</sub> = {source['c_i']:.4g} {_format_ci(source.get('c_i_ci95'))} kg/(m s)"]
+        if source.get("c_f") is not None:
+            parts.append(f"C<sub>f</sub> = {source['c_f']:.4g} {_format_ci(source.get('c_f_ci95'))} kg/m²")
+        if source.get("r2") is not None:
+            parts.append(f"R² = {source['r2']:.3f}")
+        return ", ".join(parts)
+
+
+class ModalModelView(View):
+    title = "Modal model"
+    plugins = ("modal-model",)
+
+    def draw(self, results: RunResults, channel: str) -> bool:
+        model = results.result(channel, "modal-model")
+        if model is None or not model.ok or not model.datasets:
+            return False
+        measured = results.channels.get(channel)
+        response = per_component(model, ("response", "velocity", "model_response", "simulated"))
+        drawn = False
+        if response and measured is not None:
+            plot = self.add_plot(0, 0, channel, "time", measured.unit, "s")
+            t_meas = measured.t0 + np.arange(measured.data.size) / measured.sample_rate
+            _line(plot, t_meas, measured.data, "#9e9e9e", "measured", 1.0)
+            t_model = time_axis(results, channel, model, response[0].size)
+            _line(plot, t_model, response[0], "#000000", "modal model", 1.4,
+                  Qt.PenStyle.DashLine)
+            drawn = True
+        row = 1 if drawn else 0
+        for col, (names, label, units, other) in enumerate((
+                (FREQUENCY, "frequency", "Hz", "backbone"), (ZETA, "damping ratio ζ", None,
+                                                             "damping"))):
+            y_model = per_component(model, names)
+            x_model = per_component(model, DISPLACEMENT_AMPLITUDE)
+            pairs = [(a, b) for a, b in zip(x_model, y_model) if a.size == b.size and a.size]
+            if not pairs:
+                continue
+            plot = self.add_plot(row, col, label, "displacement amplitude", units, "m")
+            measured_result = results.result(channel, other)
+            if measured_result is not None and measured_result.ok:
+                for k, (a, b) in enumerate(zip(per_component(measured_result,
+                                                             DISPLACEMENT_AMPLITUDE),
+                                               per_component(measured_result, names))):
+                    if a.size == b.size and a.size:
+                        _points(plot, a, b, COLOURS[k % len(COLOURS)], f"measured {k + 1}", 4)
+            for k, (a, b) in enumerate(pairs):
+                _line(plot, a, b, "#000000", "modal model" if k == 0 else None, 1.6,
+                      Qt.PenStyle.DashLine)
+            drawn = True
+        if drawn:
+            self.set_note(f"the modal model (Eq. 20 with the identified C_i and C_f) against "
+                          f"the measurement of {channel}")
+        return drawn
+
+
+class SpectrumView(View):
+    title = "Spectrum / FRF"
+    plugins = ("spectrum", "frf")
+
+    def draw(self, results: RunResults, channel: str) -> bool:
+        drawn = False
+        spectrum = results.result(channel, "spectrum")
+        if spectrum is not None and spectrum.ok:
+            freqs = spectrum.get(*SPECTRUM_FREQUENCY)
+            amps = spectrum.get(*SPECTRUM_AMPLITUDE)
+            if freqs is not None and amps is not None:
+                plot = self.add_plot(0, 0, f"|{channel}|", "frequency", None, "Hz")
+                plot.setLogMode(y=True)
+                for k, a in enumerate(rows(amps)):
+                    if a.size == np.asarray(freqs).size:
+                        _line(plot, freqs, np.maximum(np.abs(a), 1e-300), COLOURS[k % len(COLOURS)],
+                              "amplitude spectrum" if k == 0 else None, 1.2)
+                peaks = spectrum.get(*SPECTRUM_PEAKS)
+                if peaks is None and results.summary:
+                    peaks = results.summary.get("channels", {}).get(channel, {}).get(
+                        "spectrum_peaks_hz")
+                for f in np.ravel(peaks if peaks is not None else [])[:10]:
+                    plot.addItem(pg.InfiniteLine(float(f), pen=pg.mkPen("#9e9e9e", style=Qt.PenStyle.DotLine),
+                                                 label=f"{float(f):.2f} Hz",
+                                                 labelOpts={"position": 0.9, "color": "#555"}))
+                drawn = True
+        frf = results.result(channel, "frf")
+        if frf is not None and frf.ok:
+            freqs = frf.get(*SPECTRUM_FREQUENCY)
+            if freqs is not None:
+                plot = self.add_plot(1 if drawn else 0, 0, "|H|", "frequency", None, "Hz")
+                plot.setLogMode(y=True)
+                for k, name in enumerate(("h1", "h2")):
+                    h = frf.get(name, f"{name}_magnitude", name.upper())
+                    if h is not None and np.asarray(h).size == np.asarray(freqs).size:
+                        _line(plot, freqs, np.maximum(np.abs(h), 1e-300), COLOURS[k], name.upper())
+                coherence = frf.get("coherence")
+                if coherence is not None and np.asarray(coherence).size == np.asarray(freqs).size:
+                    coh = self.add_plot(2 if drawn else 1, 0, "coherence", "frequency", None, "Hz")
+                    coh.setXLink(plot)
+                    _line(coh, freqs, coherence, "#2ca02c", "coherence")
+                drawn = True
+        if drawn:
+            self.set_note(f"spectra of {channel}")
+        return drawn
+
+
+class SummaryView(QWidget):
+    """The identified values per component, the failures, and the status of every analysis."""
+
+    title = "Results"
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.filled = False
+        self.table = QTableWidget()
+        self.table.setObjectName("results-table")
+        self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        self.status = QTableWidget()
+        self.status.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        layout = QVBoxLayout(self)
+        layout.addWidget(QLabel("Identified values"))
+        layout.addWidget(self.table, 2)
+        layout.addWidget(QLabel("Analyses of this channel"))
+        layout.addWidget(self.status, 1)
+
+    COLUMNS = ("component", "frequency (Hz)", "C_i (kg/(m s))", "C_i 95 %", "C_f (kg/m²)",
+               "C_f 95 %", "R²")
+
+    def show_results(self, results: RunResults, channel: str) -> None:
+        rows_ = table_rows(results, channel)
+        self.table.clear()
+        self.table.setColumnCount(len(self.COLUMNS))
+        self.table.setHorizontalHeaderLabels(list(self.COLUMNS))
+        self.table.setRowCount(len(rows_))
+        for r, row in enumerate(rows_):
+            for c, key in enumerate(("index", "frequency_hz", "c_i", "c_i_ci95", "c_f",
+                                     "c_f_ci95", "r2")):
+                value = row.get(key)
+                if isinstance(value, float):
+                    text = f"{value:.5g}"
+                elif isinstance(value, (list, tuple)):
+                    text = _format_ci(value)
+                else:
+                    text = "" if value is None else str(value)
+                self.table.setItem(r, c, QTableWidgetItem(text))
+        self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+        groups = results.analysis.get(channel, {})
+        self.status.clear()
+        self.status.setColumnCount(3)
+        self.status.setHorizontalHeaderLabels(["analysis", "status", "message / parameters"])
+        self.status.setRowCount(len(groups))
+        for r, (plugin, result) in enumerate(groups.items()):
+            self.status.setItem(r, 0, QTableWidgetItem(plugin))
+            item = QTableWidgetItem(result.status)
+            if not result.ok:
+                item.setForeground(pg.mkColor("#b00020"))
+            self.status.setItem(r, 1, item)
+            detail = result.error or ", ".join(f"{k}={v}" for k, v in result.params.items())
+            self.status.setItem(r, 2, QTableWidgetItem(detail))
+        self.status.horizontalHeader().setStretchLastSection(True)
+        self.filled = bool(rows_)
+
+
+def table_rows(results: RunResults, channel: str) -> list[dict[str, Any]]:
+    """One flat dictionary per component: index, frequency and the equivalent damping."""
+    out = []
+    for component in results.components(channel):
+        row = {"index": component.get("index"), "frequency_hz": component.get("frequency_hz")}
+        eq = component.get("equivalent_damping")
+        if isinstance(eq, dict):
+            for key in ("c_i", "c_i_ci95", "c_f", "c_f_ci95", "r2"):
+                row[key] = eq.get(key)
+        out.append(row)
+    return out
+
+
+class DatasetBrowser(QWidget):
+    """Every group and dataset under ``/analysis/<channel>``, any plugin; select one to plot it."""
+
+    title = "All datasets"
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.filled = False
+        self.results: RunResults | None = None
+        self.channel = ""
+        self.tree = QTreeWidget()
+        self.tree.setHeaderLabels(["analysis / dataset", "shape", "units"])
+        self.tree.itemSelectionChanged.connect(self._selected)
+        self.plot = pg.PlotWidget()
+        self.plot.showGrid(x=True, y=True, alpha=0.2)
+        splitter = QSplitter()
+        splitter.addWidget(self.tree)
+        splitter.addWidget(self.plot)
+        splitter.setStretchFactor(1, 2)
+        layout = QVBoxLayout(self)
+        layout.addWidget(splitter)
+
+    def show_results(self, results: RunResults, channel: str) -> None:
+        self.results, self.channel = results, channel
+        self.tree.clear()
+        self.plot.clear()
+        for plugin, result in results.analysis.get(channel, {}).items():
+            top = QTreeWidgetItem([f"{plugin} ({result.status})", "", ""])
+            if result.error:
+                top.setToolTip(0, result.error)
+            for name, array in result.datasets.items():
+                child = QTreeWidgetItem([name, "x".join(map(str, np.shape(array))),
+                                         result.units.get(name, "")])
+                child.setData(0, Qt.ItemDataRole.UserRole, (plugin, name))
+                top.addChild(child)
+            self.tree.addTopLevelItem(top)
+            top.setExpanded(True)
+        self.filled = self.tree.topLevelItemCount() > 0
+
+    def _selected(self) -> None:
+        items = self.tree.selectedItems()
+        if not items or self.results is None:
+            return
+        key = items[0].data(0, Qt.ItemDataRole.UserRole)
+        if not key:
+            return
+        plugin, name = key
+        result = self.results.result(self.channel, plugin)
+        array = np.asarray(result.datasets[name])
+        self.plot.clear()
+        self.plot.setTitle(f"{plugin}/{name}")
+        if not np.issubdtype(array.dtype, np.number) and array.dtype != bool:
+            return
+        if np.iscomplexobj(array):
+            array = np.abs(array)
+        for k, row in enumerate(rows(array.astype(float))[:MAX_COMPONENTS_DRAWN]):
+            _line(self.plot.getPlotItem(), np.arange(row.size), row, COLOURS[k % len(COLOURS)])
+
+
+# --------------------------------------------------------------------------- the panel
+class AnalysisParameters(QGroupBox):
+    """The chain (``[analysis]``) and a form per plugin of the chain, from the plugins' schemas.
+
+    A valid change asks for a re-analysis (debounced); ``rerun`` carries the overrides.
+    """
+
+    rerun = Signal(list)
+
+    def __init__(self, registry: Registry, parent: QWidget | None = None) -> None:
+        super().__init__("Analysis parameters", parent)
+        self.registry = registry
+        self.chain_form: ParamForm | None = None
+        self.forms: dict[str, ParamForm] = {}
+        self.params: dict[str, dict] = {}
+        self.chain_holder = QVBoxLayout()
+        self.plugin = QComboBox()
+        self.plugin.setObjectName("analysis-plugin")
+        self.plugin.currentIndexChanged.connect(self._plugin_changed)
+        self.holder = QVBoxLayout()
+        self.button = QPushButton("Re-run analysis")
+        self.button.setObjectName("rerun")
+        self.button.clicked.connect(self.request)
+        self.auto = QTimer(self)
+        self.auto.setSingleShot(True)
+        self.auto.setInterval(400)
+        self.auto.timeout.connect(self.request)
+        self.note = QLabel("")
+        self.note.setWordWrap(True)
+        installed = ", ".join(registry.names("analysis")) or "none"
+        self.setToolTip(f"Installed analysis plugins: {installed}")
+        layout = QVBoxLayout(self)
+        layout.addLayout(self.chain_holder)
+        layout.addWidget(QLabel("Plugin"))
+        layout.addWidget(self.plugin)
+        layout.addLayout(self.holder)
+        layout.addStretch(1)
+        layout.addWidget(self.button)
+        layout.addWidget(self.note)
+        self.setEnabled(False)
+
+    def load(self, analysis: dict[str, Any], params: dict[str, dict]) -> None:
+        if self.chain_form is not None:
+            self.chain_form.deleteLater()
+        self.chain_form = ParamForm(ANALYSIS_PARAMS, analysis, "analysis")
+        self.chain_form.changed.connect(self._chain_changed)
+        self.chain_holder.addWidget(self.chain_form)
+        self.params = {k: dict(v) for k, v in params.items()}
+        self._build_forms(list(analysis.get("chain") or []))
+        self.setEnabled(True)
+
+    def _build_forms(self, chain: list[str]) -> None:
+        current = self.plugin.currentData()
+        for name, form in self.forms.items():
+            self.params[name] = form.values()
+            form.deleteLater()
+        self.forms.clear()
+        self.plugin.blockSignals(True)
+        self.plugin.clear()
+        unknown = []
+        for name in chain:
+            if name not in self.registry.descriptors["analysis"]:
+                unknown.append(name)
+                continue
+            descriptor = self.registry.get("analysis", name)
+            form = ParamForm(descriptor.params, self.params.get(name, {}), f"analysis.{name}")
+            form.setVisible(False)
+            form.setToolTip(descriptor.help)
+            form.changed.connect(self._changed)
+            self.holder.addWidget(form)
+            self.forms[name] = form
+            self.plugin.addItem(name, name)
+        if current in self.forms:
+            self.plugin.setCurrentIndex(list(self.forms).index(current))
+        self.plugin.blockSignals(False)
+        self._plugin_changed()
+        self.note.setText(f"not installed here: {', '.join(unknown)}" if unknown else "")
+
+    def _chain_changed(self) -> None:
+        if self.chain_form.is_valid():
+            self._build_forms(list(self.chain_form.values()["chain"] or []))
+        self._changed()
+
+    def _plugin_changed(self) -> None:
+        current = self.plugin.currentData()
+        for name, form in self.forms.items():
+            form.setVisible(name == current)
+
+    def valid(self) -> bool:
+        forms = [self.chain_form, *self.forms.values()] if self.chain_form else []
+        return all(form.is_valid() for form in forms)
+
+    def _changed(self) -> None:
+        if self.valid():
+            self.auto.start()
+        else:
+            self.auto.stop()
+
+    def overrides(self) -> list[str]:
+        """Every value of every form (the run's profile may hold older values than its last
+        analysis, so all are given), as ``fsi-lab analyze --set`` takes them."""
+        items = []
+        if self.chain_form is not None:
+            for field in self.chain_form.fields.values():
+                if field.param.name == "chain" or field.value:
+                    items.append(field.override("analysis"))
+        for name, form in self.forms.items():
+            items.extend(form.overrides(f"analysis.{name}"))
+        return items
+
+    def request(self) -> None:
+        self.auto.stop()
+        if self.valid() and self.chain_form is not None:
+            self.rerun.emit(self.overrides())
+
+
+class AnalysisViews(QWidget):
+    """The views of one run, a channel selector and the parameter panel.
+
+    Signals: ``reanalysed(path)`` after a re-analysis was stored, ``message(level, text)``.
+    """
+
+    reanalysed = Signal(object)
+    message = Signal(str, str)
+
+    def __init__(self, registry: Registry, pool: TaskPool, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.registry = registry
+        self.pool = pool
+        self.results: RunResults | None = None
+        self.busy = False
+        self.title = QLabel("No run open: runs appear here when they finish or when you open "
+                            "a run file.")
+        self.title.setObjectName("analysis-title")
+        self.title.setWordWrap(True)
+        self.channel = QComboBox()
+        self.channel.setObjectName("analysis-channel")
+        self.channel.currentIndexChanged.connect(self._redraw)
+        self.state = QLabel("")
+        self.views: list[Any] = [HVDView(), FrequencyView(), BackboneView(), DampingView(),
+                                 EquivalentDampingView(), ModalModelView(), SpectrumView(),
+                                 SummaryView(), DatasetBrowser()]
+        self.tabs = QTabWidget()
+        self.tabs.setObjectName("analysis-tabs")
+        for view in self.views:
+            self.tabs.addTab(view, view.title)
+        self.parameters = AnalysisParameters(registry)
+        self.parameters.rerun.connect(self.rerun)
+        bar = QHBoxLayout()
+        bar.addWidget(self.title, 1)
+        bar.addWidget(QLabel("Channel"))
+        bar.addWidget(self.channel)
+        splitter = QSplitter(Qt.Orientation.Horizontal)
+        splitter.addWidget(self.tabs)
+        splitter.addWidget(self.parameters)
+        splitter.setStretchFactor(0, 4)
+        splitter.setStretchFactor(1, 1)
+        self.parameters.setMinimumWidth(280)
+        layout = QVBoxLayout(self)
+        layout.addLayout(bar)
+        layout.addWidget(self.state)
+        layout.addWidget(splitter, 1)
+
+    def view(self, cls: type) -> Any:
+        return next(v for v in self.views if isinstance(v, cls))
+
+    def show_results(self, results: RunResults) -> None:
+        """Show a run (already read off the UI thread)."""
+        self.results = results
+        status = results.exit_status
+        started = results.attrs.get("start_time", "")
+        self.title.setText(f"<b>{results.name}</b> — {results.path.name} — {status}"
+                           + (f" — {started[:19]}" if started else ""))
+        channels = results.analysed_channels() or [
+            n for n, c in results.channels.items() if c.quantity in ("velocity", "displacement")
+        ] or list(results.channels)
+        current = self.channel.currentData()
+        self.channel.blockSignals(True)
+        self.channel.clear()
+        for name in channels:
+            self.channel.addItem(name, name)
+        if current in channels:
+            self.channel.setCurrentIndex(channels.index(current))
+        self.channel.blockSignals(False)
+        if not results.analysis:
+            self.state.setText("not computed: this run file has no analysis results "
+                               f"(exit status {status}); set the parameters and re-run")
+        else:
+            errors = [f"{r.plugin} on {r.channel}: {r.error}" for groups in results.analysis.values()
+                      for r in groups.values() if not r.ok]
+            self.state.setText("failed: " + "; ".join(errors) if errors else "")
+        self.state.setStyleSheet("color: #b00020;" if results.analysis and
+                                 self.state.text().startswith("failed") else "color: #555;")
+        analysis, params = chain_of(results, self.registry)
+        self.parameters.load(analysis, params)
+        self._redraw()
+
+    def _redraw(self) -> None:
+        if self.results is None:
+            return
+        channel = self.channel.currentData() or ""
+        for view in self.views:
+            view.show_results(self.results, channel)
+
+    def filled(self) -> dict[str, bool]:
+        return {view.title: view.filled for view in self.views}
+
+    # ------------------------------------------------------------------ re-analysis
+    def rerun(self, overrides: list[str]) -> None:
+        if self.results is None or self.busy:
+            return
+        path = self.results.path
+        self.busy = True
+        self.parameters.button.setEnabled(False)
+        self.parameters.note.setText("re-running the analysis ...")
+        self.pool.start(reanalyse, path, self.registry, list(overrides),
+                        on_done=lambda summary, p=path: self._rerun_done(p),
+                        on_error=self._rerun_failed, name="re-analyse")
+
+    def _rerun_done(self, path: Path) -> None:
+        self.busy = False
+        self.parameters.button.setEnabled(True)
+        self.parameters.note.setText("analysis stored in the run file")
+        self.reanalysed.emit(path)
+
+    def _rerun_failed(self, exc: BaseException, text: str) -> None:
+        self.busy = False
+        self.parameters.button.setEnabled(True)
+        message = str(exc) if isinstance(exc, FsiLabError) else f"{type(exc).__name__}: {exc}"
+        self.parameters.note.setText(f"failed: {message}")
+        self.message.emit("ERROR", f"re-analysis failed: {message}")

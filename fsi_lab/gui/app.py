@@ -1,0 +1,351 @@
+"""The main window of ``fsi-lab gui`` and its entry point.
+
+Layout: the bench panel (with the safe-state button) docked on the left, the log docked at the
+bottom, and three tabs: Experiment (excitation designer, run control, live plots), Analysis (the
+views of the current run and its parameters) and Runs (open run files, compare, export).
+Messages (a file that cannot be read, an instrument lost, a refused run) appear in a bar above
+the tabs and in the log; the application keeps running.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import pyqtgraph as pg
+from PySide6.QtCore import QCoreApplication, QEvent, QEventLoop, Qt, QTimer
+from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtWidgets import (
+    QApplication, QDockWidget, QFileDialog, QFrame, QGroupBox, QHBoxLayout, QLabel, QMainWindow,
+    QPushButton, QScrollArea, QSplitter, QTabWidget, QVBoxLayout, QWidget,
+)
+
+from fsi_lab.events import LogRecord
+from fsi_lab.gui.analysis_views import AnalysisViews
+from fsi_lab.gui.bench_panel import BenchPanel
+from fsi_lab.gui.excitation_designer import ExcitationDesigner
+from fsi_lab.gui.live_plots import LivePlots
+from fsi_lab.gui.results import RunResults
+from fsi_lab.gui.run_control import LogPanel, RunControl
+from fsi_lab.gui.runs_browser import RunsBrowser
+from fsi_lab.gui.session import ProfileSession
+from fsi_lab.gui.worker import EventForwarder, TaskPool
+from fsi_lab.registry import Registry, load_registry
+
+RUN_SUFFIXES = (".h5", ".hdf5", ".hdf")
+BAR_STYLES = {
+    "ERROR": "background: #fde7ea; color: #b00020; border: 1px solid #f3b6bf;",
+    "WARNING": "background: #fff4e0; color: #8a4b00; border: 1px solid #f5cf8f;",
+    "INFO": "background: #e8f1fb; color: #0d47a1; border: 1px solid #b5cdef;",
+}
+
+
+class MessageBar(QFrame):
+    """The latest message for the experimenter, dismissable; every message is kept."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("message-bar")
+        self.messages: list[tuple[str, str]] = []
+        self.text = QLabel()
+        self.text.setWordWrap(True)
+        self.text.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        close = QPushButton("Dismiss")
+        close.clicked.connect(self.hide)
+        layout = QHBoxLayout(self)
+        layout.setContentsMargins(8, 4, 8, 4)
+        layout.addWidget(self.text, 1)
+        layout.addWidget(close)
+        self.hide()
+
+    def show_message(self, level: str, text: str) -> None:
+        self.messages.append((level, text))
+        self.setStyleSheet(f"#message-bar {{ {BAR_STYLES.get(level, BAR_STYLES['INFO'])} }}")
+        self.text.setText(f"<b>{level.lower()}</b>: {text}")
+        self.show()
+
+
+class MainWindow(QMainWindow):
+    """The fsi-lab desktop: experiment, analysis and runs, on the core's runner and events."""
+
+    def __init__(self, registry: Registry | None = None, out_dir: str | Path = "runs",
+                 parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("fsi-lab")
+        self.registry = registry if registry is not None else load_registry()
+        self.pool = TaskPool(self)
+        self.forwarder = EventForwarder(self)
+        self.session = ProfileSession(self.registry, self.pool, self)
+        self._closing = False
+        self._show_when_loaded: set[Path] = set()
+        self.last_run: Path | None = None
+
+        self.messages = MessageBar()
+        self.log = LogPanel()
+        self.designer = ExcitationDesigner(self.session)
+        self.run_control = RunControl(self.session, self.forwarder, ready=self._forms_valid,
+                                      out_dir=out_dir)
+        self.bench = BenchPanel(self.session, self.pool, run_active=lambda: self.run_control.running)
+        self.live = LivePlots()
+        self.analysis = AnalysisViews(self.registry, self.pool)
+        self.runs = RunsBrowser(self.registry, self.pool)
+        self._build_layout()
+        self._build_menu()
+        self._connect()
+        for record in self.registry.records:
+            if record.status in ("failed", "invalid"):
+                self.log.add(LogRecord("WARNING", f"plugin {record.name} ({record.distribution}) "
+                                                  f"skipped: {record.error}"))
+
+    # ------------------------------------------------------------------ layout
+    def _build_layout(self) -> None:
+        run_box = QGroupBox("Run")
+        QVBoxLayout(run_box).addWidget(self.run_control)
+        design = QWidget()
+        column = QVBoxLayout(design)
+        column.addWidget(self.designer)
+        column.addWidget(run_box)
+        column.addStretch(1)
+        scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setWidget(design)
+        scroll.setMinimumWidth(380)
+        experiment = QSplitter(Qt.Orientation.Horizontal)
+        experiment.addWidget(scroll)
+        experiment.addWidget(self.live)
+        experiment.setStretchFactor(0, 1)
+        experiment.setStretchFactor(1, 3)
+        self.tabs = QTabWidget()
+        self.tabs.setObjectName("main-tabs")
+        self.tabs.addTab(experiment, "Experiment")
+        self.tabs.addTab(self.analysis, "Analysis")
+        self.tabs.addTab(self.runs, "Runs")
+        central = QWidget()
+        layout = QVBoxLayout(central)
+        layout.setContentsMargins(4, 4, 4, 4)
+        layout.addWidget(self.messages)
+        layout.addWidget(self.tabs, 1)
+        self.setCentralWidget(central)
+
+        bench_dock = QDockWidget("Bench", self)
+        bench_dock.setObjectName("bench-dock")
+        bench_dock.setWidget(self.bench)
+        bench_dock.setFeatures(QDockWidget.DockWidgetFeature.DockWidgetMovable
+                               | QDockWidget.DockWidgetFeature.DockWidgetFloatable)
+        self.addDockWidget(Qt.DockWidgetArea.LeftDockWidgetArea, bench_dock)
+        log_dock = QDockWidget("Log", self)
+        log_dock.setObjectName("log-dock")
+        log_dock.setWidget(self.log)
+        self.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, log_dock)
+        self.resizeDocks([bench_dock], [340], Qt.Orientation.Horizontal)
+        self.resizeDocks([log_dock], [140], Qt.Orientation.Vertical)
+        self.status_label = QLabel(f"{sum(len(v) for v in self.registry.descriptors.values())} "
+                                   "plugins loaded")
+        self.statusBar().addPermanentWidget(self.status_label)
+
+    def _build_menu(self) -> None:
+        menu = self.menuBar().addMenu("&File")
+        for text, shortcut, slot in (
+                ("Open &profile ...", QKeySequence.StandardKey.Open, self._open_profile_dialog),
+                ("Open &runs ...", None, self.runs._open_dialog),
+                ("&Quit", QKeySequence.StandardKey.Quit, self.close)):
+            action = QAction(text, self)
+            if shortcut is not None:
+                action.setShortcut(shortcut)
+            action.triggered.connect(slot)
+            menu.addAction(action)
+        bench = self.menuBar().addMenu("&Bench")
+        safe = QAction("&Safe state", self)
+        safe.setShortcut(QKeySequence("Ctrl+Shift+S"))
+        safe.triggered.connect(self.bench.safe_state)
+        bench.addAction(safe)
+
+    def _connect(self) -> None:
+        f = self.forwarder
+        f.data.connect(self.live.on_block)
+        f.log.connect(self.log.add)
+        f.state.connect(self.bench.on_state)
+        self.session.open_failed.connect(lambda text: self.notify("ERROR", text))
+        self.session.checked.connect(lambda _: self.run_control.update_buttons())
+        self.run_control.started.connect(self._run_started)
+        self.run_control.finished.connect(self._run_finished)
+        self.run_control.refused.connect(lambda text: self.notify("ERROR", f"run refused: {text}"))
+        self.bench.safe_requested.connect(self.run_control.abort)
+        self.bench.message.connect(self.notify)
+        self.runs.loaded.connect(self._run_loaded)
+        self.runs.selected.connect(self._show_run)
+        self.runs.failed.connect(lambda path, text: self.notify("ERROR", text))
+        self.analysis.message.connect(self.notify)
+        self.analysis.reanalysed.connect(self._reanalysed)
+
+    # ------------------------------------------------------------------ messages
+    def notify(self, level: str, text: str) -> None:
+        """Show a message in the bar and the log; never modal, never fatal."""
+        self.messages.show_message(level, text)
+        self.log.add(LogRecord(level, text))
+        self.statusBar().showMessage(text.splitlines()[0][:200], 10000)
+
+    def _forms_valid(self) -> bool:
+        return self.designer.forms_valid() and self.bench.forms_valid()
+
+    # ------------------------------------------------------------------ opening
+    def open_paths(self, paths: list[str | Path]) -> None:
+        """Open profiles (TOML) and run files (HDF5) given on the command line."""
+        runs = []
+        for path in paths:
+            path = Path(path)
+            if path.suffix.lower() in RUN_SUFFIXES or self._looks_like_hdf5(path):
+                runs.append(path)
+            else:
+                self.open_profile(path)
+        if runs:
+            self.open_runs(runs)
+
+    @staticmethod
+    def _looks_like_hdf5(path: Path) -> bool:
+        try:
+            with path.open("rb") as handle:
+                return handle.read(8) == b"\x89HDF\r\n\x1a\n"
+        except OSError:
+            return False
+
+    def open_profile(self, path: str | Path) -> bool:
+        ok = self.session.open(path)
+        if ok:
+            self.setWindowTitle(f"fsi-lab — {Path(path).name}")
+            self.tabs.setCurrentIndex(0)
+        return ok
+
+    def open_runs(self, paths: list[str | Path], show: bool = True) -> None:
+        resolved = [Path(p).resolve() for p in paths]
+        if show and resolved:
+            self._show_when_loaded.add(resolved[-1])
+        self.runs.open(resolved)
+
+    def _open_profile_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open profile", "",
+                                              "Profiles (*.toml);;All files (*)")
+        if path:
+            self.open_profile(path)
+
+    # ------------------------------------------------------------------ runs
+    def _run_started(self, profile: Any) -> None:
+        self.live.configure({name: c.unit for name, c in profile.channels.items()},
+                            profile.run["sample_rate"])
+        self.messages.hide()
+        self.tabs.setCurrentIndex(0)
+
+    def _run_finished(self, outcome: Any) -> None:
+        self.bench.on_run_finished(outcome)
+        kept = f" The data acquired so far is kept in {outcome.path}." if outcome.path else ""
+        if outcome.exit_status == "failed":
+            self.notify("ERROR", f"run failed: {outcome.error}. The bench was put in its safe "
+                                 f"state.{kept}")
+        elif outcome.exit_status == "aborted":
+            self.notify("WARNING", f"run aborted ({outcome.error}); the bench is in its safe "
+                                   f"state.{kept}")
+        if outcome.path is not None:
+            self.last_run = Path(outcome.path).resolve()
+            self.open_runs([outcome.path], show=True)
+        if self._closing:
+            QTimer.singleShot(0, self.close)
+
+    def _run_loaded(self, results: RunResults) -> None:
+        path = results.path.resolve()
+        if path in self._show_when_loaded:
+            self._show_when_loaded.discard(path)
+            self._show_run(results)
+            if path == self.last_run and results.exit_status == "completed" and results.analysis:
+                self.tabs.setCurrentWidget(self.analysis)
+
+    def _show_run(self, results: RunResults) -> None:
+        self.analysis.show_results(results)
+
+    def _reanalysed(self, path: Path) -> None:
+        self.open_runs([path], show=True)
+
+    # ------------------------------------------------------------------ closing
+    def busy(self) -> bool:
+        return self.run_control.running or self.pool.busy
+
+    def closeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        if self.run_control.running:
+            # Never leave a bench driving: abort, and close once the runner has made it safe.
+            self._closing = True
+            self.run_control.abort()
+            self.notify("WARNING", "closing: aborting the run first (safe state) ...")
+            event.ignore()
+            return
+        self.live.timer.stop()
+        self.pool.wait_all()
+        super().closeEvent(event)
+
+
+def _configure_pyqtgraph() -> None:
+    pg.setConfigOptions(background="w", foreground="k", antialias=True)
+
+
+def wait_until_idle(window: MainWindow, timeout_s: float = 120.0) -> bool:
+    """Process events until nothing is loading or checking (for screenshots)."""
+    deadline = time.monotonic() + timeout_s
+    app = QApplication.instance()
+    while time.monotonic() < deadline:
+        app.processEvents(QEventLoop.ProcessEventsFlag.AllEvents, 50)
+        pending = window.runs.pending or window._show_when_loaded
+        checking = window.session.loaded and window.session.current is None
+        if not window.pool.busy and not pending and not checking:
+            app.processEvents()
+            return True
+        time.sleep(0.01)
+    return False
+
+
+def take_screenshot(window: MainWindow, path: Path) -> bool:
+    """Render the whole window into ``path`` (PNG)."""
+    if window.analysis.results is not None:
+        window.tabs.setCurrentWidget(window.analysis)
+    app = QApplication.instance()
+    for _ in range(5):
+        app.processEvents()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return window.grab().save(str(path))
+
+
+def _dispose(window: MainWindow) -> None:
+    """Delete the window before the interpreter exits (pyqtgraph items must go first)."""
+    window.close()
+    window.deleteLater()
+    QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+    QApplication.instance().processEvents()
+
+
+def main(args: Any) -> int:
+    """``fsi-lab gui [PROFILE | RUN.h5 ...] [--screenshot OUT.png]``."""
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    app.setApplicationName("fsi-lab")
+    _configure_pyqtgraph()
+    paths = list(getattr(args, "paths", None) or [])
+    screenshot = getattr(args, "screenshot", None)
+    window = MainWindow(out_dir=getattr(args, "out", None) or "runs")
+    window.resize(1680, 1050)
+    window.show()
+    window.open_paths(paths)
+    if screenshot is None:
+        code = app.exec()
+        _dispose(window)
+        return code
+    idle = wait_until_idle(window)
+    saved = take_screenshot(window, Path(screenshot))
+    errors = [text for level, text in window.messages.messages if level == "ERROR"]
+    _dispose(window)
+    for text in errors:
+        print(f"fsi-lab gui: {text}", file=sys.stderr)
+    if not saved:
+        print(f"fsi-lab gui: could not write {screenshot}", file=sys.stderr)
+        return 1
+    if not idle:
+        print("fsi-lab gui: timed out waiting for the run files to load", file=sys.stderr)
+        return 1
+    return 2 if errors else 0

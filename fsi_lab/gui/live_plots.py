@@ -1,0 +1,212 @@
+"""Live plots: every channel in a rolling time window, and its amplitude spectrum.
+
+Blocks from the run are copied into one fixed-size ring buffer per channel (the rolling window);
+a timer redraws at most ``fps`` times a second, and only when new data came in. What is drawn is
+decimated (min and max per pixel-wide bin, so no peak disappears) to a fixed number of points, and
+the spectrum is computed over a fixed number of the latest samples: a frame costs the same at the
+first second of a run and at the last hour. Storage is the runner's business: it writes every
+sample to the run file, whatever is shown here.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Mapping
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6.QtCore import QTimer
+from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
+
+from fsi_lab.events import DataBlock
+from fsi_lab.gui.session import min_max_decimate
+
+COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2",
+           "#17becf")
+
+
+class RingBuffer:
+    """The latest ``capacity`` samples of one channel."""
+
+    def __init__(self, capacity: int) -> None:
+        self.capacity = max(1, int(capacity))
+        self._data = np.zeros(self.capacity)
+        self.total = 0  # samples ever written
+
+    def extend(self, values: np.ndarray) -> None:
+        values = np.asarray(values, dtype=float).ravel()
+        n = values.size
+        if n == 0:
+            return
+        if n >= self.capacity:
+            self.total += n
+            start = (self.total - self.capacity) % self.capacity
+            self._data[:] = np.roll(values[-self.capacity:], start)
+            return
+        pos = self.total % self.capacity
+        first = min(n, self.capacity - pos)
+        self._data[pos:pos + first] = values[:first]
+        if first < n:
+            self._data[:n - first] = values[first:]
+        self.total += n
+
+    @property
+    def count(self) -> int:
+        return min(self.total, self.capacity)
+
+    def latest(self, n: int | None = None) -> np.ndarray:
+        """The last ``n`` samples (all held when None), oldest first."""
+        count = self.count if n is None else min(int(n), self.count)
+        if count == 0:
+            return np.zeros(0)
+        end = self.total % self.capacity
+        if self.total >= self.capacity and end == 0:
+            end = self.capacity
+        start = end - count
+        if start >= 0:
+            return self._data[start:end].copy()
+        return np.concatenate([self._data[start:], self._data[:end]])
+
+
+class LivePlots(QWidget):
+    """Rolling time traces (left) and spectra (right), one row per channel.
+
+    Call :meth:`configure` before a run (channel names and units), then feed
+    :meth:`on_block` with the run's :class:`~fsi_lab.events.DataBlock` events.
+    """
+
+    def __init__(self, window_s: float = 10.0, fps: float = 30.0, max_points: int = 2000,
+                 spectrum_samples: int = 16384, spectrum_every: int = 3,
+                 parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.window_s = window_s
+        self.max_points = max_points
+        self.spectrum_samples = spectrum_samples
+        self.spectrum_every = spectrum_every
+        self.units: dict[str, str] = {}
+        self.buffers: dict[str, RingBuffer] = {}
+        self.curves: dict[str, pg.PlotDataItem] = {}
+        self.spectra: dict[str, pg.PlotDataItem] = {}
+        self.time_plots: dict[str, pg.PlotItem] = {}
+        self.sample_rate = 0.0
+        self.t_end = 0.0
+        self.t_first = None
+        self.frames = 0
+        self.blocks = 0
+        self.last_frame_s = 0.0
+        self._dirty = False
+        self._frame_counter = 0
+        self.graphics = pg.GraphicsLayoutWidget()
+        self.status = QLabel("No run yet: the channels appear here while a run acquires.")
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.status)
+        layout.addWidget(self.graphics, 1)
+        self.timer = QTimer(self)
+        self.timer.setInterval(max(1, int(1000 / fps)))
+        self.timer.timeout.connect(self.refresh)
+        self.timer.start()
+
+    # ------------------------------------------------------------------ setup
+    def configure(self, units: Mapping[str, str], sample_rate: float) -> None:
+        """Empty the plots and prepare one row per channel (``units``: name -> unit)."""
+        self.graphics.clear()
+        self.units = dict(units)
+        self.sample_rate = float(sample_rate)
+        capacity = int(round(self.window_s * self.sample_rate)) if sample_rate > 0 else 1
+        self.buffers = {name: RingBuffer(capacity) for name in self.units}
+        self.curves.clear()
+        self.spectra.clear()
+        self.time_plots.clear()
+        self.t_end = 0.0
+        self.t_first = None
+        self.blocks = 0
+        self._dirty = False
+        for row, (name, unit) in enumerate(self.units.items()):
+            colour = COLOURS[row % len(COLOURS)]
+            plot = self.graphics.addPlot(row=row, col=0)
+            plot.setLabel("left", name, units=None if not unit else unit)
+            plot.showGrid(x=True, y=True, alpha=0.2)
+            plot.setMenuEnabled(False)
+            if row == len(self.units) - 1:
+                plot.setLabel("bottom", "time", units="s")
+            curve = plot.plot(pen=pg.mkPen(colour, width=1))
+            spec = self.graphics.addPlot(row=row, col=1)
+            spec.setLogMode(y=True)
+            spec.showGrid(x=True, y=True, alpha=0.2)
+            spec.setMenuEnabled(False)
+            spec.setLabel("left", f"|{name}|")
+            if row == len(self.units) - 1:
+                spec.setLabel("bottom", "frequency", units="Hz")
+            spectrum = spec.plot(pen=pg.mkPen(colour, width=1))
+            self.curves[name] = curve
+            self.spectra[name] = spectrum
+            self.time_plots[name] = plot
+        self.graphics.ci.layout.setColumnStretchFactor(0, 3)
+        self.graphics.ci.layout.setColumnStretchFactor(1, 2)
+        self.status.setText(
+            f"{len(self.units)} channels at {self.sample_rate:g} Hz; window {self.window_s:g} s "
+            "(display decimated; the run file keeps every sample)")
+
+    # ------------------------------------------------------------------ data
+    def on_block(self, block: DataBlock) -> None:
+        """Append one block (UI thread; called through the event forwarder)."""
+        names = [n for n in block.data if n in self.buffers]
+        if not self.buffers or len(names) < len(block.data) or block.sample_rate != self.sample_rate:
+            # a channel we were not told about, or the digitiser rounded the rate
+            units = {**self.units, **{n: self.units.get(n, "") for n in block.data}}
+            self.configure(units, block.sample_rate)
+        n = 0
+        for name, values in block.data.items():
+            self.buffers[name].extend(values)
+            n = len(values)
+        if self.t_first is None:
+            self.t_first = block.t0
+        self.t_end = block.t0 + n / block.sample_rate
+        self.blocks += 1
+        self._dirty = True
+
+    def samples_shown(self, name: str) -> int:
+        """Points of the drawn curve of channel ``name`` (for tests)."""
+        x, _ = self.curves[name].getData()
+        return 0 if x is None else len(x)
+
+    # ------------------------------------------------------------------ drawing
+    def refresh(self, force: bool = False) -> None:
+        """Redraw if new data came in since the last frame."""
+        if not (self._dirty or force) or not self.buffers:
+            return
+        started = time.perf_counter()
+        self._dirty = False
+        rate = self.sample_rate
+        with_spectrum = force or self._frame_counter % self.spectrum_every == 0
+        self._frame_counter += 1
+        for name, buffer in self.buffers.items():
+            y = buffer.latest()
+            if y.size == 0:
+                continue
+            t = self.t_end - (y.size - np.arange(y.size)) / rate
+            td, yd = min_max_decimate(t, y, self.max_points)
+            self.curves[name].setData(td, yd, skipFiniteCheck=True)
+            if with_spectrum and y.size >= 16:
+                self._spectrum(name, y[-self.spectrum_samples:], rate)
+        lo = max(self.t_first or 0.0, self.t_end - self.window_s)
+        for plot in self.time_plots.values():
+            plot.setXRange(lo, max(self.t_end, lo + 1e-3), padding=0)
+        self.frames += 1
+        self.last_frame_s = time.perf_counter() - started
+
+    def _spectrum(self, name: str, y: np.ndarray, rate: float) -> None:
+        window = np.hanning(y.size)
+        amplitude = 2.0 * np.abs(np.fft.rfft((y - y.mean()) * window)) / window.sum()
+        freqs = np.fft.rfftfreq(y.size, 1.0 / rate)
+        amplitude[0] = np.nan
+        keep = slice(1, None)
+        fd, ad = freqs[keep], np.maximum(amplitude[keep], 1e-300)
+        if fd.size > self.max_points:  # keep the peaks: max over bins
+            bins = self.max_points
+            per = fd.size // bins
+            used = per * bins
+            ad = ad[:used].reshape(bins, per).max(axis=1)
+            fd = fd[:used].reshape(bins, per)[:, 0]
+        self.spectra[name].setData(fd, ad, skipFiniteCheck=True)

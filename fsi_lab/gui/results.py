@@ -1,0 +1,148 @@
+"""A run file read for display: its attributes, channels and every ``/analysis`` group.
+
+Reading happens on a worker thread. A missing, corrupt or foreign file raises
+:class:`fsi_lab.errors.InputFileError` (the core's :func:`~fsi_lab.runfile.read_run` decides what a
+run file is); a run file without analysis, or with some groups missing or failed, reads fine:
+the views say "not computed" or show the failure message.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from fsi_lab.contract import ChannelData
+from fsi_lab.errors import InputFileError
+from fsi_lab.runfile import read_attrs, read_run
+
+
+@dataclass
+class PluginResult:
+    """``/analysis/<channel>/<plugin>``: status, scalar results, parameters and datasets."""
+
+    channel: str
+    plugin: str
+    status: str
+    error: str = ""
+    attrs: dict[str, Any] = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
+    datasets: dict[str, np.ndarray] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    def get(self, *names: str) -> np.ndarray | None:
+        """The first of ``names`` that the group holds (datasets, then numeric attributes)."""
+        for name in names:
+            if name in self.datasets:
+                return self.datasets[name]
+        for name in names:
+            value = self.attrs.get(name)
+            if isinstance(value, (list, tuple)) and value and all(
+                    isinstance(v, (int, float)) for v in value):
+                return np.asarray(value, dtype=float)
+        return None
+
+    def scalar(self, *names: str) -> Any:
+        for name in names:
+            if name in self.attrs:
+                return self.attrs[name]
+        return None
+
+
+@dataclass
+class RunResults:
+    """What the views show of one run file."""
+
+    path: Path
+    attrs: dict[str, Any]
+    channels: dict[str, ChannelData]
+    instruments: dict[str, dict[str, Any]]
+    excitation: dict[str, Any] | None
+    analysis: dict[str, dict[str, PluginResult]]
+    summary: dict[str, Any] | None
+
+    @property
+    def name(self) -> str:
+        return self.attrs.get("run_name") or self.path.name
+
+    @property
+    def exit_status(self) -> str:
+        return str(self.attrs.get("exit_status", "unknown"))
+
+    @property
+    def profile_text(self) -> str:
+        return self.attrs.get("profile", "") or ""
+
+    def result(self, channel: str, plugin: str) -> PluginResult | None:
+        return self.analysis.get(channel, {}).get(plugin)
+
+    def analysed_channels(self) -> list[str]:
+        return list(self.analysis)
+
+    def components(self, channel: str) -> list[dict[str, Any]]:
+        """The summary's component entries of ``channel`` (empty when there are none)."""
+        if not self.summary:
+            return []
+        return list(self.summary.get("channels", {}).get(channel, {}).get("components", []))
+
+
+def _read_group(channel: str, plugin: str, group: h5py.Group) -> PluginResult:
+    attrs = read_attrs(group)
+    status = str(attrs.pop("status", "ok"))
+    error = str(attrs.pop("error", "") or "")
+    attrs.pop("traceback", None)
+    result = PluginResult(channel, plugin, status, error, attrs)
+    if "params" in group and isinstance(group["params"], h5py.Group):
+        result.params = read_attrs(group["params"])
+
+    def visit(name: str, node: Any) -> None:
+        if isinstance(node, h5py.Dataset) and not name.startswith("params"):
+            try:
+                result.datasets[name] = node[()]
+            except (OSError, ValueError, TypeError):
+                return
+            unit = node.attrs.get("units")
+            if unit is not None:
+                result.units[name] = unit.decode() if isinstance(unit, bytes) else str(unit)
+
+    group.visititems(visit)
+    return result
+
+
+def load_results(path: str | Path) -> RunResults:
+    """Read a run file for display (raises InputFileError for what is not a run file)."""
+    path = Path(path)
+    run = read_run(path)
+    analysis: dict[str, dict[str, PluginResult]] = {}
+    summary = None
+    try:
+        with h5py.File(path, "r") as handle:
+            root = handle.get("analysis")
+            if isinstance(root, h5py.Group):
+                text = root.attrs.get("summary")
+                if isinstance(text, bytes):
+                    text = text.decode()
+                if text:
+                    try:
+                        summary = json.loads(text)
+                    except ValueError:
+                        summary = None
+                for channel, channel_group in root.items():
+                    if not isinstance(channel_group, h5py.Group):
+                        continue
+                    for plugin, group in channel_group.items():
+                        if isinstance(group, h5py.Group):
+                            analysis.setdefault(channel, {})[plugin] = _read_group(
+                                channel, plugin, group)
+    except OSError as exc:
+        raise InputFileError(f"{path}: the analysis cannot be read ({exc})") from None
+    return RunResults(path, run.attrs, run.channels, run.instruments, run.excitation, analysis,
+                      summary)

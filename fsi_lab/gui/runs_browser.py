@@ -1,0 +1,382 @@
+"""Runs browser: open run files (several at once), compare them side by side, export.
+
+Files are read off the UI thread; a file that is not a readable fsi-lab run file is reported
+(``failed``) and the others stay open. The comparison overlays the backbones, damping curves and
+equivalent-damping fits of the ticked runs and lists their identified values; figures export as
+PNG or SVG, the values and the curves as CSV.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import (
+    QComboBox, QFileDialog, QHBoxLayout, QHeaderView, QLabel, QPushButton, QSplitter,
+    QTableWidget, QTableWidgetItem, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget,
+)
+
+from fsi_lab.errors import FsiLabError
+from fsi_lab.gui.analysis_views import (
+    COLOURS, CQ, CQ_AMPLITUDE, CQ_FIT, DISPLACEMENT_AMPLITUDE, FREQUENCY, ZETA, per_component,
+    summary_series, table_rows,
+)
+from fsi_lab.gui.export import export_figure, write_csv
+from fsi_lab.gui.results import RunResults, load_results
+from fsi_lab.gui.worker import TaskPool
+from fsi_lab.registry import Registry
+
+SYMBOLS = ("o", "t", "s", "d", "+", "x")
+SUMMARY_COLUMNS = ("run", "file", "exit_status", "start_time", "channel", "component",
+                   "frequency_hz", "c_i", "c_i_ci95_low", "c_i_ci95_high", "c_f", "c_f_ci95_low",
+                   "c_f_ci95_high", "r2", "errors")
+CURVE_COLUMNS = ("run", "file", "channel", "component", "curve", "x_name", "x", "y_name", "y")
+#: (curve name, plugin, x names, y names, summary section, summary y, x label, y label)
+CURVES = (
+    ("backbone", "backbone", DISPLACEMENT_AMPLITUDE, FREQUENCY, "backbone", "frequency_hz",
+     "displacement_amplitude_m", "frequency_hz"),
+    ("damping", "damping", DISPLACEMENT_AMPLITUDE, ZETA, "damping", "zeta",
+     "displacement_amplitude_m", "zeta"),
+    ("equivalent_damping", "equivalent-damping", CQ_AMPLITUDE, CQ, None, None,
+     "displacement_amplitude_m", "c_q"),
+)
+
+
+def curves_of(results: RunResults, channel: str) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
+    """Backbone, damping and C_q points per component, from the datasets or the summary."""
+    out: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+    for name, plugin, x_names, y_names, section, summary_y, _, _ in CURVES:
+        result = results.result(channel, plugin)
+        pairs = []
+        if result is not None and result.ok:
+            pairs = [(x, y) for x, y in zip(per_component(result, x_names),
+                                            per_component(result, y_names))
+                     if x.size == y.size and x.size]
+        if not pairs and section:
+            pairs = summary_series(results, channel, section, "amplitude", summary_y)
+        out[name] = pairs
+    return out
+
+
+def _ci(value: Any, index: int) -> Any:
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        return value[index]
+    return None
+
+
+class RunsBrowser(QWidget):
+    """The open runs, their comparison and the exports.
+
+    Signals: ``loaded(RunResults)`` whenever a file has been (re)read, ``selected(RunResults)``
+    when the experimenter picks a run, ``failed(path, message)`` when a file cannot be read.
+    """
+
+    loaded = Signal(object)
+    selected = Signal(object)
+    failed = Signal(object, str)
+
+    def __init__(self, registry: Registry, pool: TaskPool, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.registry = registry
+        self.pool = pool
+        self.runs: dict[Path, RunResults] = {}
+        self.pending: set[Path] = set()
+        self.list = QTreeWidget()
+        self.list.setObjectName("runs-list")
+        self.list.setHeaderLabels(["run", "status", "start", "file"])
+        self.list.itemChanged.connect(self._ticked)
+        self.list.itemDoubleClicked.connect(self._picked)
+        self.channel = QComboBox()
+        self.channel.currentIndexChanged.connect(self.compare)
+        open_button = QPushButton("Open runs ...")
+        open_button.clicked.connect(self._open_dialog)
+        close_button = QPushButton("Close selected")
+        close_button.clicked.connect(self._close_selected)
+        show_button = QPushButton("Show analysis")
+        show_button.clicked.connect(lambda: self._picked(self.list.currentItem()))
+        fig_button = QPushButton("Export figure ...")
+        fig_button.clicked.connect(self._export_figure_dialog)
+        csv_button = QPushButton("Export CSV ...")
+        csv_button.clicked.connect(self._export_csv_dialog)
+        self.graphics = pg.GraphicsLayoutWidget()
+        self.graphics.setObjectName("compare-plots")
+        self.table = QTableWidget()
+        self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        self.note = QLabel("Open run files and tick them to compare them.")
+        self.note.setWordWrap(True)
+
+        buttons = QHBoxLayout()
+        for button in (open_button, close_button, show_button):
+            buttons.addWidget(button)
+        left = QWidget()
+        left_layout = QVBoxLayout(left)
+        left_layout.addLayout(buttons)
+        left_layout.addWidget(self.list, 1)
+        exports = QHBoxLayout()
+        exports.addWidget(QLabel("Channel"))
+        exports.addWidget(self.channel, 1)
+        exports.addWidget(fig_button)
+        exports.addWidget(csv_button)
+        right = QWidget()
+        right_layout = QVBoxLayout(right)
+        right_layout.addLayout(exports)
+        right_layout.addWidget(self.note)
+        right_layout.addWidget(self.graphics, 3)
+        right_layout.addWidget(self.table, 1)
+        splitter = QSplitter(Qt.Orientation.Horizontal)
+        splitter.addWidget(left)
+        splitter.addWidget(right)
+        splitter.setStretchFactor(1, 3)
+        layout = QVBoxLayout(self)
+        layout.addWidget(splitter)
+
+    # ------------------------------------------------------------------ opening
+    def open(self, paths: list[str | Path]) -> None:
+        """Read each file off the UI thread; ``loaded`` or ``failed`` follows for each."""
+        for path in paths:
+            path = Path(path).resolve()
+            if path in self.pending:
+                continue
+            self.pending.add(path)
+            self.pool.start(load_results, path,
+                            on_done=self._loaded,
+                            on_error=lambda exc, text, p=path: self._failed(p, exc),
+                            name=f"read {path.name}")
+
+    reload = open
+
+    def _loaded(self, results: RunResults) -> None:
+        path = results.path.resolve()
+        self.pending.discard(path)
+        self.runs[path] = results
+        self._refresh_list(path)
+        self.compare()
+        self.loaded.emit(results)
+
+    def _failed(self, path: Path, exc: BaseException) -> None:
+        self.pending.discard(path)
+        message = str(exc) if isinstance(exc, FsiLabError) else (
+            f"{path}: cannot be read as a run file ({type(exc).__name__}: {exc})")
+        self.failed.emit(path, message)
+
+    def _open_dialog(self) -> None:
+        files, _ = QFileDialog.getOpenFileNames(self, "Open run files", "",
+                                                "Run files (*.h5 *.hdf5);;All files (*)")
+        if files:
+            self.open(files)
+
+    def close_run(self, path: Path) -> None:
+        self.runs.pop(Path(path).resolve(), None)
+        self._refresh_list()
+        self.compare()
+
+    def _close_selected(self) -> None:
+        for item in self.list.selectedItems():
+            self.runs.pop(item.data(0, Qt.ItemDataRole.UserRole), None)
+        self._refresh_list()
+        self.compare()
+
+    def _refresh_list(self, tick: Path | None = None) -> None:
+        ticked = {p for p in self.checked_paths()}
+        if tick is not None:
+            ticked.add(tick)
+        self.list.blockSignals(True)
+        self.list.clear()
+        for path, results in self.runs.items():
+            item = QTreeWidgetItem([results.name, results.exit_status,
+                                    str(results.attrs.get("start_time", ""))[:19], path.name])
+            item.setData(0, Qt.ItemDataRole.UserRole, path)
+            item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
+            item.setCheckState(0, Qt.CheckState.Checked if path in ticked
+                               else Qt.CheckState.Unchecked)
+            item.setToolTip(0, str(path))
+            self.list.addTopLevelItem(item)
+        self.list.blockSignals(False)
+        for column in range(4):
+            self.list.resizeColumnToContents(column)
+        channels: list[str] = []
+        for results in self.runs.values():
+            for name in results.analysed_channels():
+                if name not in channels:
+                    channels.append(name)
+        current = self.channel.currentData()
+        self.channel.blockSignals(True)
+        self.channel.clear()
+        for name in channels:
+            self.channel.addItem(name, name)
+        if current in channels:
+            self.channel.setCurrentIndex(channels.index(current))
+        self.channel.blockSignals(False)
+
+    def _ticked(self, *args) -> None:
+        self.compare()
+
+    def _picked(self, item: QTreeWidgetItem | None) -> None:
+        if item is None:
+            return
+        results = self.runs.get(item.data(0, Qt.ItemDataRole.UserRole))
+        if results is not None:
+            self.selected.emit(results)
+
+    def checked_paths(self) -> list[Path]:
+        paths = []
+        for i in range(self.list.topLevelItemCount()):
+            item = self.list.topLevelItem(i)
+            if item.checkState(0) == Qt.CheckState.Checked:
+                paths.append(item.data(0, Qt.ItemDataRole.UserRole))
+        return paths
+
+    def set_checked(self, paths: list[Path]) -> None:
+        wanted = {Path(p).resolve() for p in paths}
+        self.list.blockSignals(True)
+        for i in range(self.list.topLevelItemCount()):
+            item = self.list.topLevelItem(i)
+            item.setCheckState(0, Qt.CheckState.Checked
+                               if item.data(0, Qt.ItemDataRole.UserRole) in wanted
+                               else Qt.CheckState.Unchecked)
+        self.list.blockSignals(False)
+        self.compare()
+
+    # ------------------------------------------------------------------ comparison
+    def _compared(self) -> list[RunResults]:
+        return [self.runs[p] for p in self.checked_paths() if p in self.runs]
+
+    def _channel_of(self, results: RunResults) -> str | None:
+        channel = self.channel.currentData()
+        channels = results.analysed_channels()
+        if channel in channels:
+            return channel
+        return channels[0] if channels else None
+
+    def compare(self, *args) -> None:
+        """Overlay the ticked runs' curves and list their identified values."""
+        self.graphics.clear()
+        runs = self._compared()
+        plots = {}
+        for col, (name, xlabel, ylabel, yunits) in enumerate((
+                ("backbone", "displacement amplitude", "frequency", "Hz"),
+                ("damping", "displacement amplitude", "damping ratio ζ", None),
+                ("equivalent_damping", "displacement amplitude W", "C_q", "kg/(m s)"))):
+            plot = self.graphics.addPlot(row=0, col=col)
+            plot.setLabel("bottom", xlabel, units="m")
+            plot.setLabel("left", ylabel, units=yunits)
+            plot.setTitle(name.replace("_", " "))
+            plot.showGrid(x=True, y=True, alpha=0.2)
+            plot.addLegend(offset=(-10, 10))
+            plots[name] = plot
+        drawn = 0
+        for r, results in enumerate(runs):
+            channel = self._channel_of(results)
+            if channel is None:
+                continue
+            colour = COLOURS[r % len(COLOURS)]
+            for name, pairs in curves_of(results, channel).items():
+                for k, (x, y) in enumerate(pairs[:len(SYMBOLS)]):
+                    label = f"{results.name} #{k + 1}" if name == "backbone" else None
+                    plots[name].plot(x, y, pen=pg.mkPen(colour, width=1) if x.size > 400 else None,
+                                     symbol=None if x.size > 400 else SYMBOLS[k],
+                                     symbolSize=5, symbolBrush=colour, symbolPen=None, name=label)
+                    drawn += 1
+            eq = results.result(channel, "equivalent-damping")
+            if eq is not None and eq.ok:
+                for x, fit in zip(per_component(eq, CQ_AMPLITUDE), per_component(eq, CQ_FIT)):
+                    if x.size == fit.size and x.size:
+                        order = np.argsort(x)
+                        plots["equivalent_damping"].plot(x[order], fit[order],
+                                                         pen=pg.mkPen(colour, width=2))
+        self._fill_table(runs)
+        if not runs:
+            self.note.setText("Open run files and tick them to compare them.")
+        elif not drawn:
+            self.note.setText("The ticked runs hold no backbone, damping or equivalent-damping "
+                              "results (not computed).")
+        else:
+            self.note.setText(f"{len(runs)} run(s) compared")
+
+    def summary_rows(self, runs: list[RunResults] | None = None) -> list[dict[str, Any]]:
+        """One row per run, channel and component (a run without components gives one row)."""
+        out = []
+        for results in runs if runs is not None else self._compared():
+            base = {"run": results.name, "file": str(results.path),
+                    "exit_status": results.exit_status,
+                    "start_time": results.attrs.get("start_time", "")}
+            channels = results.analysed_channels() or [""]
+            for channel in channels:
+                errors = "; ".join(f"{r.plugin}: {r.error}"
+                                   for r in results.analysis.get(channel, {}).values() if not r.ok)
+                components = table_rows(results, channel) if channel else []
+                for row in components or [{}]:
+                    out.append({**base, "channel": channel, "component": row.get("index"),
+                                "frequency_hz": row.get("frequency_hz"), "c_i": row.get("c_i"),
+                                "c_i_ci95_low": _ci(row.get("c_i_ci95"), 0),
+                                "c_i_ci95_high": _ci(row.get("c_i_ci95"), 1),
+                                "c_f": row.get("c_f"),
+                                "c_f_ci95_low": _ci(row.get("c_f_ci95"), 0),
+                                "c_f_ci95_high": _ci(row.get("c_f_ci95"), 1),
+                                "r2": row.get("r2"), "errors": errors})
+        return out
+
+    def _fill_table(self, runs: list[RunResults]) -> None:
+        rows = self.summary_rows(runs)
+        columns = ("run", "exit_status", "channel", "component", "frequency_hz", "c_i", "c_f",
+                   "r2", "errors")
+        self.table.clear()
+        self.table.setColumnCount(len(columns))
+        self.table.setHorizontalHeaderLabels(list(columns))
+        self.table.setRowCount(len(rows))
+        for r, row in enumerate(rows):
+            for c, key in enumerate(columns):
+                value = row.get(key)
+                text = f"{value:.5g}" if isinstance(value, float) else (
+                    "" if value is None else str(value))
+                self.table.setItem(r, c, QTableWidgetItem(text))
+        self.table.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.ResizeToContents)
+
+    # ------------------------------------------------------------------ exports
+    def export_figure(self, path: str | Path) -> Path:
+        """The comparison plots as PNG or SVG (by the suffix)."""
+        return export_figure(self.graphics, path)
+
+    def export_csv(self, path: str | Path) -> Path:
+        """The identified values of the ticked runs, one row per component."""
+        return write_csv(path, SUMMARY_COLUMNS, self.summary_rows())
+
+    def export_curves_csv(self, path: str | Path) -> Path:
+        """Every point of the ticked runs' backbone, damping and C_q curves (long format)."""
+        rows = []
+        labels = {c[0]: (c[6], c[7]) for c in CURVES}
+        for results in self._compared():
+            channel = self._channel_of(results)
+            if channel is None:
+                continue
+            for name, pairs in curves_of(results, channel).items():
+                for k, (x, y) in enumerate(pairs):
+                    for xv, yv in zip(x, y):
+                        rows.append({"run": results.name, "file": str(results.path),
+                                     "channel": channel, "component": k + 1, "curve": name,
+                                     "x_name": labels[name][0], "x": float(xv),
+                                     "y_name": labels[name][1], "y": float(yv)})
+        return write_csv(path, CURVE_COLUMNS, rows)
+
+    def _export_figure_dialog(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Export figure", "comparison.png",
+                                              "PNG image (*.png);;SVG drawing (*.svg)")
+        if path:
+            try:
+                self.export_figure(path)
+            except (OSError, ValueError) as exc:
+                self.failed.emit(Path(path), f"export failed: {exc}")
+
+    def _export_csv_dialog(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Export results", "results.csv",
+                                              "CSV (*.csv)")
+        if path:
+            try:
+                self.export_csv(path)
+                curves = Path(path).with_name(Path(path).stem + "-curves.csv")
+                self.export_curves_csv(curves)
+            except OSError as exc:
+                self.failed.emit(Path(path), f"export failed: {exc}")

@@ -1,0 +1,150 @@
+"""Fixtures of the GUI tests: the real main window on the in-process simulated bench.
+
+Every wait has a timeout; every window is closed and every thread it started is finished at the
+end of its test (a run still going is aborted first).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+pytest.importorskip("PySide6")
+pytest.importorskip("pyqtgraph")
+
+from PySide6.QtCore import QCoreApplication, QEvent  # noqa: E402
+
+from fsi_lab.gui.app import MainWindow, _configure_pyqtgraph  # noqa: E402
+from fsi_lab.runfile import RunFileWriter, write_analysis  # noqa: E402
+
+CHECK_TIMEOUT_MS = 15000
+RUN_TIMEOUT_MS = 60000
+
+
+@pytest.fixture
+def make_window(qtbot, tmp_path):
+    """Build main windows; each is closed, its threads finished, and deleted afterwards."""
+    _configure_pyqtgraph()
+    windows: list[MainWindow] = []
+
+    def make(registry=None, **kwargs) -> MainWindow:
+        window = MainWindow(registry=registry, out_dir=kwargs.pop("out_dir", tmp_path / "runs"))
+        window.resize(1400, 900)
+        window.show()
+        qtbot.waitExposed(window)
+        windows.append(window)
+        return window
+
+    yield make
+    for window in windows:
+        if window.run_control.running:
+            window.run_control.abort()
+            qtbot.waitUntil(lambda w=window: not w.run_control.running, timeout=RUN_TIMEOUT_MS)
+        qtbot.waitUntil(lambda w=window: not w.pool.busy, timeout=RUN_TIMEOUT_MS)
+        window.close()
+        assert not window.isVisible()
+        window.pool.wait_all()
+        window.deleteLater()
+    QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+
+
+def wait_checked(qtbot, window, ok: bool | None = True):
+    """Wait for the safety check of the values now in the forms."""
+    qtbot.waitUntil(lambda: window.session.current is not None, timeout=CHECK_TIMEOUT_MS)
+    checked = window.session.current
+    if ok is not None:
+        assert checked.ok is ok, checked.error or checked.report
+    return checked
+
+
+def wait_finished(qtbot, window):
+    qtbot.waitUntil(lambda: not window.run_control.running, timeout=RUN_TIMEOUT_MS)
+    outcome = window.run_control.outcome
+    assert outcome is not None
+    return outcome
+
+
+def write_run(path: Path, rate: float = 1000.0, seconds: float = 4.0, analysis: bool = True,
+              failed: str | None = None, c_i: float = 0.65, c_f: float = 33.0,
+              name: str = "synthetic") -> Path:
+    """A run file with a decaying two-mode velocity and analysis groups laid out as the
+    analysis plugins store them (``/analysis/<channel>/<plugin>/``)."""
+    n = int(rate * seconds)
+    t = np.arange(n) / rate
+    env = np.vstack([0.05 * np.exp(-0.8 * t), 0.01 * np.exp(-2.0 * t)])
+    freq = np.vstack([17.0 - 0.3 * np.exp(-0.8 * t), 2.0 + 0 * t])
+    comps = env * np.cos(2 * np.pi * np.cumsum(freq, axis=1) / rate)
+    velocity = comps.sum(axis=0)
+    profile = '[analysis]\nchain = []\nchannels = ["tip_velocity"]\n'
+    writer = RunFileWriter(path, {"uuid": "0" * 32, "start_time": "2026-01-01T00:00:00",
+                                  "kind": "measured", "run_name": name, "profile": profile,
+                                  "software_version": "test", "plugin_versions": {},
+                                  "profile_path": "", "overrides": []})
+    writer.create_channel("tip_velocity", {"units": "m/s", "quantity": "velocity",
+                                           "sample_rate": rate, "t0": 0.0, "sensitivity": 8.0})
+    writer.create_channel("base_acceleration", {"units": "m/s^2", "quantity": "acceleration",
+                                                "sample_rate": rate, "t0": 0.0,
+                                                "sensitivity": 0.0102})
+    writer.append("tip_velocity", velocity)
+    writer.append("base_acceleration", 0.1 * np.sin(2 * np.pi * 30 * t))
+    writer.set_attrs({"exit_status": "completed", "stop_time": "2026-01-01T00:00:05"})
+    writer.close()
+    if not analysis:
+        return path
+    amp = np.linspace(0.004, 0.0005, 40)
+    vel_amp = amp * 2 * np.pi * 17
+    zeta = 0.01 + 2.0 * amp
+    cq = c_i + 8 * c_f * 2 * np.pi * 17 * amp / (3 * np.pi)
+    freqs = np.fft.rfftfreq(n, 1 / rate)
+    spectrum = np.abs(np.fft.rfft(velocity)) * 2 / n
+    groups = {
+        "tip_velocity/spectrum": {"datasets": {"frequency_hz": freqs, "amplitude": spectrum},
+                                  "attrs": {"status": "ok"}, "params": {"window": "hann"}},
+        "tip_velocity/hvd": {"datasets": {"components": comps, "envelopes": env,
+                                          "frequencies": freq,
+                                          "edge_mask": np.zeros_like(comps, dtype=bool)},
+                             "units": {"components": "m/s", "envelopes": "m/s",
+                                       "frequencies": "Hz"},
+                             "attrs": {"status": "ok", "cutoffs": [4.0, 1.0]},
+                             "params": {"components": 2}},
+        "tip_velocity/backbone": {"datasets": {"amplitude": np.vstack([amp, amp]),
+                                               "velocity_amplitude": np.vstack([vel_amp, vel_amp]),
+                                               "frequency_hz": np.vstack([17 - 10 * amp,
+                                                                          2 - 5 * amp])},
+                                  "attrs": {"status": "ok"}, "params": {}},
+        "tip_velocity/damping": {"datasets": {"amplitude": amp, "velocity_amplitude": vel_amp,
+                                              "zeta": zeta},
+                                 "attrs": {"status": "ok"}, "params": {}},
+        "tip_velocity/equivalent-damping": {
+            "datasets": {"amplitude": amp, "c_q": cq, "c_q_fit": cq},
+            "attrs": {"status": "ok", "c_i": c_i, "c_f": c_f, "r2": 0.914}, "params": {}},
+    }
+    if failed:
+        groups[f"tip_velocity/{failed}"] = {"attrs": {"status": "failed",
+                                                      "error": f"{failed}: too few peaks"},
+                                            "params": {}}
+    summary = {"run": str(path), "channels": {"tip_velocity": {
+        "spectrum_peaks_hz": [2.0, 17.0],
+        "components": [{"index": 0, "frequency_hz": 17.0,
+                        "equivalent_damping": {"c_i": c_i, "c_f": c_f, "r2": 0.914,
+                                               "c_i_ci95": [c_i - 0.1, c_i + 0.1],
+                                               "c_f_ci95": [c_f - 3, c_f + 3]}},
+                       {"index": 1, "frequency_hz": 2.0}]}}}
+    write_analysis(path, groups, summary)
+    return path
+
+
+def write_foreign(path: Path) -> Path:
+    """A valid HDF5 file that is not an fsi-lab run file."""
+    with h5py.File(path, "w") as handle:
+        handle.create_dataset("data", data=np.arange(10))
+    return path
+
+
+def write_corrupt(path: Path) -> Path:
+    """Not an HDF5 file at all, though it is called .h5."""
+    path.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\x00garbage" * 100)
+    return path

@@ -1,0 +1,216 @@
+"""The real window drives runs on the in-process simulated bench (paced in real time)."""
+
+import numpy as np
+import pytest
+from conftest import RUN_TIMEOUT_MS, wait_checked, wait_finished
+
+from fsi_lab.chain import DEFAULT_CHAIN
+from fsi_lab.runfile import read_run
+
+PAPER_CHAIN = DEFAULT_CHAIN
+
+
+def _chain(registry) -> list[str]:
+    """The paper's chain as far as it is installed, else the example plugin's analysis."""
+    installed = [name for name in PAPER_CHAIN if name in registry.descriptors["analysis"]]
+    if installed:
+        return installed
+    return [name for name in ("rms",) if name in registry.descriptors["analysis"]]
+
+
+def _analysis_section(chain) -> str:
+    return "[analysis]\nchannels = [\"tip_velocity\"]\nchain = [" + ", ".join(
+        f'"{name}"' for name in chain) + "]\n"
+
+
+def test_start_run_live_plots_then_analysis(qtbot, make_window, sim_profile, registry,
+                                            with_example_plugin):
+    from fsi_lab.registry import load_registry
+
+    registry = load_registry()  # with the example distribution on the path
+    chain = _chain(registry)
+    path = sim_profile(duration=1.5, realtime="true", analysis=_analysis_section(chain))
+    window = make_window(registry)
+    assert window.open_profile(path)
+    wait_checked(qtbot, window)
+    start = window.run_control.start_button
+    qtbot.waitUntil(start.isEnabled, timeout=5000)
+    qtbot.mouseClick(start, pytest.importorskip("PySide6.QtCore").Qt.MouseButton.LeftButton)
+    assert window.run_control.running and not start.isEnabled()
+    assert window.run_control.abort_button.isEnabled()
+
+    # data arrives in the live plots while the run acquires
+    qtbot.waitUntil(lambda: window.live.blocks >= 3 and window.live.frames >= 1, timeout=10000)
+    assert window.run_control.running
+    assert set(window.live.curves) == {"base_acceleration", "tip_velocity"}
+    assert 0 < window.live.samples_shown("tip_velocity") <= 2 * window.live.max_points
+    x, _ = window.live.spectra["tip_velocity"].getData()
+    assert x is not None and len(x) > 0
+    assert window.run_control.progress.value() > 0
+
+    outcome = wait_finished(qtbot, window)
+    assert outcome.exit_status == "completed", outcome.error
+    assert window.run_control.exit_label.text().startswith("completed")
+
+    # the analysis views fill from the run file
+    qtbot.waitUntil(lambda: window.analysis.results is not None
+                    and window.analysis.results.path == outcome.path.resolve(), timeout=20000)
+    results = window.analysis.results
+    assert set(results.analysis["tip_velocity"]) == set(chain)
+    filled = window.analysis.filled()
+    assert filled["All datasets"]
+    if "hvd" in chain:
+        assert filled["HVD components"] and filled["Instantaneous frequency"]
+    if "backbone" in chain:
+        assert filled["Backbone"]
+    if "equivalent-damping" in chain:
+        assert filled["Cq fit"] and filled["Results"]
+    assert window.tabs.currentWidget() is window.analysis
+    # the bench panel shows the state read back after the safe state
+    amplifier = window.bench.boxes["amplifier"]
+    assert "output enabled: off" in amplifier.state.text()
+    qtbot.waitUntil(lambda: "SIM0001" in amplifier.identity.text(), timeout=5000)
+
+
+def test_abort_mid_run_keeps_partial_data_in_safe_state(qtbot, make_window, sim_profile,
+                                                       registry):
+    path = sim_profile(duration=30.0, realtime="true")
+    window = make_window(registry)
+    window.open_profile(path)
+    wait_checked(qtbot, window)
+    assert window.run_control.start()
+    qtbot.waitUntil(lambda: window.live.blocks >= 4, timeout=10000)
+    assert window.run_control.state == "running"
+    window.run_control.abort_button.click()
+    outcome = wait_finished(qtbot, window)
+    assert outcome.exit_status == "aborted"
+    assert "aborted" in window.run_control.exit_label.text()
+    assert window.messages.isVisible() and "aborted" in window.messages.text.text()
+
+    run = read_run(outcome.path)
+    assert run.attrs["exit_status"] == "aborted"
+    amplifier = run.instruments["amplifier"]["final_state"]
+    source = run.instruments["source"]["final_state"]
+    assert amplifier["output_enabled"] is False
+    assert source["output_enabled"] is False and source["level_v"] == 0.0
+    kept = run.channels["tip_velocity"].data
+    assert 0.2 * 2000 <= kept.size < 30 * 2000      # partial, not empty, not complete
+    assert np.all(np.isfinite(kept))
+    assert "output enabled: off" in window.bench.boxes["amplifier"].state.text()
+    # the window is ready for the next run
+    qtbot.waitUntil(window.run_control.start_button.isEnabled, timeout=5000)
+
+
+def test_instrument_lost_mid_run_shows_message_and_app_keeps_running(qtbot, make_window,
+                                                                     sim_profile, registry):
+    path = sim_profile(duration=10.0, realtime="true", acquisition_extra="fail_after_s = 0.6")
+    window = make_window(registry)
+    window.open_profile(path)
+    wait_checked(qtbot, window)
+    assert window.run_control.start()
+    outcome = wait_finished(qtbot, window)
+    assert outcome.exit_status == "failed"
+    assert "no answer" in outcome.error
+    level, text = window.messages.messages[-1]
+    assert level == "ERROR" and "no answer" in text and "safe state" in text
+    assert window.messages.isVisible()
+    assert "no answer" in window.log.contents()
+    run = read_run(outcome.path)
+    assert run.attrs["exit_status"] == "failed"
+    assert run.instruments["amplifier"]["final_state"]["output_enabled"] is False
+    assert run.channels["tip_velocity"].data.size > 0
+    # still alive and usable
+    assert window.isVisible()
+    qtbot.waitUntil(window.run_control.start_button.isEnabled, timeout=5000)
+    window.designer.run_form.fields["duration"].editor.setValue(0.3)
+    wait_checked(qtbot, window)
+    assert window.run_control.start()
+    assert wait_finished(qtbot, window).exit_status == "completed"  # shorter than the fault
+    assert window.isVisible()
+
+
+def test_out_of_bounds_value_refused_and_start_disabled(qtbot, make_window, sim_profile,
+                                                        registry):
+    window = make_window(registry)
+    window.open_profile(sim_profile(duration=1.0))
+    wait_checked(qtbot, window)
+    start = window.run_control.start_button
+    qtbot.waitUntil(start.isEnabled, timeout=5000)
+    amplitude = window.designer.form.fields["amplitude"]
+    amplitude.editor.setValue(25.0)                  # beyond the step plugin's 10 V
+    assert "out of bounds" in amplitude.error and amplitude.message.isVisible()
+    wait_checked(qtbot, window, ok=None)
+    assert not start.isEnabled()
+    assert "out of bounds" in window.designer.verdict.text()
+
+    amplitude.editor.setValue(5.0)                   # allowed by the plugin, not by [safety]
+    checked = wait_checked(qtbot, window, ok=False)
+    assert "max_drive_v" in " ".join(checked.report.problems)
+    assert "refused" in window.designer.verdict.text() and not start.isEnabled()
+    assert not window.run_control.start()
+
+    amplitude.editor.setValue(0.4)
+    checked = wait_checked(qtbot, window)
+    assert checked.profile.excitation["amplitude"] == 0.4
+    assert "excitation.amplitude=0.4" in checked.overrides
+    qtbot.waitUntil(start.isEnabled, timeout=5000)
+    assert "safe to start" in window.designer.verdict.text()
+    x, y = window.designer.preview_curve.getData()
+    assert np.max(y) == pytest.approx(0.4)
+
+
+def test_bench_settings_form_and_refusal(qtbot, make_window, sim_profile, registry):
+    window = make_window(registry)
+    window.open_profile(sim_profile(duration=1.0))
+    wait_checked(qtbot, window)
+    gain = window.bench.boxes["amplifier"].form.fields["gain"]
+    gain.editor.setValue(500.0)                      # the plugin allows at most 100
+    assert gain.error and not window.run_control.can_start()
+    gain.editor.setValue(20.0)                       # allowed by the plugin, not by [safety]
+    checked = wait_checked(qtbot, window, ok=False)
+    assert any("max_gain" in p for p in checked.report.problems)
+    gain.editor.setValue(3.0)
+    checked = wait_checked(qtbot, window)
+    assert checked.profile.roles["amplifier"].settings["gain"] == 3.0
+
+
+def test_third_party_excitation_plugin_in_the_designer(qtbot, make_window, sim_profile,
+                                                      with_example_plugin):
+    from fsi_lab.registry import load_registry
+
+    registry = load_registry()
+    window = make_window(registry)
+    window.open_profile(sim_profile(duration=1.0))
+    wait_checked(qtbot, window)
+    combo = window.designer.plugin
+    index = combo.findData("chirp")
+    assert index >= 0, "the example distribution's excitation is offered"
+    combo.setCurrentIndex(index)
+    assert set(window.designer.form.fields) == {"amplitude", "f_start", "f_stop", "duration"}
+    checked = wait_checked(qtbot, window)
+    assert checked.profile.excitation_plugin == "chirp"
+    assert checked.report.peak_drive_v == pytest.approx(0.1, rel=0.05)
+    window.designer.form.fields["f_stop"].editor.setValue(20.0)
+    checked = wait_checked(qtbot, window)
+    assert checked.profile.excitation["f_stop"] == 20.0
+    qtbot.waitUntil(window.run_control.start_button.isEnabled, timeout=5000)
+    assert window.run_control.start()
+    assert wait_finished(qtbot, window).exit_status == "completed"
+    run = read_run(window.run_control.outcome.path, load_data=False)
+    assert run.excitation["plugin"] == "chirp"
+    assert 'plugin = "chirp"' in run.attrs["profile"]
+
+
+def test_safe_state_button_without_a_run(qtbot, make_window, sim_profile, registry):
+    window = make_window(registry)
+    window.open_profile(sim_profile(duration=1.0))
+    window.bench.check_button.click()
+    qtbot.waitUntil(lambda: "amplifier" in window.bench.last_report, timeout=RUN_TIMEOUT_MS)
+    amplifier = window.bench.boxes["amplifier"]
+    assert "SIM0001" in amplifier.identity.text()
+    assert set(amplifier.interlocks) >= {"over_travel", "e_stop"}
+    window.bench.last_report = {}
+    window.bench.safe_button.click()
+    qtbot.waitUntil(lambda: "amplifier" in window.bench.last_report, timeout=RUN_TIMEOUT_MS)
+    assert window.bench.last_report["amplifier"]["state"]["output_enabled"] is False
+    assert "output enabled: off" in amplifier.state.text()
