@@ -1,0 +1,159 @@
+"""Backbone curves: instantaneous frequency against instantaneous amplitude.
+
+The paper (Section 2.2) pairs the zero-crossing frequency of each period with the extremum
+amplitude of the same period; see :mod:`.instantaneous` for how each is measured. The amplitude
+is in the unit of the record: pass a displacement for the backbone against displacement
+amplitude (the paper's Figs. 7, 15, 21a), a velocity for the backbone against velocity amplitude.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from fsi_lab.plugins.analysis.instantaneous import Instantaneous, instantaneous
+
+
+@dataclass(frozen=True)
+class Backbone:
+    """A backbone curve, in time order.
+
+    Attributes
+    ----------
+    time
+        Time of each point (centre of the period measured), s.
+    amplitude
+        Instantaneous amplitude, unit of the record (m for a displacement).
+    frequency
+        Instantaneous frequency, Hz.
+    """
+
+    time: np.ndarray
+    amplitude: np.ndarray
+    frequency: np.ndarray
+
+
+def backbone_from(inst: Instantaneous) -> Backbone:
+    """The backbone of an :class:`~.instantaneous.Instantaneous` analysis."""
+    return Backbone(time=inst.frequency_times.copy(), amplitude=inst.amplitude.copy(),
+                    frequency=inst.frequency.copy())
+
+
+def backbone(x: Any, fs: float, *, smooth: int = 0, offset: Any = "cycles",
+             min_amplitude: float | None = None) -> Backbone:
+    """Backbone curve (frequency against amplitude) of one component or free decay.
+
+    Parameters
+    ----------
+    x
+        Samples, unit U (displacement in m for the paper's backbone); one quasi-harmonic
+        oscillation (an HVD component, or a single-mode decay).
+    fs
+        Sample rate, Hz.
+    smooth, offset, min_amplitude
+        As for :func:`.instantaneous.instantaneous` (``smooth = 5`` is the paper's
+        5-points-each-side moving average).
+
+    Returns
+    -------
+    Backbone
+        Time (s), amplitude (U) and frequency (Hz) per period.
+
+    Raises
+    ------
+    AnalysisError
+        As :func:`.instantaneous.instantaneous` (NaN/inf, constant, clipped or short record,
+        fewer than 3 zero crossings, fewer than 8 samples per cycle).
+    """
+    return backbone_from(instantaneous(x, fs, offset=offset, smooth=smooth,
+                                       min_amplitude=min_amplitude))
+
+
+# ----------------------------------------------------------------------------- plugin
+from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult  # noqa: E402
+from fsi_lab.hookspecs import hookimpl  # noqa: E402
+from fsi_lab.params import Param  # noqa: E402
+from fsi_lab.plugins.analysis._chain import (  # noqa: E402
+    Component, displacement_components, error_entries, guarded, jsonable, per_component,
+    stack_rows, trusted_times, velocity_components,
+)
+from fsi_lab.plugins.analysis.instantaneous import INSTANT_PARAMS  # noqa: E402
+
+
+def trusted_backbone(c: Component, params: dict[str, Any], plugin: str,
+                     context: AnalysisContext) -> Backbone:
+    """Backbone of one component without the points in untrusted record ends (the HVD edge
+    mask and one period at each end)."""
+    with guarded(plugin, context):
+        inst = instantaneous(c.signal, c.sample_rate, offset=params["offset"],
+                             smooth=params["smooth_points"],
+                             min_amplitude=params["min_amplitude"])
+        bb = backbone_from(inst)
+        period = 1.0 / float(np.median(bb.frequency))
+        keep = trusted_times(bb.time, c, period)
+        if keep.sum() < 2:
+            from fsi_lab.plugins.analysis._signal import fail
+            raise fail("backbone", f"only {int(keep.sum())} period(s) away from the untrusted "
+                                   "record ends; need at least 2 - a longer record")
+        return Backbone(bb.time[keep], bb.amplitude[keep], bb.frequency[keep])
+
+
+def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+    with guarded("backbone", context):
+        disp = displacement_components(context, "backbone")
+    done, errors = per_component("backbone", context, disp,
+                                 lambda c: trusted_backbone(c, params, "backbone", context))
+    vel = velocity_components(context)
+    vdone: dict[int, Backbone] = {}
+    if vel is not None:
+        for c in vel:
+            try:
+                vdone[c.index] = trusted_backbone(c, params, "backbone", context)
+            except Exception:  # noqa: BLE001 - the velocity backbone is optional
+                pass
+    count = len(disp)
+    entries = []
+    for k, bb in done.items():
+        e = {"index": k, "backbone": {"amplitude": jsonable(bb.amplitude),
+                                      "frequency_hz": jsonable(bb.frequency)}}
+        if k in vdone:
+            e["backbone_velocity"] = {"amplitude": jsonable(vdone[k].amplitude),
+                                      "frequency_hz": jsonable(vdone[k].frequency)}
+        entries.append(e)
+    err_entries, err_attrs = error_entries(errors, "backbone")
+    datasets = {"time": stack_rows({k: b.time for k, b in done.items()}, count),
+                "amplitude": stack_rows({k: b.amplitude for k, b in done.items()}, count),
+                "frequency": stack_rows({k: b.frequency for k, b in done.items()}, count)}
+    units = {"time": "s", "amplitude": "m", "frequency": "Hz"}
+    if vdone:
+        datasets["velocity_amplitude"] = stack_rows({k: b.amplitude for k, b in vdone.items()},
+                                                    count)
+        datasets["velocity_frequency"] = stack_rows({k: b.frequency for k, b in vdone.items()},
+                                                    count)
+        units.update(velocity_amplitude="m/s", velocity_frequency="Hz")
+    return AnalysisResult(datasets=datasets, units=units,
+                          attrs={"rows": "one row per component, padded with NaN",
+                                 **err_attrs},
+                          summary={"components": entries + err_entries},
+                          values={"displacement": done, "velocity": vdone})
+
+
+PLUGIN = AnalysisPlugin(
+    name="backbone",
+    params=(
+        Param("smooth_points", "int", "", 0, minimum=0,
+              help="Centred moving average, points each side (the paper uses 5; 0 = none)."),
+        *INSTANT_PARAMS,
+    ),
+    run=_run,
+    help="Backbone curves: zero-crossing frequency against displacement amplitude (m) and "
+         "against velocity amplitude (m/s), per component; the untrusted record ends are left "
+         "out.",
+)
+
+
+@hookimpl
+def fsi_lab_analyses():
+    return [PLUGIN]

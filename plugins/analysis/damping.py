@@ -1,0 +1,380 @@
+"""Damping ratio against amplitude from the extrema of a free decay.
+
+The envelope is written as ``A(t) = A_0 exp(-zeta(t) 2 pi f(t) t)`` (the paper's Eq. 4), so
+``zeta = -(d ln A / dt) / (2 pi f)`` with f the measured (damped) instantaneous frequency. Four
+estimators:
+
+``"decrement"`` (default, unbiased)
+    Successive-peak logarithmic decrement over ``span`` extrema (default 2: one full period,
+    between extrema of the same sign, so an offset cancels to first order):
+    ``zeta_k = ln(A_k / A_{k+span}) / (2 pi f (t_{k+span} - t_k))``, at the logarithmic mean
+    amplitude of the pair. On a linear + quadratic damping law this recovers the local decay
+    rate ``a + b A`` to second order in the decrement.
+``"envelope-fit"`` (unbiased for linear + quadratic damping)
+    Least-squares fit of ln A to the closed-form envelope of ``dA/dt = -a A - b A^2``:
+    ``A(t) = a A0 e^{-a t} / (a + b A0 (1 - e^{-a t}))``; then ``zeta = (a + b A) / (2 pi f)``.
+``"eq5"`` (the paper's Eq. 5)
+    Regression of ln A on ``2 pi f t`` over a sliding window of ``window`` extrema (time counted
+    from the window start); the slope is ``-zeta``.
+``"eq7"`` (the paper's Eq. 7)
+    One cubic polynomial in t fitted to ln A over the whole decay,
+    ``zeta(t) = (3 k1 t^2 + 2 k2 t + k3) / (2 pi f)``. Biased on long decays: a cubic cannot
+    follow the envelope of quadratic damping over a 30-fold decay (c1 off by about +14 %, c2 by
+    -24 %); offered for comparison with the paper.
+
+All take the extrema (times, amplitudes) and the frequency at those times, as produced by
+:func:`.instantaneous.instantaneous`; :func:`damping` runs that analysis on a record first.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.optimize as sopt
+
+from fsi_lab.plugins.analysis._signal import fail, moving_average
+from fsi_lab.plugins.analysis.instantaneous import instantaneous
+
+METHODS = ("decrement", "envelope-fit", "eq5", "eq7")
+
+
+@dataclass(frozen=True)
+class DampingCurve:
+    """Damping ratio against amplitude, in time order.
+
+    Attributes
+    ----------
+    time
+        Time of each estimate, s.
+    amplitude
+        Amplitude at which the estimate holds, unit of the record.
+    zeta
+        Damping ratio (dimensionless).
+    frequency
+        Instantaneous frequency there, Hz.
+    decay_rate
+        ``zeta * 2 pi f = -d ln A / dt``, 1/s.
+    method
+        Estimator used.
+    params
+        Fitted parameters of ``"envelope-fit"`` (``a`` in 1/s, ``b`` in 1/(unit s), ``A0``) or
+        ``"eq7"`` (``k1``, ``k2``, ``k3``, ``lnA0``); empty otherwise.
+    """
+
+    time: np.ndarray
+    amplitude: np.ndarray
+    zeta: np.ndarray
+    frequency: np.ndarray
+    decay_rate: np.ndarray
+    method: str
+    params: dict[str, float] = field(default_factory=dict)
+
+
+def _check(t: Any, amp: Any, freq: Any, func: str, need: int
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    t = np.asarray(t, dtype=np.float64)
+    a = np.asarray(amp, dtype=np.float64)
+    f = np.broadcast_to(np.asarray(freq, dtype=np.float64), t.shape).copy() \
+        if np.ndim(freq) == 0 else np.asarray(freq, dtype=np.float64)
+    if t.ndim != 1 or a.shape != t.shape or f.shape != t.shape:
+        raise fail(func, f"times {t.shape}, amplitudes {a.shape} and frequencies {f.shape} must "
+                         "be 1-D arrays of the same length")
+    if t.size < need:
+        raise fail(func, f"{t.size} peak(s) given; the method needs at least {need} peaks - "
+                         "a longer decay, a lower min_amplitude or another method")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(a)) and np.all(np.isfinite(f))):
+        raise fail(func, "peak times, amplitudes or frequencies contain NaN or inf")
+    if np.any(a <= 0):
+        raise fail(func, "peak amplitudes must be > 0 (give |extremum| values)")
+    if np.any(f <= 0):
+        raise fail(func, "frequencies must be > 0 Hz")
+    if np.any(np.diff(t) <= 0):
+        raise fail(func, "peak times must increase strictly")
+    return t, np.abs(a), f
+
+
+def _curve(t, amp, rate, f, method, params=None) -> DampingCurve:
+    return DampingCurve(time=t, amplitude=amp, zeta=rate / (2.0 * math.pi * f), frequency=f,
+                        decay_rate=rate, method=method, params=dict(params or {}))
+
+
+def damping_decrement(t: Any, amp: Any, freq: Any, *, span: int = 2) -> DampingCurve:
+    """Successive-peak logarithmic decrement (unbiased default).
+
+    Parameters
+    ----------
+    t
+        Extremum times, s, increasing.
+    amp
+        Extremum amplitudes (> 0), unit U.
+    freq
+        Instantaneous frequency at those times, Hz (array or one value).
+    span
+        Number of extrema between the two peaks of each decrement (2: one period).
+
+    Returns
+    -------
+    DampingCurve
+        One estimate per pair (k, k + span): time and amplitude at the midpoint (logarithmic
+        mean amplitude), frequency averaged over the pair.
+    """
+    func = "damping (decrement)"
+    if isinstance(span, bool) or not isinstance(span, (int, np.integer)) or span < 1:
+        raise fail(func, f"span = {span!r}; expected an integer >= 1")
+    t, a, f = _check(t, amp, freq, func, span + 2)
+    la = np.log(a)
+    d = la[:-span] - la[span:]
+    dt = t[span:] - t[:-span]
+    rate = d / dt
+    # Logarithmic mean (exact mean amplitude of an exponential between the two peaks).
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lmean = np.where(np.abs(d) > 1e-12, (a[:-span] - a[span:]) / d, a[:-span])
+    fm = 0.5 * (f[:-span] + f[span:])
+    return _curve(0.5 * (t[:-span] + t[span:]), lmean, rate, fm, "decrement")
+
+
+def envelope_law(t: np.ndarray, a: float, b: float, a0: float) -> np.ndarray:
+    """Envelope of dA/dt = -a A - b A^2 from A(0) = a0:
+    ``a a0 e^{-a t} / (a + b a0 (1 - e^{-a t}))`` (``a0 / (1 + b a0 t)`` when a = 0)."""
+    e = np.exp(-a * t)
+    if abs(a) < 1e-12:
+        return a0 / (1.0 + b * a0 * t)
+    return a * a0 * e / (a + b * a0 * (1.0 - e))
+
+
+def damping_envelope_fit(t: Any, amp: Any, freq: Any) -> DampingCurve:
+    """Fit the linear + quadratic damping envelope law to the peaks (unbiased for that law).
+
+    ``A(t)`` is fitted to the peak amplitudes by least squares with ``a >= 0``, ``b >= 0``; the
+    curve is then ``zeta = (a + b A) / (2 pi f)`` at every peak (A the fitted envelope).
+    ``params`` holds ``a`` (1/s), ``b`` (1/(U s)), ``A0`` (U), their standard errors ``a_se``,
+    ``b_se`` and the degrees of freedom ``dof``.
+    """
+    func = "damping (envelope-fit)"
+    t, amp_, f = _check(t, amp, freq, func, 4)
+    t0 = t[0]
+    tt = t - t0
+    la = np.log(amp_)
+    # Start: straight line in ln A (b = 0). Residuals in amplitude (not ln A): additive noise
+    # on the record gives peaks with equal absolute scatter, so this is the efficient fit.
+    slope = -np.polyfit(tt, la, 1)[0]
+    x0 = np.array([max(slope, 1e-6), 1e-6 / max(amp_[0], 1e-300), la[0]])
+    scale = float(amp_.max())
+
+    def resid(p):
+        a, b, la0 = p
+        return (envelope_law(tt, a, b, math.exp(la0)) - amp_) / scale
+
+    res = sopt.least_squares(resid, x0, bounds=([0.0, 0.0, -np.inf], [np.inf, np.inf, np.inf]),
+                             x_scale="jac", xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=2000)
+    a, b, la0 = res.x
+    dof = max(1, t.size - 3)
+    s2 = float(res.fun @ res.fun) / dof
+    try:
+        cov = np.linalg.inv(res.jac.T @ res.jac) * s2
+        se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    except np.linalg.LinAlgError:
+        se = np.full(3, np.nan)
+    a_fit = envelope_law(tt, a, b, math.exp(la0))
+    rate = a + b * a_fit
+    return _curve(t, a_fit, rate, f, "envelope-fit",
+                  {"a": float(a), "b": float(b), "A0": float(math.exp(la0)),
+                   "a_se": float(se[0]), "b_se": float(se[1]), "dof": float(dof)})
+
+
+def damping_eq5(t: Any, amp: Any, freq: Any, *, window: int = 6) -> DampingCurve:
+    """The paper's Eq. 5 on a sliding window of ``window`` extrema.
+
+    In each window, ln A is regressed on ``2 pi f(t) (t - t_start)``; ``-slope`` is zeta. The
+    estimate is placed at the window's mean time, at the geometric mean amplitude.
+    """
+    func = "damping (eq5)"
+    if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 3:
+        raise fail(func, f"window = {window!r}; expected an integer >= 3 (peaks per window)")
+    t, a, f = _check(t, amp, freq, func, window)
+    la = np.log(a)
+    n = t.size - window + 1
+    idx = np.arange(window)[None, :] + np.arange(n)[:, None]
+    tw = t[idx]
+    xw = 2.0 * math.pi * f[idx] * (tw - tw[:, :1])
+    yw = la[idx]
+    xm = xw.mean(axis=1, keepdims=True)
+    ym = yw.mean(axis=1, keepdims=True)
+    slope = np.sum((xw - xm) * (yw - ym), axis=1) / np.sum((xw - xm) ** 2, axis=1)
+    zeta = -slope
+    fm = f[idx].mean(axis=1)
+    return DampingCurve(time=tw.mean(axis=1), amplitude=np.exp(ym[:, 0]), zeta=zeta,
+                        frequency=fm, decay_rate=zeta * 2.0 * math.pi * fm, method="eq5")
+
+
+def damping_eq7(t: Any, amp: Any, freq: Any) -> DampingCurve:
+    """The paper's Eq. 7: ln A = -(k1 t^3 + k2 t^2 + k3 t) + ln A0 over the whole decay.
+
+    Biased on long decays (see the module notes); the curve is evaluated at every peak with the
+    fitted (smooth) amplitude.
+    """
+    func = "damping (eq7)"
+    t, a, f = _check(t, amp, freq, func, 5)
+    t0 = t[0]
+    tt = t - t0
+    scale = tt[-1] if tt[-1] > 0 else 1.0
+    u = tt / scale
+    design = np.stack((u ** 3, u ** 2, u, np.ones_like(u)), axis=1)
+    coef, *_ = np.linalg.lstsq(design, np.log(a), rcond=None)
+    k1, k2, k3 = -coef[0] / scale ** 3, -coef[1] / scale ** 2, -coef[2] / scale
+    rate = 3 * k1 * tt ** 2 + 2 * k2 * tt + k3
+    fitted = np.exp(coef[3] - (k1 * tt ** 3 + k2 * tt ** 2 + k3 * tt))
+    return _curve(t, fitted, rate, f, "eq7",
+                  {"k1": float(k1), "k2": float(k2), "k3": float(k3), "lnA0": float(coef[3]),
+                   "t0": float(t0)})
+
+
+def damping_from_peaks(t: Any, amp: Any, freq: Any, *, method: str = "decrement",
+                       span: int = 2, window: int = 6, smooth: int = 0) -> DampingCurve:
+    """Damping curve from extrema by one of :data:`METHODS` (see the module notes).
+
+    ``smooth`` > 0 applies the paper's centred moving average (``smooth`` points each side) to
+    zeta and ln(amplitude) of the resulting curve.
+    """
+    if method not in METHODS:
+        raise fail("damping", f"method = {method!r}; expected one of {', '.join(METHODS)}")
+    if method == "decrement":
+        curve = damping_decrement(t, amp, freq, span=span)
+    elif method == "envelope-fit":
+        curve = damping_envelope_fit(t, amp, freq)
+    elif method == "eq5":
+        curve = damping_eq5(t, amp, freq, window=window)
+    else:
+        curve = damping_eq7(t, amp, freq)
+    if smooth:
+        zeta = moving_average(curve.zeta, smooth)
+        amp_s = np.exp(moving_average(np.log(curve.amplitude), smooth))
+        curve = DampingCurve(time=curve.time, amplitude=amp_s, zeta=zeta,
+                             frequency=curve.frequency,
+                             decay_rate=zeta * 2.0 * math.pi * curve.frequency,
+                             method=curve.method, params=curve.params)
+    return curve
+
+
+def damping(x: Any, fs: float, *, method: str = "decrement", span: int = 2, window: int = 6,
+            smooth: int = 0, offset: Any = "cycles", min_amplitude: float | None = None
+            ) -> DampingCurve:
+    """Damping ratio against amplitude of a free decay (one component).
+
+    Parameters
+    ----------
+    x
+        Samples, unit U (displacement in m for the paper's damping curves), one quasi-harmonic
+        decay.
+    fs
+        Sample rate, Hz.
+    method
+        One of ``"decrement"`` (default), ``"envelope-fit"``, ``"eq5"``, ``"eq7"``.
+    span
+        Extrema per decrement (``"decrement"``).
+    window
+        Extrema per regression window (``"eq5"``).
+    smooth
+        Moving average of the result, points each side (the paper: 5).
+    offset, min_amplitude
+        As for :func:`.instantaneous.instantaneous`.
+
+    Returns
+    -------
+    DampingCurve
+        Time (s), amplitude (U), zeta, frequency (Hz), decay rate (1/s).
+
+    Raises
+    ------
+    AnalysisError
+        Bad record (see :func:`.instantaneous.instantaneous`), unknown method, or fewer peaks
+        than the method needs.
+    """
+    inst = instantaneous(x, fs, offset=offset, min_amplitude=min_amplitude)
+    return damping_from_peaks(inst.peak_times, inst.peak_amplitudes, inst.peak_frequency,
+                              method=method, span=span, window=window, smooth=smooth)
+
+
+# ----------------------------------------------------------------------------- plugin
+from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult  # noqa: E402
+from fsi_lab.hookspecs import hookimpl  # noqa: E402
+from fsi_lab.params import Param  # noqa: E402
+from fsi_lab.plugins.analysis._chain import (  # noqa: E402
+    Component, displacement_components, error_entries, guarded, jsonable, per_component,
+    stack_rows, trusted_times,
+)
+from fsi_lab.plugins.analysis.instantaneous import INSTANT_PARAMS  # noqa: E402
+
+
+def trusted_peaks(c: Component, params: dict[str, Any]):
+    """Extrema (times s, amplitudes, frequencies Hz) of a component, without the untrusted
+    record ends (the HVD edge mask and one period at each end)."""
+    inst = instantaneous(c.signal, c.sample_rate, offset=params.get("offset", "cycles"),
+                         min_amplitude=params.get("min_amplitude"))
+    period = 1.0 / float(np.median(inst.frequency))
+    keep = trusted_times(inst.peak_times, c, period)
+    return inst.peak_times[keep], inst.peak_amplitudes[keep], inst.peak_frequency[keep]
+
+
+def curve_for(c: Component, params: dict[str, Any]) -> DampingCurve:
+    t, a, f = trusted_peaks(c, params)
+    return damping_from_peaks(t, a, f, method=params["method"], span=params["span"],
+                              window=params["window"], smooth=params["smooth_points"])
+
+
+def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+    with guarded("damping", context):
+        disp = displacement_components(context, "damping")
+
+    def work(c):
+        with guarded("damping", context):
+            return curve_for(c, params)
+
+    done, errors = per_component("damping", context, disp, work)
+    count = len(disp)
+    entries = [{"index": k, "damping": {"amplitude": jsonable(d.amplitude),
+                                        "zeta": jsonable(d.zeta), "method": d.method,
+                                        **({"params": d.params} if d.params else {})}}
+               for k, d in done.items()]
+    err_entries, err_attrs = error_entries(errors, "damping")
+    names = ("time", "amplitude", "zeta", "frequency", "decay_rate")
+    datasets = {n: stack_rows({k: getattr(d, n) for k, d in done.items()}, count)
+                for n in names}
+    datasets["velocity_amplitude"] = stack_rows(
+        {k: 2.0 * math.pi * d.frequency * d.amplitude for k, d in done.items()}, count)
+    return AnalysisResult(
+        datasets=datasets,
+        units={"time": "s", "amplitude": "m", "zeta": "", "frequency": "Hz",
+               "decay_rate": "1/s", "velocity_amplitude": "m/s"},
+        attrs={"method": params["method"],
+               "velocity_amplitude": "2 pi f times the displacement amplitude",
+               "rows": "one row per component, padded with NaN", **err_attrs},
+        summary={"components": entries + err_entries}, values=done)
+
+
+PLUGIN = AnalysisPlugin(
+    name="damping",
+    params=(
+        Param("method", "str", "", "decrement", choices=METHODS,
+              help="decrement (successive-peak log decrement, unbiased), envelope-fit (linear + "
+                   "quadratic envelope law), eq5 (paper, windowed regression), eq7 (paper, "
+                   "cubic in t; biased on long decays)."),
+        Param("span", "int", "", 2, minimum=1,
+              help="Extrema per decrement (2 = one full period)."),
+        Param("window", "int", "", 6, minimum=3, help="Extrema per regression window (eq5)."),
+        Param("smooth_points", "int", "", 0, minimum=0,
+              help="Centred moving average of the curve, points each side (paper: 5)."),
+        *INSTANT_PARAMS,
+    ),
+    run=_run,
+    help="Damping ratio against displacement amplitude (m) per component, from the refined "
+         "extrema; the untrusted record ends are left out.",
+)
+
+
+@hookimpl
+def fsi_lab_analyses():
+    return [PLUGIN]

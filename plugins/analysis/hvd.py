@@ -1,0 +1,466 @@
+"""Hilbert Vibration Decomposition (Feldman 2006, 2011) with time-varying frequency.
+
+The record is split into quasi-harmonic components ``A_k(t) cos(theta_k(t))``, the largest
+first. For each component, on the residual left by the previous ones:
+
+1. analytic signal ``z = r + i H[r]`` (FFT);
+2. instantaneous frequency ``omega(t) = d arg z / dt``, low-passed: the ripple that the smaller
+   components put on ``omega`` sits at their frequency differences and is removed, leaving the
+   frequency of the largest component, time-varying (not a constant carrier);
+3. synchronous demodulation: ``b = LP[z e^{-i phi}]`` with ``phi = integral of omega`` - the
+   in-phase and quadrature parts of the residual, low-passed with the same cut-off;
+4. amplitude ``A = |b|``, phase ``theta = phi + arg b`` (phase correction), component
+   ``A cos(theta)``, frequency ``d theta / dt``;
+5. subtract and repeat.
+
+Numerical choices (see the module constants):
+
+- Filters act in the frequency domain with a zero-phase low-pass whose pass band is flat (slowly
+  varying envelopes pass without bias) and whose transition is infinitely smooth (filter
+  transients stay near the record ends).
+- Record ends: each end is extended by linear prediction (an AR model fitted to the first and
+  last cycles continues the oscillation without a phase jump), tapered to zero, to a fast FFT
+  length. ``padding="mirror"`` uses even reflection instead. Samples closer to an end than
+  ``EDGE_PERIODS / cutoff`` are marked in :attr:`HVDResult.edge_mask`.
+- Speed: the decomposition runs on the band that holds the record's spectral peaks (up to
+  ``BAND_FACTOR`` times the highest significant peak, at least 10 samples per cycle of the band
+  edge), obtained exactly by truncating the spectrum; the components are brought back to the
+  full sample rate by interpolating their (smooth) envelopes and phases. Content above that band
+  (noise, weak harmonics) does not influence the components and stays in the residual.
+- Automatic cut-off, per component: half the smaller of the component's frequency and its
+  distance to the nearest other spectral peak (Feldman's rule: below the difference of the
+  component frequencies). Peaks closer than about 5 % are treated as one (a chirping component);
+  give ``cutoff`` explicitly to separate closer components.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numba
+import numpy as np
+import scipy.fft as sfft
+
+from fsi_lab.plugins.analysis._signal import (
+    FFT_WORKERS, as_record, check_rate, check_samples_per_cycle, fail, lowpass_gain, mirror_pad,
+    predict_pad, smooth_step,
+)
+from fsi_lab.plugins.analysis.spectrum import spectral_peaks
+
+#: Cut-off as a fraction of min(component frequency, distance to the nearest other peak).
+CUTOFF_FRACTION = 0.5
+#: Relative width of the low-pass transition band (gain 1 below fc (1 - w), 0 above fc (1 + w)).
+TRANSITION = 0.5
+#: Samples closer to an end than EDGE_PERIODS / cutoff seconds are marked untrusted.
+EDGE_PERIODS = 1.0
+#: Each end is padded by PAD_PERIODS / cutoff seconds (predicted or mirrored).
+PAD_PERIODS = 3.0
+#: Fewest samples per cycle HVD accepts for a component.
+MIN_SAMPLES_PER_CYCLE = 4.0
+#: Relative prominence of the spectral peaks considered by the automatic cut-off and the band.
+PEAK_THRESHOLD = 0.01
+#: Relative half-width of the spectral smoothing before the peak search: peaks closer than
+#: about 5 % merge (a chirping component, e.g. a softening or hardening decay, is one peak).
+PEAK_SMOOTHING = 0.05
+#: The decomposition band is flat up to BAND_FACTOR x the highest significant peak.
+BAND_FACTOR = 3.0
+PADDINGS = ("predict", "mirror")
+#: Largest growth allowed to the predicted extension (a decay read backwards grows; letting a
+#: fast-decaying small component grow past the dominant one would switch the tracked component).
+PAD_GROWTH = 1.0
+
+
+@dataclass(frozen=True)
+class HVDResult:
+    """Components of a Hilbert Vibration Decomposition, by decreasing amplitude.
+
+    Attributes
+    ----------
+    components
+        Waveforms, shape ``(K, N)``, unit of the input.
+    envelopes
+        Instantaneous amplitudes ``A_k(t) >= 0``, shape ``(K, N)``, unit of the input.
+    frequencies
+        Instantaneous frequencies, shape ``(K, N)``, Hz.
+    residual
+        The record minus all components, shape ``(N,)``.
+    edge_mask
+        ``True`` where a sample is too close to a record end to be trusted, shape ``(K, N)``.
+    cutoffs
+        Low-pass cut-off used for each component, Hz, shape ``(K,)``.
+    sample_rate
+        Hz.
+    """
+
+    components: np.ndarray
+    envelopes: np.ndarray
+    frequencies: np.ndarray
+    residual: np.ndarray
+    edge_mask: np.ndarray
+    cutoffs: np.ndarray
+    sample_rate: float
+
+    @property
+    def n_components(self) -> int:
+        return self.components.shape[0]
+
+    def mean_frequency(self, k: int) -> float:
+        """Envelope-weighted mean instantaneous frequency of component ``k`` (trusted part), Hz."""
+        good = ~self.edge_mask[k]
+        if not good.any():
+            good = np.ones_like(good)
+        w = self.envelopes[k, good]
+        return float(np.sum(w * self.frequencies[k, good]) / max(np.sum(w), 1e-300))
+
+
+# ----------------------------------------------------------------------------- kernels
+@numba.njit(cache=True, parallel=True)
+def _inst_omega(z: np.ndarray, out: np.ndarray) -> None:
+    """Instantaneous angular frequency, rad/sample: central phase difference of ``z``."""
+    m = z.shape[0]
+    for n in numba.prange(1, m - 1):
+        p = z[n + 1] * np.conj(z[n - 1])
+        out[n] = 0.5 * math.atan2(p.imag, p.real)
+    p0 = z[1] * np.conj(z[0])
+    out[0] = math.atan2(p0.imag, p0.real)
+    p1 = z[m - 1] * np.conj(z[m - 2])
+    out[m - 1] = math.atan2(p1.imag, p1.real)
+
+
+@numba.njit(cache=True, parallel=True)
+def _demodulate(z: np.ndarray, phi: np.ndarray, out: np.ndarray) -> None:
+    """out = z * exp(-i phi)."""
+    for n in numba.prange(z.shape[0]):
+        c = math.cos(phi[n])
+        s = math.sin(phi[n])
+        zr = z[n].real
+        zi = z[n].imag
+        out[n] = complex(zr * c + zi * s, zi * c - zr * s)
+
+
+@numba.njit(cache=True, parallel=True)
+def _modulate_real(b: np.ndarray, phi: np.ndarray, out: np.ndarray) -> None:
+    """out -= Re(b e^{i phi})."""
+    for n in numba.prange(b.shape[0]):
+        out[n] -= b[n].real * math.cos(phi[n]) - b[n].imag * math.sin(phi[n])
+
+
+@numba.njit(cache=True, parallel=True)
+def _reconstruct(bf: np.ndarray, theta: np.ndarray, slope: float, freq: np.ndarray,
+                 start: float, step: float, comp: np.ndarray, env: np.ndarray,
+                 inst: np.ndarray, residual: np.ndarray) -> None:
+    """Full-rate component from band-rate quantities by cubic (4-point Lagrange) interpolation.
+
+    Sample n of the record sits at band-rate position u = start + n * step. ``theta`` is the
+    band-rate phase minus ``slope * j`` (smooth); bf the complex baseband; freq in Hz.
+    """
+    m = bf.shape[0]
+    for n in numba.prange(comp.shape[0]):
+        u = start + n * step
+        j = int(math.floor(u))
+        t = u - j
+        if j < 1:
+            j = 1
+            t = u - 1.0
+        if j > m - 3:
+            j = m - 3
+            t = u - j
+        # Lagrange weights at nodes j-1, j, j+1, j+2.
+        w0 = -t * (t - 1.0) * (t - 2.0) / 6.0
+        w1 = (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0
+        w2 = -(t + 1.0) * t * (t - 2.0) / 2.0
+        w3 = (t + 1.0) * t * (t - 1.0) / 6.0
+        br = (w0 * bf[j - 1].real + w1 * bf[j].real + w2 * bf[j + 1].real
+              + w3 * bf[j + 2].real)
+        bi = (w0 * bf[j - 1].imag + w1 * bf[j].imag + w2 * bf[j + 1].imag
+              + w3 * bf[j + 2].imag)
+        ph = (w0 * theta[j - 1] + w1 * theta[j] + w2 * theta[j + 1] + w3 * theta[j + 2]
+              + slope * u)
+        c = math.cos(ph)
+        s = math.sin(ph)
+        y = br * c - bi * s
+        comp[n] = y
+        env[n] = math.sqrt(br * br + bi * bi)
+        inst[n] = w0 * freq[j - 1] + w1 * freq[j] + w2 * freq[j + 1] + w3 * freq[j + 2]
+        residual[n] -= y
+
+
+@numba.njit(cache=True, parallel=True)
+def _band_frequency(om_f: np.ndarray, bf: np.ndarray, scale: float, out: np.ndarray) -> None:
+    """out = (omega_f + d arg(bf)/dn) * scale (central difference of the phase correction)."""
+    m = bf.shape[0]
+    for n in numba.prange(1, m - 1):
+        q = bf[n + 1] * np.conj(bf[n - 1])
+        out[n] = (om_f[n] + 0.5 * math.atan2(q.imag, q.real)) * scale
+    out[0] = out[1]
+    out[m - 1] = out[m - 2]
+
+
+# ----------------------------------------------------------------------------- helpers
+def _significant_peaks(x: np.ndarray, fs: float, func: str) -> np.ndarray:
+    """Frequencies (Hz) of the record's significant spectral peaks, largest first."""
+    fmin = 2.0 * fs / x.size
+    peaks = spectral_peaks(x, fs, window="decay", min_relative=PEAK_THRESHOLD,
+                           smoothing=PEAK_SMOOTHING, fmin=fmin)
+    if peaks.frequencies.size == 0:
+        raise fail(func, "found no spectral peak to decompose (no oscillation above the lowest "
+                         f"resolvable frequency {fmin:.3g} Hz in a record of {x.size / fs:.4g} s)")
+    return peaks.frequencies
+
+
+def _cutoff_for(f_k: float, peaks: np.ndarray) -> float:
+    """Automatic cut-off for a component at ``f_k`` Hz among the record's ``peaks``."""
+    others = peaks[np.abs(peaks - f_k) > PEAK_SMOOTHING * f_k]
+    gap = float(np.min(np.abs(others - f_k))) if others.size else f_k
+    return CUTOFF_FRACTION * min(f_k, gap)
+
+
+def _analytic(spec: np.ndarray, m: int, out_len: int, band_gain: np.ndarray | None
+              ) -> np.ndarray:
+    """Analytic signal of length ``out_len`` from the rfft ``spec`` of a real length-m signal.
+
+    With ``out_len < m`` the spectrum is truncated (``band_gain`` tapers its kept bins), which
+    resamples the band-limited analytic signal exactly at rate ``fs * out_len / m``.
+    """
+    zs = np.zeros(out_len, dtype=np.complex128)
+    kept = min(spec.size, (out_len + 1) // 2) if out_len < m else spec.size
+    zs[0] = spec[0]
+    if out_len < m:
+        zs[1:kept] = 2.0 * spec[1:kept] * band_gain[1:kept]
+    else:
+        half = (m + 1) // 2
+        zs[1:half] = 2.0 * spec[1:half]
+        if m % 2 == 0:
+            zs[m // 2] = spec[m // 2]
+    z = sfft.ifft(zs, workers=FFT_WORKERS, overwrite_x=True)
+    if out_len < m:
+        z *= out_len / m
+    return z
+
+
+# ----------------------------------------------------------------------------- main
+def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float] | None = None,
+        *, padding: str = "predict") -> HVDResult:
+    """Hilbert Vibration Decomposition of a real record.
+
+    Parameters
+    ----------
+    x
+        Samples of the record, any unit U (1-D, finite, not constant, not clipped).
+    fs
+        Sample rate, Hz.
+    n_components
+        Number of components to extract, >= 1 (no upper limit).
+    cutoff
+        Low-pass cut-off, Hz, of the instantaneous-frequency and demodulation filters: one value
+        for all components, one per component, or None (automatic: for each component, half the
+        smaller of its frequency and its distance to the nearest other spectral peak). It must
+        stay below the difference between the component frequencies.
+    padding
+        ``"predict"`` (default: linear-prediction extension of both ends) or ``"mirror"``.
+
+    Returns
+    -------
+    HVDResult
+        Components, envelopes (U), instantaneous frequencies (Hz), residual, edge mask and
+        cut-offs; components sorted by decreasing RMS envelope over their trusted samples.
+
+    Raises
+    ------
+    AnalysisError
+        NaN/inf, constant or clipped record, bad sample rate, ``n_components`` < 1, a cut-off
+        that is not positive or not below the Nyquist frequency, a spectral peak with fewer than
+        4 samples per cycle, or a record too short for the cut-off (no trusted sample left).
+
+    Notes
+    -----
+    Components are extracted in order of decreasing instantaneous amplitude; when two
+    envelopes cross, a component can switch from one mode to the other mid-record.
+    """
+    func = "hvd"
+    fs = check_rate(fs, func)
+    x = as_record(x, func, min_samples=32)
+    if isinstance(n_components, bool) or not isinstance(n_components, (int, np.integer)) \
+            or n_components < 1:
+        raise fail(func, f"n_components = {n_components!r}; expected an integer >= 1")
+    if padding not in PADDINGS:
+        raise fail(func, f"padding = {padding!r}; expected one of {', '.join(PADDINGS)}")
+    n = x.size
+    k_total = int(n_components)
+
+    peaks = _significant_peaks(x, fs, func)
+    for f_p in peaks:
+        check_samples_per_cycle(f_p, fs, func, MIN_SAMPLES_PER_CYCLE, "spectral peak")
+
+    given = None
+    if cutoff is not None:
+        given = np.atleast_1d(np.asarray(cutoff, dtype=np.float64))
+        if given.ndim != 1 or given.size not in (1, k_total):
+            raise fail(func, f"cutoff has {given.size} values for {k_total} components; give "
+                             "one value, one per component, or None (automatic)")
+        if not np.all(np.isfinite(given)) or np.any(given <= 0) \
+                or np.any(given * (1 + TRANSITION) >= fs / 2):
+            raise fail(func, f"cutoff {given.tolist()} Hz is not usable; expected values > 0 "
+                             f"and below {fs / 2 / (1 + TRANSITION):.4g} Hz (Nyquist / "
+                             f"{1 + TRANSITION:g})")
+        given = np.broadcast_to(given, (k_total,)).copy()
+
+    auto = [_cutoff_for(f, peaks) for f in peaks]
+    fc_min = float(given.min()) if given is not None else min(auto)
+    fc_max = float(given.max()) if given is not None else max(auto)
+    edge = int(math.ceil(EDGE_PERIODS * fs / fc_min))
+    if n <= 2 * edge + 8:
+        raise fail(func, f"record of {n} samples ({n / fs:.4g} s) is too short for a cut-off of "
+                         f"{fc_min:.4g} Hz: {edge} samples at each end are not trusted; need "
+                         f"more than {2 * edge + 8} samples (a longer record or a higher cut-off)")
+
+    # Padded length (fast for the real FFT) and the band actually decomposed.
+    pad = min(int(math.ceil(PAD_PERIODS * fs / fc_min)), 4 * n)
+    m = sfft.next_fast_len(n + 2 * pad, real=True)
+    left = pad
+    right = m - n - pad
+    xp = mirror_pad(x, left, right) if padding == "mirror" else \
+        predict_pad(x, fs, peaks, left, right, PAD_GROWTH, modes=k_total)
+    spec = sfft.rfft(xp, workers=FFT_WORKERS)
+    del xp
+    f_pass = max(BAND_FACTOR * float(peaks.max()), 2.0 * fc_max)
+    f_stop = 1.25 * f_pass
+    m_b = sfft.next_fast_len(int(math.ceil(2.0 * 1.1 * f_stop * m / fs)) + 8)
+    freqs_full = np.arange(spec.size) * (fs / m)
+    # Decimate only when every requested component can be one of the detected peaks (a
+    # component below the peak threshold could lie above the band).
+    if m_b < m and f_stop < 0.45 * fs and k_total <= peaks.size:
+        band_gain = 1.0 - smooth_step((freqs_full - f_pass) / (f_stop - f_pass))
+    else:
+        m_b = m
+        band_gain = None
+    fs_b = fs * m_b / m                     # sample rate of the band signal, Hz
+    start = left * m_b / m                  # band-rate position of the first record sample
+    step = m_b / m
+    lo_b = int(math.floor(start))
+    hi_b = int(math.ceil(start + n * step))
+
+    z = _analytic(spec, m, m_b, band_gain)
+    r_b = z.real.copy()                     # band residual
+    freqs_r = np.arange(m_b // 2 + 1) * (fs_b / m_b)
+    freqs_c = sfft.fftfreq(m_b, d=1.0 / fs_b)
+
+    comps = np.empty((k_total, n))
+    envs = np.empty((k_total, n))
+    inst = np.empty((k_total, n))
+    cutoffs = np.empty(k_total)
+    mask = np.zeros((k_total, n), dtype=bool)
+    residual = x.copy()
+    omega = np.empty(m_b)
+    b = np.empty(m_b, dtype=np.complex128)
+    fband = np.empty(m_b)
+    to_hz = fs_b / (2.0 * math.pi)
+    for k in range(k_total):
+        if k > 0:
+            z = _analytic(sfft.rfft(r_b, workers=FFT_WORKERS), m_b, m_b, None)
+        _inst_omega(z, omega)
+        if given is not None:
+            fc = float(given[k])
+        else:
+            # The frequency that dominates the residual: median of the raw instantaneous
+            # frequency where the residual is large (at least 30 % of its largest magnitude;
+            # smaller components only add a ripple), snapped to the nearest spectral peak of
+            # the record (or kept if no peak is within 25 %: a component below the peak
+            # threshold).
+            inner = (hi_b - lo_b) // 10           # away from the ends, where earlier
+            stride = max(1, (hi_b - lo_b) // 20000)  # components leave their largest errors
+            sel = slice(lo_b + inner, hi_b - inner, stride)
+            mag = np.abs(z[sel])
+            f_res = abs(float(np.median(omega[sel][mag >= 0.3 * mag.max()]))) * to_hz
+            near = int(np.argmin(np.abs(peaks - f_res)))
+            if abs(peaks[near] - f_res) <= 0.25 * f_res:
+                f_k = float(peaks[near])
+                fc = _cutoff_for(f_k, peaks)
+            else:                                    # a component below the peak threshold
+                fc = _cutoff_for(f_res, np.append(peaks, f_res))
+        cutoffs[k] = fc
+        # Low-passed instantaneous frequency and its phase.
+        om_f = sfft.irfft(sfft.rfft(omega, workers=FFT_WORKERS)
+                          * lowpass_gain(freqs_r, fc, TRANSITION), n=m_b, workers=FFT_WORKERS)
+        phi = np.cumsum(om_f)
+        # Synchronous demodulation: in-phase and quadrature parts, low-passed.
+        _demodulate(z, phi, b)
+        bs = sfft.fft(b, workers=FFT_WORKERS)
+        bs *= lowpass_gain(freqs_c, fc, TRANSITION)
+        bf = sfft.ifft(bs, workers=FFT_WORKERS, overwrite_x=True)
+        # Subtract from the band residual; frequency with the phase correction.
+        _modulate_real(bf, phi, r_b)
+        _band_frequency(om_f, bf, to_hz, fband)
+        slope = float(np.mean(om_f))
+        theta = phi - slope * np.arange(m_b)
+        _reconstruct(bf, theta, slope, fband, start, step, comps[k], envs[k], inst[k], residual)
+        e = min(int(math.ceil(EDGE_PERIODS * fs / fc)), n // 2)
+        mask[k, :e] = True
+        mask[k, n - e:] = True
+
+    rms = np.array([np.sqrt(np.mean(envs[k][~mask[k]] ** 2)) if (~mask[k]).any() else 0.0
+                    for k in range(k_total)])
+    order = np.argsort(-rms, kind="stable")
+    if np.any(order != np.arange(k_total)):          # (a copy only when needed)
+        comps, envs, inst, mask, cutoffs = (a[order] for a in (comps, envs, inst, mask, cutoffs))
+    return HVDResult(components=comps, envelopes=envs, frequencies=inst, residual=residual,
+                     edge_mask=mask, cutoffs=cutoffs, sample_rate=fs)
+
+
+# ----------------------------------------------------------------------------- plugin
+from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult  # noqa: E402
+from fsi_lab.hookspecs import hookimpl  # noqa: E402
+from fsi_lab.params import Param  # noqa: E402
+from fsi_lab.plugins.analysis._chain import guarded  # noqa: E402
+
+
+def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+    ch = context.channel
+    with guarded("hvd", context):
+        res = hvd(ch.data, ch.sample_rate, params["components"], params["cutoff_hz"],
+                  padding=params["padding"])
+    comps = []
+    for k in range(res.n_components):
+        good = ~res.edge_mask[k]
+        comps.append({"index": k, "frequency_hz": res.mean_frequency(k),
+                      "cutoff_hz": float(res.cutoffs[k]),
+                      "hvd_peak_envelope": float(res.envelopes[k][good].max())
+                      if good.any() else None})
+    return AnalysisResult(
+        datasets={"components": res.components, "envelopes": res.envelopes,
+                  "frequencies": res.frequencies, "residual": res.residual,
+                  "edge_mask": res.edge_mask.astype(np.uint8), "cutoffs": res.cutoffs},
+        units={"components": ch.unit, "envelopes": ch.unit, "frequencies": "Hz",
+               "residual": ch.unit, "edge_mask": "", "cutoffs": "Hz"},
+        attrs={"n_components": res.n_components, "sample_rate": res.sample_rate,
+               "padding": params["padding"],
+               "edge_mask_meaning": "1 where the sample is too close to a record end to be "
+                                    "trusted (within 1 / cutoff)",
+               "order": "components sorted by decreasing RMS envelope; row k = index k"},
+        summary={"components": comps}, values=res)
+
+
+PLUGIN = AnalysisPlugin(
+    name="hvd",
+    params=(
+        Param("components", "int", "", 2, minimum=1,
+              help="Number of components to extract (largest first); no upper limit."),
+        Param("cutoff_hz", "float", "Hz", None, minimum=0.0, exclusive_minimum=True,
+              help="Low-pass cut-off of the frequency and demodulation filters; unset = "
+                   "automatic (half the smaller of each component's frequency and its distance "
+                   "to the nearest other spectral peak)."),
+        Param("padding", "str", "", "predict", choices=PADDINGS,
+              help="Record-end extension: linear prediction (default) or mirror image."),
+    ),
+    run=_run,
+    help="Hilbert Vibration Decomposition (Feldman): splits the channel into quasi-harmonic "
+         "components with time-varying envelope and frequency, by decreasing amplitude. Later "
+         "analyses of the chain work per component.",
+)
+
+
+@hookimpl
+def fsi_lab_analyses():
+    return [PLUGIN]
