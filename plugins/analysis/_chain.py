@@ -9,13 +9,21 @@ Conventions of the chain (documented for plugin users in each plugin's help):
   else the channel integrated on the fly, or the channel itself if it is a displacement).
 - A failure on one component is recorded (``summary`` entry ``"error"`` and attribute
   ``component_<k>_error``) and the others go on; the plugin fails only if every component does.
+- Cycles whose amplitude is below 10 x the noise left in a component are not measured (unless
+  the plugin's ``min_amplitude`` is set): the white-noise RMS of the raw channel (from its
+  spectrum above 3 x the dominant frequency), scaled to the component's band (an HVD component
+  keeps its frequency +- 1.5 cut-off; a whole channel about 3 x its frequency) and divided by
+  2 pi f per integration. An HVD component is band-limited, so its own spectrum shows no noise
+  floor: the tail of a decay sunk into noise would otherwise be measured as garbage.
+- Backbone and damping points closer than one period to a record end, or inside HVD's
+  untrusted edge, are left out.
 """
 
 from __future__ import annotations
 
 import math
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator
 
 import numpy as np
@@ -45,6 +53,9 @@ class Component:
         Hz.
     edge_mask
         True where samples are not trusted (HVD record ends), or None.
+    noise_floor
+        Smallest cycle amplitude worth measuring (10 x the noise RMS in the component), in
+        ``unit``, or None to let the analysis estimate it.
     """
 
     index: int
@@ -53,6 +64,7 @@ class Component:
     unit: str
     sample_rate: float
     edge_mask: np.ndarray | None = None
+    noise_floor: float | None = None
 
 
 @dataclass
@@ -64,6 +76,7 @@ class ComponentSignals:
     sample_rate: float
     signals: dict[int, np.ndarray]
     edge_masks: dict[int, np.ndarray | None]
+    noise_floors: dict[int, float | None] = field(default_factory=dict)
 
 
 def where(plugin: str, context: AnalysisContext) -> str:
@@ -81,16 +94,55 @@ def guarded(plugin: str, context: AnalysisContext) -> Iterator[None]:
         raise AnalysisError(text if text.startswith(prefix) else f"{prefix}: {text}") from None
 
 
-def components(context: AnalysisContext) -> list[Component]:
-    """The channel's components: HVD's if it ran earlier in the chain, else the channel."""
+def _channel_noise(context: AnalysisContext) -> tuple[float, float]:
+    """White-noise RMS of the raw channel (unit of the channel) and its dominant frequency."""
+    from fsi_lab.plugins.analysis.instantaneous import noise_rms
+    from fsi_lab.plugins.analysis.spectrum import spectral_peaks
+
     ch = context.channel
+    x = np.asarray(ch.data, dtype=np.float64)
+    try:
+        peaks = spectral_peaks(x, ch.sample_rate, window="decay", min_relative=0.05,
+                               max_peaks=1, smoothing=0.05)
+    except AnalysisError:
+        return 0.0, 0.0
+    if peaks.frequencies.size == 0:
+        return 0.0, 0.0
+    f_dom = float(peaks.frequencies[0])
+    return noise_rms(x, float(ch.sample_rate), f_dom), f_dom
+
+
+def _floor(sigma: float, fs: float, f_k: float, band: float, order: int) -> float | None:
+    """10 x the noise RMS left in a component at f_k (Hz) whose noise band is ``band`` Hz wide,
+    after ``order`` integrations (each divides by 2 pi f_k)."""
+    if sigma <= 0 or f_k <= 0:
+        return None
+    return 10.0 * sigma * math.sqrt(min(1.0, band / (0.5 * fs))) / (2 * math.pi * f_k) ** order
+
+
+def components(context: AnalysisContext, order: int = 0) -> list[Component]:
+    """The channel's components: HVD's if it ran earlier in the chain, else the channel.
+
+    ``order`` (integrations the caller will apply) only scales the noise floors.
+    """
+    ch = context.channel
+    fs = float(ch.sample_rate)
+    sigma, f_dom = _channel_noise(context)
     hvd = context.results.get("hvd")
     if hvd is not None and hvd.values is not None:
         res = hvd.values
-        return [Component(k, res.components[k], ch.quantity, ch.unit, res.sample_rate,
-                          res.edge_mask[k]) for k in range(res.components.shape[0])]
-    return [Component(0, np.asarray(ch.data, dtype=np.float64), ch.quantity, ch.unit,
-                      float(ch.sample_rate), None)]
+        out = []
+        for k in range(res.components.shape[0]):
+            f_k = res.mean_frequency(k)
+            # The demodulation keeps f_k +- 1.5 cutoff.
+            floor = _floor(sigma, fs, f_k, 3.0 * float(res.cutoffs[k]), order)
+            out.append(Component(k, res.components[k], ch.quantity, ch.unit, res.sample_rate,
+                                 res.edge_mask[k], floor))
+        return out
+    # A cycle-by-cycle measurement feels the noise near the oscillation: about 3 f wide.
+    floor = _floor(sigma, fs, f_dom, 3.0 * f_dom, order)
+    return [Component(0, np.asarray(ch.data, dtype=np.float64), ch.quantity, ch.unit, fs, None,
+                      floor)]
 
 
 def displacement_components(context: AnalysisContext, plugin: str) -> list[Component]:
@@ -101,12 +153,11 @@ def displacement_components(context: AnalysisContext, plugin: str) -> list[Compo
     if integ is not None and isinstance(integ.values, ComponentSignals) \
             and integ.values.quantity == "displacement":
         v = integ.values
-        return [Component(k, sig, "displacement", v.unit, v.sample_rate, v.edge_masks.get(k))
-                for k, sig in sorted(v.signals.items())]
-    comps = components(context)
+        return [Component(k, sig, "displacement", v.unit, v.sample_rate, v.edge_masks.get(k),
+                          v.noise_floors.get(k)) for k, sig in sorted(v.signals.items())]
     quantity = context.channel.quantity
     if quantity == "displacement":
-        return comps
+        return components(context)
     if quantity not in ("velocity", "acceleration"):
         raise AnalysisError(
             f"{where(plugin, context)}: the channel measures {quantity!r} ({context.channel.unit})"
@@ -114,9 +165,9 @@ def displacement_components(context: AnalysisContext, plugin: str) -> list[Compo
             "channel")
     order = 1 if quantity == "velocity" else 2
     out = []
-    for c in comps:
+    for c in components(context, order):
         out.append(Component(c.index, integrate(c.signal, c.sample_rate, order=order),
-                             "displacement", "m", c.sample_rate, c.edge_mask))
+                             "displacement", "m", c.sample_rate, c.edge_mask, c.noise_floor))
     return out
 
 
@@ -132,11 +183,12 @@ def velocity_components(context: AnalysisContext) -> list[Component] | None:
     if integ is not None and isinstance(integ.values, ComponentSignals) \
             and integ.values.quantity == "velocity":
         v = integ.values
-        return [Component(k, sig, "velocity", v.unit, v.sample_rate, v.edge_masks.get(k))
-                for k, sig in sorted(v.signals.items())]
+        return [Component(k, sig, "velocity", v.unit, v.sample_rate, v.edge_masks.get(k),
+                          v.noise_floors.get(k)) for k, sig in sorted(v.signals.items())]
     if quantity == "acceleration":
         return [Component(c.index, integrate(c.signal, c.sample_rate, order=1), "velocity",
-                          "m/s", c.sample_rate, c.edge_mask) for c in components(context)]
+                          "m/s", c.sample_rate, c.edge_mask, c.noise_floor)
+                for c in components(context, 1)]
     return None
 
 

@@ -10,14 +10,14 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numba
 import numpy as np
 import scipy.fft as sfft
 import scipy.linalg
 
 from fsi_lab.errors import AnalysisError
 
-#: Worker threads given to scipy.fft (the lab machines have 2 cores).
+#: Worker threads given to scipy.fft (the lab machines have 2 cores; pocketfft uses them for
+#: batches of transforms, a single 1-D transform runs on one).
 FFT_WORKERS = 2
 
 #: Fewest samples per cycle of a component that the zero-crossing and peak refinement need
@@ -107,7 +107,8 @@ def clipping(x: np.ndarray) -> str | None:
 
 
 def check_samples_per_cycle(frequency: float, fs: float, func: str,
-                            minimum: float = MIN_SAMPLES_PER_CYCLE, what: str = "component") -> None:
+                            minimum: float = MIN_SAMPLES_PER_CYCLE,
+                            what: str = "component") -> None:
     """Raise if a ``frequency`` (Hz) has fewer than ``minimum`` samples per cycle at ``fs``."""
     if frequency <= 0:
         return
@@ -116,11 +117,6 @@ def check_samples_per_cycle(frequency: float, fs: float, func: str,
         raise fail(func, f"sample rate {fs:g} Hz is too low for the {what} at {frequency:.4g} Hz "
                          f"({spc:.1f} samples per cycle); need at least {minimum:g} samples per "
                          f"cycle, i.e. a rate >= {minimum * frequency:.4g} Hz")
-
-
-def fast_length(n: int) -> int:
-    """Smallest length >= n whose FFT is fast (products of 2, 3, 5, 7, 11)."""
-    return sfft.next_fast_len(int(n), real=True)
 
 
 def mirror_pad(x: np.ndarray, left: int, right: int) -> np.ndarray:
@@ -184,11 +180,8 @@ def moving_average(y: np.ndarray, half_width: int) -> np.ndarray:
 
 
 def rfft(x: np.ndarray, n: int | None = None) -> np.ndarray:
+    """scipy.fft.rfft with the project's worker count."""
     return sfft.rfft(x, n=n, workers=FFT_WORKERS)
-
-
-def irfft(x: np.ndarray, n: int) -> np.ndarray:
-    return sfft.irfft(x, n=n, workers=FFT_WORKERS)
 
 
 # ----------------------------------------------------------------------------- AR extension

@@ -89,7 +89,7 @@ def trusted_backbone(c: Component, params: dict[str, Any], plugin: str,
     with guarded(plugin, context):
         inst = instantaneous(c.signal, c.sample_rate, offset=params["offset"],
                              smooth=params["smooth_points"],
-                             min_amplitude=params["min_amplitude"])
+                             min_amplitude=params["min_amplitude"], noise_floor=c.noise_floor)
         bb = backbone_from(inst)
         period = 1.0 / float(np.median(bb.frequency))
         keep = trusted_times(bb.time, c, period)

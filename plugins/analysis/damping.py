@@ -313,7 +313,7 @@ def trusted_peaks(c: Component, params: dict[str, Any]):
     """Extrema (times s, amplitudes, frequencies Hz) of a component, without the untrusted
     record ends (the HVD edge mask and one period at each end)."""
     inst = instantaneous(c.signal, c.sample_rate, offset=params.get("offset", "cycles"),
-                         min_amplitude=params.get("min_amplitude"))
+                         min_amplitude=params.get("min_amplitude"), noise_floor=c.noise_floor)
     period = 1.0 / float(np.median(inst.frequency))
     keep = trusted_times(inst.peak_times, c, period)
     return inst.peak_times[keep], inst.peak_amplitudes[keep], inst.peak_frequency[keep]

@@ -271,8 +271,9 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
     ------
     AnalysisError
         NaN/inf, constant or clipped record, bad sample rate, ``n_components`` < 1, a cut-off
-        that is not positive or not below the Nyquist frequency, a spectral peak with fewer than
-        4 samples per cycle, or a record too short for the cut-off (no trusted sample left).
+        that is not positive or not below the Nyquist frequency, one of the ``n_components``
+        largest spectral peaks with fewer than 4 samples per cycle, or a record too short for
+        the cut-off (no trusted sample left).
 
     Notes
     -----
@@ -291,7 +292,7 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
     k_total = int(n_components)
 
     peaks = _significant_peaks(x, fs, func)
-    for f_p in peaks:
+    for f_p in peaks[:k_total]:          # the largest peaks: the components asked for
         check_samples_per_cycle(f_p, fs, func, MIN_SAMPLES_PER_CYCLE, "spectral peak")
 
     given = None

@@ -240,7 +240,7 @@ def _remove_offset(x: np.ndarray, mode: Any, merge: float, func: str) -> tuple[n
     return x - off, off
 
 
-def _noise_rms(x: np.ndarray, fs: float, f_dom: float) -> float:
+def noise_rms(x: np.ndarray, fs: float, f_dom: float) -> float:
     """RMS of white noise in ``x``, from the median amplitude spectrum above 3 f_dom."""
     n = x.size
     w = np.hanning(n)
@@ -254,7 +254,8 @@ def _noise_rms(x: np.ndarray, fs: float, f_dom: float) -> float:
 
 # ----------------------------------------------------------------------------- main
 def instantaneous(x: Any, fs: float, *, offset: Any = "cycles", smooth: int = 0,
-                  min_amplitude: float | None = None) -> Instantaneous:
+                  min_amplitude: float | None = None, noise_floor: float | None = None
+                  ) -> Instantaneous:
     """Zero-crossing instantaneous frequency and extremum amplitude (paper Eq. 3).
 
     Parameters
@@ -275,6 +276,10 @@ def instantaneous(x: Any, fs: float, *, offset: Any = "cycles", smooth: int = 0,
         None (default): drop those below 10 x the RMS of the record's white noise, estimated
         from the median of its spectrum above 3 x the dominant frequency - the tail of a decay
         that has sunk into noise.
+    noise_floor
+        Used when ``min_amplitude`` is None: drop the cycles whose amplitude is below this
+        absolute value (U) instead of the automatic estimate (for a band-limited component,
+        whose own spectrum shows no noise floor, the caller knows the noise better).
 
     Returns
     -------
@@ -316,8 +321,10 @@ def instantaneous(x: Any, fs: float, *, offset: Any = "cycles", smooth: int = 0,
                          f"{f_dom:.4g} Hz ({spc:.1f} samples per cycle); need at least "
                          f"{MIN_SAMPLES_PER_CYCLE} samples per cycle, i.e. a rate >= "
                          f"{MIN_SAMPLES_PER_CYCLE * f_dom:.4g} Hz")
-    if min_amplitude is None:
-        floor = 10.0 * _noise_rms(y, fs, f_dom)
+    if min_amplitude is None and noise_floor is not None:
+        floor = float(noise_floor)
+    elif min_amplitude is None:
+        floor = 10.0 * noise_rms(y, fs, f_dom)
     else:
         floor = float(min_amplitude) * float(np.max(np.abs(pval)))
 
@@ -384,12 +391,14 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
         with guarded("instantaneous", context):
             return instantaneous(c.signal, c.sample_rate, offset=params["offset"],
                                  smooth=params["smooth_points"],
-                                 min_amplitude=params["min_amplitude"])
+                                 min_amplitude=params["min_amplitude"],
+                                 noise_floor=c.noise_floor)
 
     done, errors = per_component("instantaneous", context, comps, work)
     unit = comps[0].unit
     count = len(comps)
-    entries = [{"index": k, "frequency_hz": float(np.median(r.frequency))}
+    entries = [{"index": k, "frequency_hz": float(np.sum(r.amplitude ** 2 * r.frequency)
+                                                  / np.sum(r.amplitude ** 2))}
                for k, r in done.items()]
     err_entries, err_attrs = error_entries(errors, "instantaneous")
     rows = {name: stack_rows({k: getattr(r, name) for k, r in done.items()}, count)

@@ -123,7 +123,6 @@ _ORDER = {("velocity", "displacement"): 1, ("acceleration", "velocity"): 1,
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     ch = context.channel
     target = params["target"]
-    comps = components(context)
     if ch.quantity == target:
         order = 0                                     # nothing to do: passed through
     elif (ch.quantity, target) in _ORDER:
@@ -133,6 +132,7 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
             f"{where('integrate', context)}: cannot integrate a {ch.quantity!r} channel "
             f"({ch.unit}) to {target}; expected a velocity or acceleration channel (or "
             f"target = the channel's own quantity)")
+    comps = components(context, order)
 
     def work(c):
         if order == 0:
@@ -146,7 +146,8 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     err_entries, err_attrs = error_entries(errors, "integrate")
     values = ComponentSignals(quantity=target, unit=unit, sample_rate=float(ch.sample_rate),
                               signals=done,
-                              edge_masks={c.index: c.edge_mask for c in comps})
+                              edge_masks={c.index: c.edge_mask for c in comps},
+                              noise_floors={c.index: c.noise_floor for c in comps})
     return AnalysisResult(
         datasets={"signals": stack_rows(done, len(comps))},
         units={"signals": unit},

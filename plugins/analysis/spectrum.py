@@ -275,10 +275,11 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
 PLUGIN = AnalysisPlugin(
     name="spectrum",
     params=(
-        Param("window", "str", "", "hann", choices=WINDOWS,
-              help="Window: hann, blackmanharris, flattop (accurate amplitudes), boxcar, or "
-                   "decay (flat, then half-Hann: keeps fast-decaying modes)."),
-        Param("min_relative", "float", "", 0.05, minimum=0.0, maximum=1.0,
+        Param("window", "str", "", "decay", choices=WINDOWS,
+              help="Window: decay (default: flat, then half-Hann - keeps the early part of a "
+                   "free decay and fast-decaying modes), hann (steady or random records), "
+                   "blackmanharris, flattop (accurate amplitudes), boxcar."),
+        Param("min_relative", "float", "", 0.02, minimum=0.0, maximum=1.0,
               exclusive_minimum=True,
               help="Report peaks whose prominence is at least this fraction of the largest."),
         Param("max_peaks", "int", "", 8, minimum=1, help="Report at most this many peaks."),
