@@ -28,7 +28,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
-    QComboBox, QGroupBox, QHBoxLayout, QHeaderView, QLabel, QPushButton, QSplitter, QTabWidget,
+    QComboBox, QGridLayout, QGroupBox, QHBoxLayout, QHeaderView, QLabel, QPushButton, QSplitter, QTabWidget,
     QTableWidget, QTableWidgetItem, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget,
 )
 
@@ -98,6 +98,19 @@ def per_component(result: PluginResult | None, names: Sequence[str]) -> list[np.
     return [np.asarray(nested[k], dtype=float).ravel() for k in sorted(nested, key=_natural)]
 
 
+def finite_pairs(pairs) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Matching ``(x, y)`` rows without their NaN padding; empty rows are dropped."""
+    out = []
+    for x, y in pairs:
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        if x.size != y.size:
+            continue
+        keep = np.isfinite(x) & np.isfinite(y)
+        if keep.any():
+            out.append((x[keep], y[keep]))
+    return out
+
+
 def _natural(key: str) -> tuple:
     digits = "".join(ch for ch in key if ch.isdigit())
     return (int(digits) if digits else 0, key)
@@ -113,8 +126,9 @@ def summary_series(results: RunResults, channel: str, section: str, x: str, y: s
             continue
         xs, ys = block.get(x), block.get(y)
         if isinstance(xs, list) and isinstance(ys, list) and xs and len(xs) == len(ys):
-            series.append((np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)))
-    return series
+            series.append((np.asarray([np.nan if v is None else v for v in xs], dtype=float),
+                           np.asarray([np.nan if v is None else v for v in ys], dtype=float)))
+    return finite_pairs(series)
 
 
 def time_axis(results: RunResults, channel: str, result: PluginResult | None, n: int
@@ -255,9 +269,47 @@ def _points(plot: pg.PlotItem, x, y, colour: str, name: str | None = None, size:
                      symbol="o", symbolSize=size, symbolBrush=colour, symbolPen=None, name=name)
 
 
+def robust_range(plot: pg.PlotItem, values: Sequence[np.ndarray], axis: str = "y",
+                 low: float = 2.0, high: float = 98.0) -> None:
+    """Scale one axis to the bulk of the data (outliers of noisy record ends stay reachable by
+    zooming out: the view's "View all")."""
+    data = np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in values] or [[]])
+    data = data[np.isfinite(data)]
+    if data.size < 5:
+        return
+    lo, hi = np.percentile(data, [low, high])
+    if hi <= lo:
+        return
+    margin = 0.15 * (hi - lo)
+    if axis == "y":
+        plot.setYRange(lo - margin, hi + margin, padding=0)
+    else:
+        plot.setXRange(max(lo - margin, 0.0) if lo >= 0 else lo - margin, hi + margin, padding=0)
+
+
+def active_span(t: np.ndarray, envelope: np.ndarray, fraction: float = 0.01
+                ) -> tuple[float, float] | None:
+    """The time span where ``envelope`` exceeds ``fraction`` of its peak."""
+    env = np.asarray(envelope, dtype=float)
+    good = np.isfinite(env)
+    if not good.any():
+        return None
+    above = np.flatnonzero(good & (env > fraction * np.nanmax(env)))
+    if above.size < 2:
+        return None
+    t0, t1 = float(t[above[0]]), float(t[above[-1]])
+    pad = 0.05 * (t1 - t0)
+    return t0 - pad, t1 + pad
+
+
 class HVDView(View):
     title = "HVD components"
     plugins = ("hvd",)
+
+    def __init__(self, max_components: int = MAX_COMPONENTS_DRAWN,
+                 parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.max_components = max_components
 
     def draw(self, results: RunResults, channel: str) -> bool:
         hvd = results.result(channel, "hvd")
@@ -277,20 +329,25 @@ class HVDView(View):
         if components:
             _line(top, t, np.sum(components, axis=0), "#000000", "sum of components", 1.0,
                   Qt.PenStyle.DashLine)
-        count = min(max(len(components), len(envelopes)), MAX_COMPONENTS_DRAWN)
+        count = min(max(len(components), len(envelopes)), self.max_components)
         for k in range(count):
             colour = COLOURS[k % len(COLOURS)]
-            plot = self.add_plot(k + 1, 0, f"component {k + 1}", "time", unit or None, "s")
+            plot = self.add_plot(k + 1, 0, f"component {k}", "time", unit or None, "s")
             plot.setXLink(top)
             if k < len(components):
-                _line(plot, t, components[k], colour, f"component {k + 1}", 1.0)
+                _line(plot, t, components[k], colour, f"component {k}", 1.0)
             if k < len(envelopes):
                 _line(plot, t, envelopes[k], "#000000", "envelope", 1.4)
                 _line(plot, t, -envelopes[k], "#000000", None, 1.4)
+        if envelopes:
+            span = active_span(t, envelopes[0])
+            if span is not None:
+                top.setXRange(*span, padding=0)
         cutoffs = hvd.get("cutoffs", "cutoff")
         extra = f"; cut-offs {', '.join(f'{c:.3g}' for c in np.ravel(cutoffs))} Hz" \
             if cutoffs is not None else ""
-        self.set_note(f"{count} components of {channel}, by decreasing amplitude{extra}")
+        self.set_note(f"HVD of {channel}: {count} of {max(len(components), len(envelopes))} "
+                      f"component(s), by decreasing amplitude{extra}")
         return True
 
 
@@ -302,26 +359,37 @@ class FrequencyView(View):
         plot = self.add_plot(0, 0, "frequency", "time", "Hz", "s")
         drawn = False
         hvd = results.result(channel, "hvd")
+        shown: list[np.ndarray] = []
         if hvd is not None and hvd.ok:
             freqs = per_component(hvd, HVD_FREQUENCIES)
             edges = per_component(hvd, HVD_EDGE)
+            envelopes = per_component(hvd, HVD_ENVELOPES)
             for k, f in enumerate(freqs[:MAX_COMPONENTS_DRAWN]):
                 f = np.array(f, dtype=float)
                 if k < len(edges) and edges[k].size == f.size:
                     f[np.asarray(edges[k], dtype=bool)] = np.nan
                 t = time_axis(results, channel, hvd, f.size)
-                _line(plot, t, f, COLOURS[k % len(COLOURS)], f"HVD component {k + 1}", 1.4)
+                if k < len(envelopes) and envelopes[k].size == f.size:
+                    weak = envelopes[k] < 0.01 * np.nanmax(envelopes[k])
+                    f[weak] = np.nan  # no frequency where the component has died out
+                _line(plot, t, f, COLOURS[k % len(COLOURS)], f"HVD component {k}", 1.4)
+                shown.append(f)
+                if k == 0 and k < len(envelopes) and envelopes[0].size == t.size:
+                    span = active_span(t, envelopes[0])
+                    if span is not None:
+                        plot.setXRange(*span, padding=0)
                 drawn = True
         inst = results.result(channel, "instantaneous")
         if inst is not None and inst.ok:
             times = per_component(inst, ZC_TIME)
             freqs = per_component(inst, ZC_FREQUENCY)
-            for k, (t, f) in enumerate(zip(times, freqs)):
-                if t.size == f.size and f.size:
-                    _points(plot, t, f, "#ff7f0e" if k == 0 else COLOURS[(k + 4) % len(COLOURS)],
-                            "zero crossings" if k == 0 else None, 4)
-                    drawn = True
+            for k, (t, f) in enumerate(finite_pairs(zip(times, freqs))):
+                _points(plot, t, f, COLOURS[k % len(COLOURS)],
+                        f"zero crossings, component {k}", 4)
+                shown.append(f)
+                drawn = True
         if drawn:
+            robust_range(plot, shown)
             self.set_note(f"instantaneous frequency of {channel}; record ends HVD does not "
                           "trust are left out")
         return drawn
@@ -331,34 +399,46 @@ class _AmplitudeView(View):
     """Two plots of a quantity against displacement and velocity amplitude."""
 
     y_names: Sequence[str] = ()
+    velocity_y_names: Sequence[str] = ()
+    summary_velocity_section = ""
     y_label = ""
     y_units: str | None = None
+
+    def __init__(self, compact: bool = False, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.compact = compact
     summary_section = ""
     summary_y = ""
 
     def draw(self, results: RunResults, channel: str) -> bool:
         result = results.result(channel, self.plugins[0])
-        y = per_component(result, self.y_names) if result is not None and result.ok else []
+        ok = result is not None and result.ok
+        y = per_component(result, self.y_names) if ok else []
+        y_v = per_component(result, self.velocity_y_names or self.y_names) if ok else []
         disp = per_component(result, DISPLACEMENT_AMPLITUDE) if y else []
-        vel = per_component(result, VELOCITY_AMPLITUDE) if y else []
-        pairs_d = [(a, b) for a, b in zip(disp, y) if a.size == b.size and a.size]
-        pairs_v = [(a, b) for a, b in zip(vel, y) if a.size == b.size and a.size]
-        if not pairs_d:
+        vel = per_component(result, VELOCITY_AMPLITUDE) if y_v else []
+        pairs_d = finite_pairs(zip(disp, y))
+        pairs_v = finite_pairs(zip(vel, y_v))
+        if not pairs_d and ok:
             pairs_d = summary_series(results, channel, self.summary_section, "amplitude",
                                      self.summary_y)
-        if not pairs_v:
-            pairs_v = summary_series(results, channel, self.summary_section,
-                                     "velocity_amplitude", self.summary_y)
+        if not pairs_v and ok and self.summary_velocity_section:
+            pairs_v = summary_series(results, channel, self.summary_velocity_section,
+                                     "amplitude", self.summary_y)
         if not pairs_d and not pairs_v:
             return False
         left = self.add_plot(0, 0, self.y_label, "displacement amplitude", self.y_units, "m")
         for k, (a, b) in enumerate(pairs_d[:MAX_COMPONENTS_DRAWN]):
             self._series(left, a, b, k)
-        right = self.add_plot(0, 1, self.y_label, "velocity amplitude", self.y_units, "m/s")
-        for k, (a, b) in enumerate(pairs_v[:MAX_COMPONENTS_DRAWN]):
-            self._series(right, a, b, k)
-        if not pairs_v:
-            right.setTitle("velocity amplitude: not computed")
+        robust_range(left, [b for _, b in pairs_d])
+        right = None
+        if not self.compact:
+            right = self.add_plot(0, 1, self.y_label, "velocity amplitude", self.y_units, "m/s")
+            for k, (a, b) in enumerate(pairs_v[:MAX_COMPONENTS_DRAWN]):
+                self._series(right, a, b, k)
+            robust_range(right, [b for _, b in pairs_v])
+            if not pairs_v:
+                right.setTitle("velocity amplitude: not computed")
         self.overlay_model(results, channel, left, right)
         self.set_note(f"{self.title} of {channel}, {len(pairs_d or pairs_v)} component(s)")
         return True
@@ -366,9 +446,9 @@ class _AmplitudeView(View):
     def _series(self, plot: pg.PlotItem, a: np.ndarray, b: np.ndarray, k: int) -> None:
         colour = COLOURS[k % len(COLOURS)]
         if a.size > 400:
-            _line(plot, a, b, colour, f"component {k + 1}", 1.4)
+            _line(plot, a, b, colour, f"component {k}", 1.4)
         else:
-            _points(plot, a, b, colour, f"component {k + 1}", 5)
+            _points(plot, a, b, colour, f"component {k}", 5)
 
     def overlay_model(self, results, channel, left, right) -> None:
         model = results.result(channel, "modal-model")
@@ -376,16 +456,20 @@ class _AmplitudeView(View):
             return
         y = per_component(model, self.y_names)
         for plot, names in ((left, DISPLACEMENT_AMPLITUDE), (right, VELOCITY_AMPLITUDE)):
-            for k, (a, b) in enumerate(zip(per_component(model, names), y)):
-                if a.size == b.size and a.size:
-                    _line(plot, a, b, "#000000", "modal model" if k == 0 else None, 1.6,
-                          Qt.PenStyle.DashLine)
+            if plot is None:
+                continue
+            for k, (a, b) in enumerate(finite_pairs(zip(per_component(model, names), y))):
+                order = np.argsort(a)
+                _line(plot, a[order], b[order], "#000000", "modal model" if k == 0 else None,
+                      1.6, Qt.PenStyle.DashLine)
 
 
 class BackboneView(_AmplitudeView):
     title = "Backbone"
     plugins = ("backbone",)
     y_names = FREQUENCY
+    velocity_y_names = ("velocity_frequency",) + FREQUENCY
+    summary_velocity_section = "backbone_velocity"
     y_label = "frequency"
     y_units = "Hz"
     summary_section = "backbone"
@@ -407,66 +491,82 @@ class EquivalentDampingView(View):
 
     def draw(self, results: RunResults, channel: str) -> bool:
         result = results.result(channel, "equivalent-damping")
-        summaries = [c.get("equivalent_damping") for c in results.components(channel)]
-        summaries = [s for s in summaries if isinstance(s, dict)]
         if result is None or not result.ok:
             return False
-        amplitudes = per_component(result, CQ_AMPLITUDE)
-        cqs = per_component(result, CQ)
+        components = results.components(channel)
+        summaries = {c.get("index"): c.get("equivalent_damping") for c in components
+                     if isinstance(c.get("equivalent_damping"), dict)}
+        frequencies = {c.get("index"): c.get("frequency_hz") for c in components}
+        rows_w = per_component(result, CQ_AMPLITUDE)
+        rows_cq = per_component(result, CQ)
         fits = per_component(result, CQ_FIT)
         lows = per_component(result, CQ_BAND_LOW)
         highs = per_component(result, CQ_BAND_HIGH)
-        if not cqs:
+        if not rows_cq:
             return False
         plot = self.add_plot(0, 0, "C_q", "displacement amplitude W", "kg/(m s)", "m")
         lines = []
-        for k, (w, cq) in enumerate(zip(amplitudes, cqs)):
-            if w.size != cq.size or not w.size:
+        for k, (w_row, cq_row) in enumerate(zip(rows_w, rows_cq)):
+            pairs = finite_pairs([(w_row, cq_row)])
+            if not pairs:
                 continue
+            w, cq = pairs[0]
             colour = COLOURS[k % len(COLOURS)]
-            _points(plot, w, cq, colour, f"C_q, component {k + 1}", 5)
+            _points(plot, w, cq, colour, f"C_q, component {k}", 5)
             order = np.argsort(w)
-            if k < len(fits) and fits[k].size == w.size:
-                _line(plot, w[order], fits[k][order], "#000000",
+            fit = fits[k] if k < len(fits) and fits[k].size == w_row.size else None
+            summary = summaries.get(k) or {}
+            if fit is not None:
+                keep = np.isfinite(w_row) & np.isfinite(fit)
+                o = np.argsort(w_row[keep])
+                _line(plot, w_row[keep][o], fit[keep][o], "#000000",
                       "first-order fit" if k == 0 else None, 1.8)
-            if k < len(lows) and k < len(highs) and lows[k].size == w.size == highs[k].size:
-                low = plot.plot(w[order], lows[k][order], pen=pg.mkPen("#00000040"))
-                high = plot.plot(w[order], highs[k][order], pen=pg.mkPen("#00000040"))
+            elif summary.get("c_i") is not None and summary.get("c_f") is not None \
+                    and frequencies.get(k):
+                # Eq. 24 with the identified coefficients at the component's mean frequency
+                omega = 2 * np.pi * float(frequencies[k])
+                span = np.array([0.0, float(np.max(w))])
+                line = summary["c_i"] + 8 * summary["c_f"] * omega * span / (3 * np.pi)
+                _line(plot, span, line, colour, f"fit: C_i + 8 C_f ω W / 3π (component {k})",
+                      1.8, Qt.PenStyle.DashLine)
+            if k < len(lows) and k < len(highs) and lows[k].size == w_row.size == highs[k].size:
+                low = plot.plot(w[order], lows[k][np.isfinite(w_row)][order],
+                                pen=pg.mkPen("#00000040"))
+                high = plot.plot(w[order], highs[k][np.isfinite(w_row)][order],
+                                 pen=pg.mkPen("#00000040"))
                 plot.addItem(pg.FillBetweenItem(low, high, brush=pg.mkBrush(0, 0, 0, 30)))
-            values = self._values(result, summaries, k)
+            values = self._values(result, summary, k)
             if values:
-                lines.append(f"component {k + 1}: {values}")
-        if not lines and summaries:
-            lines = [f"component {k + 1}: {self._values(None, summaries, k)}"
-                     for k in range(len(summaries))]
-        text = "<br>".join(lines)
-        if text:
-            label = pg.LabelItem(text, justify="left", size="10pt")
-            self.graphics.addItem(label, row=1, col=0)
-        self.set_note("equivalent damping C_q = 2 ζ (μ + M) 2π f against displacement "
-                      "amplitude, and its first-order fit C_q = C_i + (8 C_f ω / 3π) W")
+                lines.append(f"component {k} (95 % intervals):<br>&nbsp;&nbsp;{values}")
+        if not lines:
+            return False
+        robust_range(plot, [finite_pairs([(w, c)])[0][1] for w, c in zip(rows_w, rows_cq)
+                            if finite_pairs([(w, c)])])
+        label = pg.LabelItem("<br>".join(lines), justify="left", size="10pt")
+        self.graphics.addItem(label, row=1, col=0)
+        convention = result.scalar("amplitude_convention")
+        self.set_note("C_q = 2 ζ (μ + M) 2π f against displacement amplitude W, and its "
+                      "first-order fit C_q = C_i + 8 C_f ω W / 3π (Eq. 24)")
+        if convention:
+            self.note.setToolTip(f"amplitudes: {convention}")
         return True
 
     @staticmethod
-    def _values(result: PluginResult | None, summaries: list[dict], k: int) -> str:
-        source: dict[str, Any] = {}
-        if k < len(summaries):
-            source.update(summaries[k])
-        if result is not None and not source:
-            for key in ("c_i", "c_f", "r2", "c_i_ci95", "c_f_ci95"):
-                value = result.scalar(key)
-                if isinstance(value, (list, tuple)) and k < len(value) and key in ("c_i", "c_f", "r2"):
-                    value = value[k]
-                if value is not None:
-                    source[key] = value
-        if source.get("c_i") is None:
+    def _values(result: PluginResult, summary: dict[str, Any], k: int) -> str:
+        source = dict(summary)
+        for key in ("c_i", "c_f", "r2"):
+            if source.get(key) is None:
+                source[key] = result.scalar(f"component_{k}_{key}", key)
+        if not isinstance(source.get("c_i"), (int, float)):
             return ""
-        parts = [f"C<sub>i</sub> = {source['c_i']:.4g} {_format_ci(source.get('c_i_ci95'))} kg/(m s)"]
-        if source.get("c_f") is not None:
-            parts.append(f"C<sub>f</sub> = {source['c_f']:.4g} {_format_ci(source.get('c_f_ci95'))} kg/m²")
-        if source.get("r2") is not None:
+        parts = [f"C<sub>i</sub> = {source['c_i']:.4g} {_format_ci(source.get('c_i_ci95'))} "
+                 "kg/(m s)"]
+        if isinstance(source.get("c_f"), (int, float)):
+            parts.append(f"C<sub>f</sub> = {source['c_f']:.4g} "
+                         f"{_format_ci(source.get('c_f_ci95'))} kg/m²")
+        if isinstance(source.get("r2"), (int, float)):
             parts.append(f"R² = {source['r2']:.3f}")
-        return ", ".join(parts)
+        return "<br>&nbsp;&nbsp;".join(parts)
 
 
 class ModalModelView(View):
@@ -536,7 +636,10 @@ class SpectrumView(View):
                 if peaks is None and results.summary:
                     peaks = results.summary.get("channels", {}).get(channel, {}).get(
                         "spectrum_peaks_hz")
-                for f in np.ravel(peaks if peaks is not None else [])[:10]:
+                peak_list = np.ravel(peaks if peaks is not None else [])
+                if peak_list.size:
+                    plot.setXRange(0, 3 * float(np.max(peak_list[:10])), padding=0)
+                for f in peak_list[:10]:
                     plot.addItem(pg.InfiniteLine(float(f), pen=pg.mkPen("#9e9e9e", style=Qt.PenStyle.DotLine),
                                                  label=f"{float(f):.2f} Hz",
                                                  labelOpts={"position": 0.9, "color": "#555"}))
@@ -560,6 +663,28 @@ class SpectrumView(View):
         if drawn:
             self.set_note(f"spectra of {channel}")
         return drawn
+
+
+class OverviewView(QWidget):
+    """The paper's figures side by side: HVD component with its envelope, instantaneous
+    frequency, backbone and the C_q fit."""
+
+    title = "Overview"
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.parts = [HVDView(max_components=1), FrequencyView(), BackboneView(compact=True),
+                      EquivalentDampingView()]
+        grid = QGridLayout(self)
+        grid.setContentsMargins(0, 0, 0, 0)
+        for i, part in enumerate(self.parts):
+            grid.addWidget(part, i // 2, i % 2)
+        self.filled = False
+
+    def show_results(self, results: RunResults, channel: str) -> None:
+        for part in self.parts:
+            part.show_results(results, channel)
+        self.filled = any(part.filled for part in self.parts)
 
 
 class SummaryView(QWidget):
@@ -830,7 +955,7 @@ class AnalysisViews(QWidget):
         self.channel.setObjectName("analysis-channel")
         self.channel.currentIndexChanged.connect(self._redraw)
         self.state = QLabel("")
-        self.views: list[Any] = [HVDView(), FrequencyView(), BackboneView(), DampingView(),
+        self.views: list[Any] = [OverviewView(), HVDView(), FrequencyView(), BackboneView(), DampingView(),
                                  EquivalentDampingView(), ModalModelView(), SpectrumView(),
                                  SummaryView(), DatasetBrowser()]
         self.tabs = QTabWidget()

@@ -176,7 +176,7 @@ class MainWindow(QMainWindow):
         self.bench.message.connect(self.notify)
         self.runs.loaded.connect(self._run_loaded)
         self.runs.selected.connect(self._show_run)
-        self.runs.failed.connect(lambda path, text: self.notify("ERROR", text))
+        self.runs.failed.connect(self._run_failed)
         self.analysis.message.connect(self.notify)
         self.analysis.reanalysed.connect(self._reanalysed)
 
@@ -220,8 +220,8 @@ class MainWindow(QMainWindow):
 
     def open_runs(self, paths: list[str | Path], show: bool = True) -> None:
         resolved = [Path(p).resolve() for p in paths]
-        if show and resolved:
-            self._show_when_loaded.add(resolved[-1])
+        if show:
+            self._show_when_loaded.update(resolved)
         self.runs.open(resolved)
 
     def _open_profile_dialog(self) -> None:
@@ -259,6 +259,10 @@ class MainWindow(QMainWindow):
             self._show_run(results)
             if path == self.last_run and results.exit_status == "completed" and results.analysis:
                 self.tabs.setCurrentWidget(self.analysis)
+
+    def _run_failed(self, path: Path, text: str) -> None:
+        self._show_when_loaded.discard(Path(path).resolve())
+        self.notify("ERROR", text)
 
     def _show_run(self, results: RunResults) -> None:
         self.analysis.show_results(results)

@@ -7,30 +7,49 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
-import pyqtgraph as pg
-import pyqtgraph.exporters  # noqa: F401 - registers the exporters
+from PySide6.QtCore import QRect
+from PySide6.QtGui import QColor, QImage, QPainter
+from PySide6.QtSvg import QSvgGenerator
+from PySide6.QtWidgets import QWidget
 
 FIGURE_SUFFIXES = (".png", ".svg")
 
 
-def export_figure(item: Any, path: str | Path, width: int | None = None) -> Path:
-    """Write a pyqtgraph scene, layout or plot to ``path`` (.png or .svg by its suffix)."""
+def export_figure(widget: QWidget, path: str | Path, scale: float = 2.0) -> Path:
+    """Write what ``widget`` shows (a plot or a layout of plots) to ``path``.
+
+    PNG is rendered at ``scale`` times the on-screen size; SVG is vector (Qt's SVG generator:
+    pyqtgraph's own SVG exporter cannot read the paths Qt 6.12 writes).
+    """
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in FIGURE_SUFFIXES:
         raise ValueError(f"{path}: figures are exported as {' or '.join(FIGURE_SUFFIXES)}")
-    if isinstance(item, pg.GraphicsLayoutWidget):
-        item = item.scene()
-    elif isinstance(item, pg.PlotWidget):
-        item = item.getPlotItem()
-    if suffix == ".png":
-        exporter = pg.exporters.ImageExporter(item)
-        if width:
-            exporter.parameters()["width"] = int(width)
-    else:
-        exporter = pg.exporters.SVGExporter(item)
     path.parent.mkdir(parents=True, exist_ok=True)
-    exporter.export(str(path))
+    size = widget.size()
+    if suffix == ".png":
+        image = QImage(int(size.width() * scale), int(size.height() * scale),
+                       QImage.Format.Format_ARGB32)
+        image.fill(QColor("white"))
+        painter = QPainter(image)
+        painter.setRenderHint(QPainter.RenderHint.Antialiasing)
+        painter.scale(scale, scale)
+        widget.render(painter)
+        painter.end()
+        if not image.save(str(path)):
+            raise OSError(f"{path}: cannot write the image")
+        return path
+    generator = QSvgGenerator()
+    generator.setFileName(str(path))
+    generator.setSize(size)
+    generator.setViewBox(QRect(0, 0, size.width(), size.height()))
+    generator.setTitle(path.stem)
+    generator.setDescription("exported by fsi-lab")
+    painter = QPainter(generator)
+    widget.render(painter)
+    painter.end()
+    if not path.exists():
+        raise OSError(f"{path}: cannot write the drawing")
     return path
 
 

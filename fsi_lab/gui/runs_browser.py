@@ -21,8 +21,8 @@ from PySide6.QtWidgets import (
 
 from fsi_lab.errors import FsiLabError
 from fsi_lab.gui.analysis_views import (
-    COLOURS, CQ, CQ_AMPLITUDE, CQ_FIT, DISPLACEMENT_AMPLITUDE, FREQUENCY, ZETA, per_component,
-    summary_series, table_rows,
+    COLOURS, CQ, CQ_AMPLITUDE, CQ_FIT, DISPLACEMENT_AMPLITUDE, FREQUENCY, ZETA, finite_pairs,
+    per_component, summary_series, table_rows,
 )
 from fsi_lab.gui.export import export_figure, write_csv
 from fsi_lab.gui.results import RunResults, load_results
@@ -52,9 +52,8 @@ def curves_of(results: RunResults, channel: str) -> dict[str, list[tuple[np.ndar
         result = results.result(channel, plugin)
         pairs = []
         if result is not None and result.ok:
-            pairs = [(x, y) for x, y in zip(per_component(result, x_names),
-                                            per_component(result, y_names))
-                     if x.size == y.size and x.size]
+            pairs = finite_pairs(zip(per_component(result, x_names),
+                                     per_component(result, y_names)))
         if not pairs and section:
             pairs = summary_series(results, channel, section, "amplitude", summary_y)
         out[name] = pairs
@@ -282,11 +281,11 @@ class RunsBrowser(QWidget):
                     drawn += 1
             eq = results.result(channel, "equivalent-damping")
             if eq is not None and eq.ok:
-                for x, fit in zip(per_component(eq, CQ_AMPLITUDE), per_component(eq, CQ_FIT)):
-                    if x.size == fit.size and x.size:
-                        order = np.argsort(x)
-                        plots["equivalent_damping"].plot(x[order], fit[order],
-                                                         pen=pg.mkPen(colour, width=2))
+                for x, fit in finite_pairs(zip(per_component(eq, CQ_AMPLITUDE),
+                                               per_component(eq, CQ_FIT))):
+                    order = np.argsort(x)
+                    plots["equivalent_damping"].plot(x[order], fit[order],
+                                                     pen=pg.mkPen(colour, width=2))
         self._fill_table(runs)
         if not runs:
             self.note.setText("Open run files and tick them to compare them.")

@@ -100,28 +100,43 @@ def write_run(path: Path, rate: float = 1000.0, seconds: float = 4.0, analysis: 
     cq = c_i + 8 * c_f * 2 * np.pi * 17 * amp / (3 * np.pi)
     freqs = np.fft.rfftfreq(n, 1 / rate)
     spectrum = np.abs(np.fft.rfft(velocity)) * 2 / n
+    pad = np.full(10, np.nan)  # rows of unequal length are padded with NaN
+
+    def two_rows(a, b):
+        return np.vstack([a, np.concatenate([b[:-10], pad])])
+
+    zc_t = np.arange(0.05, seconds - 0.05, 1 / 34.0)
     groups = {
-        "tip_velocity/spectrum": {"datasets": {"frequency_hz": freqs, "amplitude": spectrum},
-                                  "attrs": {"status": "ok"}, "params": {"window": "hann"}},
+        "tip_velocity/spectrum": {"datasets": {"frequency": freqs, "amplitude": spectrum,
+                                               "peak_frequencies": np.array([2.0, 17.0])},
+                                  "attrs": {}, "params": {"window": "hann"}},
         "tip_velocity/hvd": {"datasets": {"components": comps, "envelopes": env,
-                                          "frequencies": freq,
-                                          "edge_mask": np.zeros_like(comps, dtype=bool)},
+                                          "frequencies": freq, "residual": velocity * 0,
+                                          "edge_mask": np.zeros_like(comps, dtype=np.uint8),
+                                          "cutoffs": np.array([4.0, 1.0])},
                              "units": {"components": "m/s", "envelopes": "m/s",
-                                       "frequencies": "Hz"},
-                             "attrs": {"status": "ok", "cutoffs": [4.0, 1.0]},
-                             "params": {"components": 2}},
-        "tip_velocity/backbone": {"datasets": {"amplitude": np.vstack([amp, amp]),
-                                               "velocity_amplitude": np.vstack([vel_amp, vel_amp]),
-                                               "frequency_hz": np.vstack([17 - 10 * amp,
-                                                                          2 - 5 * amp])},
-                                  "attrs": {"status": "ok"}, "params": {}},
-        "tip_velocity/damping": {"datasets": {"amplitude": amp, "velocity_amplitude": vel_amp,
-                                              "zeta": zeta},
-                                 "attrs": {"status": "ok"}, "params": {}},
+                                       "frequencies": "Hz", "cutoffs": "Hz"},
+                             "attrs": {"n_components": 2}, "params": {"components": 2}},
+        "tip_velocity/instantaneous": {
+            "datasets": {"frequency_times": two_rows(zc_t, zc_t),
+                         "frequency": two_rows(17 + 0 * zc_t, 2 + 0 * zc_t)}, "params": {}},
+        "tip_velocity/backbone": {"datasets": {"amplitude": two_rows(amp, amp),
+                                               "frequency": two_rows(17 - 10 * amp, 2 - 5 * amp),
+                                               "velocity_amplitude": two_rows(vel_amp, vel_amp),
+                                               "velocity_frequency": two_rows(17 - 10 * amp,
+                                                                              2 - 5 * amp)},
+                                  "attrs": {}, "params": {}},
+        "tip_velocity/damping": {"datasets": {"amplitude": amp[None, :],
+                                              "velocity_amplitude": vel_amp[None, :],
+                                              "zeta": zeta[None, :]},
+                                 "attrs": {"method": "envelope-fit"}, "params": {}},
         "tip_velocity/equivalent-damping": {
-            "datasets": {"amplitude": amp, "c_q": cq, "c_q_fit": cq},
-            "attrs": {"status": "ok", "c_i": c_i, "c_f": c_f, "r2": 0.914}, "params": {}},
+            "datasets": {"amplitude": amp[None, :], "c_q": cq[None, :]},
+            "attrs": {"component_0_c_i": c_i, "component_0_c_f": c_f, "component_0_r2": 0.914},
+            "params": {"confidence": 0.95}},
     }
+    for content in groups.values():
+        content["attrs"] = {"status": "ok", **content.get("attrs", {})}
     if failed:
         groups[f"tip_velocity/{failed}"] = {"attrs": {"status": "failed",
                                                       "error": f"{failed}: too few peaks"},

@@ -1,48 +1,49 @@
 """The real window drives runs on the in-process simulated bench (paced in real time)."""
 
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import RUN_TIMEOUT_MS, wait_checked, wait_finished
+from PySide6.QtCore import Qt
 
 from fsi_lab.chain import DEFAULT_CHAIN
 from fsi_lab.runfile import read_run
 
-PAPER_CHAIN = DEFAULT_CHAIN
+ROOT = Path(__file__).resolve().parents[2]
 
 
-def _chain(registry) -> list[str]:
-    """The paper's chain as far as it is installed, else the example plugin's analysis."""
-    installed = [name for name in PAPER_CHAIN if name in registry.descriptors["analysis"]]
-    if installed:
-        return installed
-    return [name for name in ("rms",) if name in registry.descriptors["analysis"]]
+def wet_profile(tmp_path, duration: float = 3.0) -> Path:
+    """The paper's wet experiment (profiles/wet-beam-sim.toml) shortened and paced in real
+    time, with its analysis chain."""
+    text = (ROOT / "profiles" / "wet-beam-sim.toml").read_text()
+    text = re.sub(r"(?m)^duration = 10\.0", f"duration = {duration}", text, count=1)
+    text = text.replace('plugin = "inprocess-acquisition"',
+                        'plugin = "inprocess-acquisition"\nrealtime = true')
+    path = tmp_path / "wet.toml"
+    path.write_text(text)
+    return path
 
 
-def _analysis_section(chain) -> str:
-    return "[analysis]\nchannels = [\"tip_velocity\"]\nchain = [" + ", ".join(
-        f'"{name}"' for name in chain) + "]\n"
-
-
-def test_start_run_live_plots_then_analysis(qtbot, make_window, sim_profile, registry,
-                                            with_example_plugin):
-    from fsi_lab.registry import load_registry
-
-    registry = load_registry()  # with the example distribution on the path
-    chain = _chain(registry)
-    path = sim_profile(duration=1.5, realtime="true", analysis=_analysis_section(chain))
+def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_path):
+    path = wet_profile(tmp_path)
     window = make_window(registry)
     assert window.open_profile(path)
+    chain = list(window.session.base.analysis["chain"])
+    installed = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
+    assert chain and set(chain) <= set(registry.descriptors["analysis"])
     wait_checked(qtbot, window)
     start = window.run_control.start_button
     qtbot.waitUntil(start.isEnabled, timeout=5000)
-    qtbot.mouseClick(start, pytest.importorskip("PySide6.QtCore").Qt.MouseButton.LeftButton)
+    qtbot.mouseClick(start, Qt.MouseButton.LeftButton)
     assert window.run_control.running and not start.isEnabled()
     assert window.run_control.abort_button.isEnabled()
 
     # data arrives in the live plots while the run acquires
     qtbot.waitUntil(lambda: window.live.blocks >= 3 and window.live.frames >= 1, timeout=10000)
     assert window.run_control.running
-    assert set(window.live.curves) == {"base_acceleration", "tip_velocity"}
+    assert set(window.live.curves) == {"drive", "base_acceleration", "tip_velocity"}
     assert 0 < window.live.samples_shown("tip_velocity") <= 2 * window.live.max_points
     x, _ = window.live.spectra["tip_velocity"].getData()
     assert x is not None and len(x) > 0
@@ -56,16 +57,16 @@ def test_start_run_live_plots_then_analysis(qtbot, make_window, sim_profile, reg
     qtbot.waitUntil(lambda: window.analysis.results is not None
                     and window.analysis.results.path == outcome.path.resolve(), timeout=20000)
     results = window.analysis.results
-    assert set(results.analysis["tip_velocity"]) == set(chain)
+    groups = results.analysis["tip_velocity"]
+    assert set(groups) == set(chain)
+    assert all(group.ok for group in groups.values()), [g.error for g in groups.values()]
     filled = window.analysis.filled()
-    assert filled["All datasets"]
-    if "hvd" in chain:
-        assert filled["HVD components"] and filled["Instantaneous frequency"]
-    if "backbone" in chain:
-        assert filled["Backbone"]
-    if "equivalent-damping" in chain:
-        assert filled["Cq fit"] and filled["Results"]
+    expected = {"Overview", "HVD components", "Instantaneous frequency", "Backbone", "Damping",
+                "Cq fit", "Spectrum / FRF", "Results", "All datasets"}
+    if set(installed) >= {"hvd", "backbone", "damping", "equivalent-damping"}:
+        assert {title for title, ok in filled.items() if ok} >= expected
     assert window.tabs.currentWidget() is window.analysis
+    assert set(window.analysis.parameters.forms) == set(chain)
     # the bench panel shows the state read back after the safe state
     amplifier = window.bench.boxes["amplifier"]
     assert "output enabled: off" in amplifier.state.text()

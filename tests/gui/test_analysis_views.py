@@ -1,0 +1,129 @@
+"""Analysis views read /analysis/<channel>/<plugin>/ of run files, tolerant of what is missing."""
+
+import numpy as np
+from conftest import write_corrupt, write_foreign, write_run
+
+from fsi_lab.gui.analysis_views import (
+    BackboneView, DampingView, EquivalentDampingView, FrequencyView, HVDView, SpectrumView,
+)
+from fsi_lab.gui.results import load_results
+
+
+def _open(qtbot, window, path):
+    window.open_runs([path])
+    qtbot.waitUntil(lambda: window.analysis.results is not None
+                    and window.analysis.results.path == path.resolve(), timeout=10000)
+    return window.analysis
+
+
+def test_views_fill_from_the_plugins_layout(qtbot, make_window, registry, tmp_path):
+    views = _open(qtbot, make_window(registry), write_run(tmp_path / "a.h5"))
+    filled = views.filled()
+    for title in ("Overview", "HVD components", "Instantaneous frequency", "Backbone", "Damping",
+                  "Cq fit", "Spectrum / FRF", "Results", "All datasets"):
+        assert filled[title], title
+    assert not filled["Modal model"]
+    assert "not computed" in views.view(type(views.views[6])).note.text()  # modal model
+    hvd = views.view(HVDView)
+    assert "2 of 2 component(s)" in hvd.note.text() and "4, 1 Hz" in hvd.note.text()
+    eq = views.view(EquivalentDampingView)
+    labels = [item for item in eq.graphics.ci.items if hasattr(item, "text")]
+    text = " ".join(item.text for item in labels)
+    assert "0.65" in text and "33" in text and "R² = 0.914" in text and "[0.55, 0.75]" in text
+    table = views.views[-2].table
+    assert table.rowCount() == 2 and table.item(0, 2).text() == "0.65"
+
+
+def test_missing_and_failed_groups_say_so(qtbot, make_window, registry, tmp_path):
+    window = make_window(registry)
+    views = _open(qtbot, window, write_run(tmp_path / "none.h5", analysis=False))
+    assert not any(v for k, v in views.filled().items() if k != "Results")
+    assert "not computed" in views.state.text()
+    assert "not computed" in views.view(BackboneView).note.text()
+    views = _open(qtbot, window, write_run(tmp_path / "failed.h5", failed="damping"))
+    assert not views.filled()["Damping"]
+    assert "damping failed on tip_velocity: damping: too few peaks" in \
+        views.view(DampingView).note.text()
+    assert views.filled()["Backbone"]          # the others are still shown
+    assert "failed" in views.state.text()
+
+
+def test_results_reader(tmp_path):
+    results = load_results(write_run(tmp_path / "r.h5"))
+    hvd = results.result("tip_velocity", "hvd")
+    assert hvd.ok and hvd.datasets["components"].shape == (2, 4000)
+    assert hvd.units["frequencies"] == "Hz" and hvd.params == {"components": 2}
+    assert results.components("tip_velocity")[0]["equivalent_damping"]["c_f"] == 33.0
+    assert results.exit_status == "completed"
+
+
+def test_corrupt_and_foreign_files_show_a_message(qtbot, make_window, registry, tmp_path):
+    window = make_window(registry)
+    for path, words in ((write_corrupt(tmp_path / "corrupt.h5"), "not a readable HDF5 file"),
+                        (write_foreign(tmp_path / "foreign.h5"), "not an fsi-lab run file"),
+                        (tmp_path / "missing.h5", "no such file")):
+        count = len(window.messages.messages)
+        window.open_runs([path])
+        qtbot.waitUntil(lambda c=count: len(window.messages.messages) > c, timeout=10000)
+        level, text = window.messages.messages[-1]
+        assert level == "ERROR" and words in text and path.name in text
+        assert window.messages.isVisible()
+    assert window.isVisible() and window.runs.runs == {}
+    # still working: a good file opens
+    _open(qtbot, window, write_run(tmp_path / "good.h5"))
+    assert len(window.runs.runs) == 1
+
+
+def test_cli_paths_open_profiles_and_runs(qtbot, make_window, registry, tmp_path, sim_profile):
+    window = make_window(registry)
+    window.open_paths([sim_profile(), write_run(tmp_path / "x.h5"),
+                       write_corrupt(tmp_path / "y.hdf5")])
+    qtbot.waitUntil(lambda: window.session.current is not None and not window.pool.busy,
+                    timeout=10000)
+    assert window.session.loaded and "x.h5" in window.analysis.title.text()
+    assert any("y.hdf5" in text for _, text in window.messages.messages)
+
+
+def test_a_bad_profile_is_reported(qtbot, make_window, registry, tmp_path):
+    window = make_window(registry)
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[run]\nduration = -1\n")
+    assert not window.open_profile(bad)
+    level, text = window.messages.messages[-1]
+    assert level == "ERROR" and "run.duration" in text and "bad.toml" in text
+
+
+def test_changing_an_analysis_parameter_reruns_it_off_the_ui_thread(
+        qtbot, make_window, tmp_path, with_example_plugin):
+    from fsi_lab.registry import load_registry
+
+    registry = load_registry()
+    path = write_run(tmp_path / "rerun.h5", analysis=False)
+    window = make_window(registry)
+    views = _open(qtbot, window, path)
+    chain = views.parameters.chain_form.fields["chain"]
+    chain.editor.setText("rms")
+    chain.editor.editingFinished.emit()
+    assert "rms" in views.parameters.forms
+    qtbot.waitUntil(lambda: "rms" in views.results.analysis.get("tip_velocity", {}),
+                    timeout=20000)
+    first = views.results.result("tip_velocity", "rms").attrs["rms"]
+    scale = views.parameters.forms["rms"].fields["scale"]
+    scale.editor.setValue(2.0)
+    assert not views.busy or views.busy                     # the request is debounced
+    qtbot.waitUntil(lambda: views.results.result("tip_velocity", "rms").params.get("scale")
+                    == 2.0, timeout=20000)
+    assert np.isclose(views.results.result("tip_velocity", "rms").attrs["rms"], 2 * first)
+    assert views.filled()["All datasets"]
+
+
+def test_views_draw_the_plugin_layout_directly(qtbot, tmp_path):
+    results = load_results(write_run(tmp_path / "d.h5"))
+    for cls in (HVDView, FrequencyView, BackboneView, DampingView, EquivalentDampingView,
+                SpectrumView):
+        view = cls()
+        qtbot.addWidget(view)
+        view.show_results(results, "tip_velocity")
+        assert view.filled, cls.__name__
+        view.show_results(results, "base_acceleration")
+        assert not view.filled and "not computed" in view.note.text()

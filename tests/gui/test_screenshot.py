@@ -1,0 +1,43 @@
+"""``fsi-lab gui RUN.h5 --screenshot OUT.png`` renders the run's analysis and exits."""
+
+import argparse
+import sys
+
+from conftest import write_corrupt, write_run
+
+from fsi_lab.gui.app import main
+
+
+def _png(path):
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    return width, height
+
+
+def test_screenshot_in_process(qapp, tmp_path):
+    out = tmp_path / "shot.png"
+    code = main(argparse.Namespace(paths=[write_run(tmp_path / "run.h5")], screenshot=out))
+    assert code == 0
+    assert _png(out) == (1680, 1050)
+    assert out.stat().st_size > 50_000                  # plots, not an empty window
+
+
+def test_screenshot_of_a_corrupt_file_reports_and_exits(qapp, tmp_path, capsys):
+    out = tmp_path / "bad.png"
+    code = main(argparse.Namespace(paths=[write_corrupt(tmp_path / "bad.h5")], screenshot=out))
+    assert code == 2 and out.exists()
+    assert "not a readable HDF5 file" in capsys.readouterr().err
+
+
+def test_screenshot_through_the_command(tmp_path):
+    import os
+    import subprocess
+
+    out = tmp_path / "cli.png"
+    proc = subprocess.run(
+        [sys.executable, "-m", "fsi_lab.cli", "gui", str(write_run(tmp_path / "c.h5")),
+         "--screenshot", str(out)], capture_output=True, text=True, timeout=120,
+        env={**os.environ, "QT_QPA_PLATFORM": "offscreen"})
+    assert proc.returncode == 0, proc.stderr
+    assert _png(out) == (1680, 1050)
