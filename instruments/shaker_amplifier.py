@@ -1,0 +1,158 @@
+"""Shaker power amplifier with interlocks (PA25E class) over VISA: serial or TCP, SCPI.
+
+Command set: ``*IDN?``, ``*CLS``, ``SYST:ERR?``, ``OUTP 0|1``, ``OUTP?``, ``GAIN <V/V>``,
+``GAIN?``, ``STAT:INTL?`` (interlock bitfield: bit 0 over-travel, 1 supply fault,
+2 over-temperature, 3 over-current, 4 e-stop, 5 input clip), ``INTL:RES`` and ``MEAS:CURR?`` (A).
+Interlocks latch in the amplifier and force its output off; ``OUTP 1`` is refused while one is
+active, and this driver checks them before asking.
+
+Address: a VISA resource, e.g. ``TCPIP0::192.168.1.20::5025::SOCKET`` or
+``ASRL/dev/ttyUSB0::INSTR`` (8N1 at ``baud_rate``), or ``embedded``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fsi_lab.contract import Amplifier, InstrumentPlugin
+from fsi_lab.errors import InstrumentError
+from fsi_lab.hookspecs import hookimpl
+from fsi_lab.params import Param
+
+NAME = "shaker-amplifier"
+#: Interlock name for each bit of ``STAT:INTL?``.
+INTERLOCKS = ("over_travel", "supply_fault", "over_temperature", "over_current", "e_stop",
+              "input_clip")
+SAFE_TIMEOUT_S = 1.0
+
+
+class ShakerAmplifier(Amplifier):
+    """An open amplifier. Use :func:`open_amplifier`."""
+
+    def __init__(self, link, identity: str) -> None:
+        self.link = link
+        self.identity = identity
+        self._gain: float | None = None
+
+    def identify(self) -> str:
+        return self.identity
+
+    def settings(self) -> dict[str, Any]:
+        return {"visa_address": self.link.address, "gain_read_back": self._gain}
+
+    def _where(self) -> str:
+        return f"{NAME} at {self.link.address}"
+
+    def set_gain(self, gain: float) -> None:
+        """Set the gain (V/V) and read it back."""
+        self.link.send_checked(f"GAIN {gain:.6g}", "the gain must lie within the amplifier's "
+                                                   "range")
+        value = self.link.query_float("GAIN?")
+        if abs(value - gain) > 1e-4 * max(1.0, abs(gain)):
+            raise InstrumentError(f"{self._where()}: gain reads back {value:g} after "
+                                  f"GAIN {gain:g}")
+        self._gain = value
+
+    def interlocks(self) -> dict[str, bool]:
+        """Latched interlocks by name (``STAT:INTL?``)."""
+        bits = self.link.query_int("STAT:INTL?")
+        if not 0 <= bits < 1 << len(INTERLOCKS):
+            raise InstrumentError(f"{self._where()}: STAT:INTL? answered {bits}; expected a "
+                                  f"bitfield 0 to {(1 << len(INTERLOCKS)) - 1}")
+        return {name: bool(bits >> bit & 1) for bit, name in enumerate(INTERLOCKS)}
+
+    def enable_output(self, enabled: bool) -> None:
+        """Switch the output stage on (refused while an interlock is latched) or off; the
+        state is read back."""
+        if enabled:
+            active = [name for name, on in self.interlocks().items() if on]
+            if active:
+                raise InstrumentError(
+                    f"{self._where()}: output on refused: interlock {', '.join(active)} is "
+                    "active; remove its cause, then clear it with INTL:RES (or set "
+                    "reset_interlocks = true to do so when the amplifier is opened)")
+        self.link.send_checked(f"OUTP {1 if enabled else 0}")
+        if self.link.query_bool("OUTP?") != enabled:
+            raise InstrumentError(f"{self._where()}: the output did not switch "
+                                  f"{'on' if enabled else 'off'}")
+
+    def safe_state(self) -> None:
+        """Output off, confirmed by ``OUTP?``; reconnects first if the link misbehaved, with a
+        short timeout, and tries twice before reporting failure."""
+        last: Exception | None = None
+        for _ in range(2):
+            try:
+                with self.link.timeout(SAFE_TIMEOUT_S):
+                    self.link.recover(SAFE_TIMEOUT_S)
+                    self.link.write("OUTP 0")
+                    if not self.link.query_bool("OUTP?"):
+                        return
+                    last = InstrumentError(f"{self._where()}: the output still reads on "
+                                           "after OUTP 0")
+            except InstrumentError as exc:
+                last = exc
+                self.link.broken = self.link.broken or str(exc)
+        raise InstrumentError(f"{NAME}: safe state not confirmed: {last}")
+
+    def read_state(self) -> dict[str, Any]:
+        with self.link.timeout(SAFE_TIMEOUT_S):
+            self.link.recover(SAFE_TIMEOUT_S)
+            state = {
+                "output_enabled": self.link.query_bool("OUTP?"),
+                "gain": self.link.query_float("GAIN?"),
+                "interlocks": {k: v for k, v in self.interlocks().items() if v},
+                "current_a": self.link.query_float("MEAS:CURR?"),
+            }
+        return state
+
+    def close(self) -> None:
+        self.link.close()
+
+
+def open_amplifier(address: str, settings: dict[str, Any],
+                   context: dict[str, Any]) -> ShakerAmplifier:
+    """Connect, identify, clear the status, switch the output off (and clear interlocks when
+    ``reset_interlocks`` is set)."""
+    from fsi_lab.instruments._visa import VisaLink
+
+    if address.strip() in ("", "embedded"):
+        from fsi_lab.instruments.sim.embedded import resolve_address
+
+        address = resolve_address("amplifier", NAME, address, context)
+    link = VisaLink(NAME, address, settings["timeout_s"], settings["baud_rate"])
+    try:
+        identity = link.query("*IDN?")
+        if identity.count(",") < 3:
+            raise InstrumentError(f"{NAME} at {address}: unexpected identity {identity!r}; "
+                                  "expected <maker>,<model>,<serial>,<firmware>")
+        link.write("*CLS")
+        link.send_checked("OUTP 0")
+        if settings["reset_interlocks"]:
+            link.send_checked("INTL:RES")
+    except BaseException:
+        link.close()
+        raise
+    return ShakerAmplifier(link, identity)
+
+
+PLUGIN = InstrumentPlugin(
+    name=NAME,
+    role="amplifier",
+    params=(
+        Param("gain", "float", "V/V", 1.0, minimum=0.0, maximum=100.0,
+              help="Voltage gain of the amplifier."),
+        Param("reset_interlocks", "bool", "", False,
+              help="Clear latched interlocks (INTL:RES) when the amplifier is opened."),
+        Param("baud_rate", "int", "Bd", 115200, minimum=1200, maximum=921600,
+              help="Serial addresses only: line speed (8 data bits, no parity, 1 stop bit)."),
+        Param("timeout_s", "float", "s", 2.0, minimum=0.05, maximum=60.0,
+              help="Time allowed for each reply."),
+    ),
+    open=open_amplifier,
+    help="Shaker power amplifier with latched interlocks, SCPI over serial or TCP (VISA).",
+)
+
+
+@hookimpl
+def fsi_lab_instruments():
+    return [PLUGIN]

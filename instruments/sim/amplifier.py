@@ -1,0 +1,105 @@
+"""Simulated shaker power amplifier (PA25E class) with a SCPI command set.
+
+Commands: ``*IDN?``, ``*RST``, ``*CLS``, ``SYST:ERR?``, ``OUTP 0|1|ON|OFF``, ``OUTP?``,
+``GAIN <V/V>`` (0 to 50), ``GAIN?``, ``STAT:INTL?`` (interlock bitfield, see
+:data:`INTERLOCK_BITS`), ``INTL:RES`` and ``MEAS:CURR?`` (RMS output current over the last
+simulated block, A).
+
+Interlocks latch and force the output off; ``OUTP 1`` is refused (error -221) while one is
+latched. ``INTL:RES`` clears the latched interlocks whose cause has gone (an e-stop still pressed,
+a supply fault or an over-temperature still present stay latched).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from fsi_lab.instruments.sim import scpi
+from fsi_lab.instruments.sim.scpi import CommandSet, ErrorQueue, ScpiError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from fsi_lab.instruments.sim.bench import SimBench
+
+IDENTITY = "fsi-lab,PA25E-SIM,SIMPA25,1.0 (simulated)"
+MAX_GAIN = 50.0
+#: Bit of each interlock in the ``STAT:INTL?`` bitfield.
+INTERLOCK_BITS = {"over_travel": 0, "supply_fault": 1, "over_temperature": 2,
+                  "over_current": 3, "e_stop": 4, "input_clip": 5}
+#: Interlocks whose cause persists until it is removed on the bench.
+PERSISTENT = ("supply_fault", "over_temperature", "e_stop")
+
+
+class AmplifierState:
+    """Output relay, gain and interlocks."""
+
+    def __init__(self) -> None:
+        self.gain = 0.0
+        self.output_on = False
+        self.latched: set[str] = set()
+        self.causes: set[str] = set()  # persistent causes still present
+        self.current_rms_a = 0.0
+        self.trips: list[tuple[float | None, str]] = []  # (record time, interlock) history
+
+    def trip(self, names: set[str], time_s: float | None = None) -> None:
+        """Latch ``names`` and switch the output off."""
+        self.latched |= set(names)
+        self.output_on = False
+        self.trips.extend((time_s, name) for name in sorted(names))
+
+    @property
+    def bits(self) -> int:
+        return sum(1 << INTERLOCK_BITS[name] for name in self.latched)
+
+
+class AmplifierSim:
+    """The amplifier's command set, acting on the bench."""
+
+    def __init__(self, bench: "SimBench") -> None:
+        self.bench = bench
+        self.state = AmplifierState()
+        self.errors = ErrorQueue()
+        c = self.commands = CommandSet(self.errors)
+        c.add("*IDN?", lambda a, s: IDENTITY)
+        c.add("*RST", self._rst)
+        c.add("*CLS", lambda a, s: self.errors.clear())
+        c.add("SYSTem:ERRor[:NEXT]?", lambda a, s: self.errors.pop())
+        c.add("OUTPut[:STATe]", self._output)
+        c.add("OUTPut[:STATe]?", lambda a, s: "1" if self.state.output_on else "0")
+        c.add("GAIN", self._gain)
+        c.add("GAIN?", lambda a, s: f"{self.state.gain:.6g}")
+        c.add("STATus:INTLock?", lambda a, s: str(self.state.bits))
+        c.add("INTLock:RESet", self._reset_interlocks)
+        c.add("MEASure:CURRent?", lambda a, s: f"{self.state.current_rms_a:.6E}")
+
+    def handle(self, message: bytes) -> bytes | None:
+        with self.bench.lock:
+            self.bench.catch_up()
+            return self.commands.run(message)
+
+    def set_cause(self, name: str, present: bool) -> None:
+        """Press or release the e-stop, or raise or clear a supply or temperature fault."""
+        if name not in PERSISTENT:
+            raise ValueError(f"{name!r}: expected one of {', '.join(PERSISTENT)}")
+        with self.bench.lock:
+            self.bench.catch_up()
+            if present:
+                self.state.causes.add(name)
+                self.state.trip({name})
+            else:
+                self.state.causes.discard(name)
+
+    def _rst(self, args, suffixes):
+        self.state.output_on = False
+        self.state.gain = 0.0
+
+    def _output(self, args, suffixes):
+        on = scpi.boolean(args)
+        if on and self.state.latched:
+            raise ScpiError(-221, "interlock active: " + ", ".join(sorted(self.state.latched)))
+        self.state.output_on = on
+
+    def _gain(self, args, suffixes):
+        self.state.gain = scpi.number(args, 0.0, MAX_GAIN)
+
+    def _reset_interlocks(self, args, suffixes):
+        self.state.latched &= self.state.causes

@@ -1,0 +1,143 @@
+"""``fsi-lab bench``: run the simulated bench until Ctrl+C or SIGTERM.
+
+It prints where each instrument answers (TCP on 127.0.0.1, pseudo-terminals for the serial
+ones) and the ``[bench.*]`` tables of a profile that uses them; such a profile runs unchanged
+against real hardware once the addresses are replaced. The physics comes from ``--profile``
+(its ``[specimen]``, ``[model]``, ``[shaker]`` and the ``fast``/``fault`` keys of ``[bench]``)
+or from the defaults (the paper's beam in water).
+
+This module is imported to list the command: everything heavy is imported inside :func:`run`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from fsi_lab.contract import CliCommand
+from fsi_lab.instruments.sim.faults import FAULTS, ROLES
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--profile", type=Path, metavar="PROFILE",
+                        help="take the physics and the [bench] fast/fault keys from this profile")
+    parser.add_argument("--fast", action="store_true", default=None,
+                        help="simulate as fast as the client fetches (default: real time)")
+    parser.add_argument("--fault", choices=FAULTS, help="inject this fault")
+    parser.add_argument("--fault-after", type=float, metavar="S",
+                        help="record time at which the fault happens (default 1 s)")
+    parser.add_argument("--fault-target", choices=ROLES,
+                        help="instrument whose link a timeout, drop or garble hits "
+                             "(default: acquisition)")
+    for role in ("source", "amplifier", "acquisition"):
+        parser.add_argument(f"--{role}-port", type=int, default=0, metavar="PORT",
+                            help=f"TCP port of the {role} on 127.0.0.1 (default: any free port)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the noise generators")
+    parser.add_argument("--json", action="store_true",
+                        help="print the addresses and the profile snippet as one JSON line")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no event log on stderr")
+
+
+def _profile_sections(path: Path):
+    """Specimen, model, shaker and the [bench] keys of a profile (ProfileError if invalid)."""
+    import tomllib
+
+    from fsi_lab.errors import ProfileError
+    from fsi_lab.params import validate
+    from fsi_lab.profile import BENCH_PARAMS, parse_profile
+    from fsi_lab.registry import load_registry
+
+    try:
+        text = path.read_text(encoding="utf-8")
+        raw = tomllib.loads(text)
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise ProfileError(f"{path}: cannot read the profile ({exc})") from None
+    profile = parse_profile(text, str(path), load_registry(),
+                            sections=("specimen", "model", "shaker"))
+    keys = {p.name for p in BENCH_PARAMS}
+    bench_raw = {k: v for k, v in (raw.get("bench") or {}).items() if k in keys}
+    try:
+        bench = validate(BENCH_PARAMS, bench_raw, "bench")
+    except Exception as exc:  # ParameterError
+        raise ProfileError(f"{path}: {exc}") from None
+    return profile.specimen, profile.model, profile.shaker, bench
+
+
+def run(args: argparse.Namespace) -> int:
+    import json
+    import signal
+    import threading
+
+    from fsi_lab.errors import FsiLabError
+    from fsi_lab.instruments.sim.bench import BenchOptions, SimBench
+
+    specimen = model = shaker = None
+    bench_keys = {"fast": False, "fault": "none", "fault_after_s": 1.0}
+    try:
+        if args.profile is not None:
+            specimen, model, shaker, bench_keys = _profile_sections(args.profile)
+    except FsiLabError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return exc.exit_code
+
+    def log(text: str) -> None:
+        if not args.quiet:
+            print(f"[bench] {text}", file=sys.stderr, flush=True)
+
+    options = BenchOptions(
+        fast=bench_keys["fast"] if args.fast is None else True,
+        fault=args.fault or bench_keys["fault"],
+        fault_after_s=bench_keys["fault_after_s"] if args.fault_after is None else args.fault_after,
+        fault_target=args.fault_target, seed=args.seed,
+        ports={"source": args.source_port, "amplifier": args.amplifier_port,
+               "acquisition": args.acquisition_port},
+        log=log)
+    stop = threading.Event()
+    previous = {sig: signal.signal(sig, lambda signum, frame: stop.set())
+                for sig in (signal.SIGINT, signal.SIGTERM)}
+    bench = SimBench(specimen, model, shaker, options)
+    try:
+        bench.start()
+    except OSError as exc:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        print(f"error: cannot start the simulated bench: {exc}", file=sys.stderr)
+        return 1
+    try:
+        addresses, snippet = bench.addresses, bench.profile_snippet()
+        if args.json:
+            print(json.dumps({"addresses": addresses, "profile": snippet}), flush=True)
+        else:
+            print("simulated bench (Ctrl+C stops it):")
+            for role, address in addresses.items():
+                print(f"  {role:<17} {address}")
+            print("\nprofile tables for these instruments:\n")
+            print(snippet, flush=True)
+        while not stop.wait(0.5):
+            pass
+    finally:
+        bench.stop()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        log("stopped")
+    return 0
+
+
+COMMAND = CliCommand(
+    name="bench",
+    help="start the simulated bench (instruments on 127.0.0.1 and pseudo-terminals)",
+    configure=configure,
+    run=run,
+)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m fsi_lab.instruments.sim.cli`` does what ``fsi-lab bench`` does."""
+    parser = argparse.ArgumentParser(prog="fsi-lab bench", description=COMMAND.help)
+    configure(parser)
+    return run(parser.parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

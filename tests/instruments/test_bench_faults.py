@@ -1,0 +1,96 @@
+"""Each injected fault ends a run on the embedded bench in the safe state, with a clear message
+and the data acquired up to the fault kept in the run file."""
+
+import re
+import time
+
+import numpy as np
+import pytest
+from benchkit import bench_profile, bench_threads, lab_registry, run_profile
+
+from fsi_lab.errors import InstrumentError
+from fsi_lab.profile import load_profile
+from fsi_lab.runfile import read_run
+from fsi_lab.runner import Runner
+
+RECORD = 10000  # samples per channel of a complete 1 s record
+
+CASES = {
+    "timeout": r"scpi-daq at TCPIP0::127\.0\.0\.1::\d+::SOCKET: no reply within 0\.5 s "
+               r"\(after sending 'ACQ:STAT\?'\)",
+    "drop": r"scpi-daq at TCPIP0::127\.0\.0\.1::\d+::SOCKET: the connection was lost "
+            r"\(Connection reset by peer\)",
+    "garble": r"scpi-daq at TCPIP0::127\.0\.0\.1::\d+::SOCKET: garbled reply",
+    "overload": r"overload on input 3 \(tip_velocity, range 10\.0 V\) after 3\d\d\d samples",
+    "interlock": r"amplifier interlock tripped: over_travel; the output was switched off",
+}
+
+
+@pytest.mark.parametrize("fault", list(CASES))
+def test_fault_ends_the_run_safe_with_its_data(tmp_path, fault):
+    # the interlock is polled by the runner every 0.2 s of wall time: pace that run in real time
+    path = bench_profile(tmp_path / f"{fault}.toml", duration=1.0, fault=fault,
+                         fault_after_s=0.3, timeout_s=0.5, fast=fault != "interlock")
+    started = time.monotonic()
+    outcome = run_profile(path, lab_registry(), tmp_path / "runs")
+    assert time.monotonic() - started < 20
+    assert outcome.exit_status == "failed"
+    assert outcome.error is not None
+    assert re.search(CASES[fault], outcome.error), outcome.error
+    assert not bench_threads()  # the embedded bench was stopped by the runner's cleanup
+
+    run = read_run(outcome.path)
+    assert run.attrs["exit_status"] == "failed"
+    amplifier = run.instruments["amplifier"]["final_state"]
+    source = run.instruments["source"]["final_state"]
+    assert amplifier["output_enabled"] is False
+    assert source["output_enabled"] is False and source["level_v"] == 0.0
+    for name in ("drive", "base_acceleration", "tip_velocity"):
+        data = run.channels[name].data
+        assert 0.2 * RECORD <= data.size < RECORD and np.all(np.isfinite(data)), name
+    if fault == "interlock":
+        assert amplifier["interlocks"] == {"over_travel": True}
+    if fault == "overload":
+        assert run.instruments["acquisition"]["final_state"]["overloaded_inputs"] == [3]
+        # the block with the transient never reached the run file
+        assert np.abs(run.channels["tip_velocity"].data).max() < 1.0
+
+
+def test_a_run_without_faults_completes_and_records_the_instruments(tmp_path):
+    outcome = run_profile(bench_profile(tmp_path / "ok.toml", duration=1.0), lab_registry(),
+                          tmp_path / "runs")
+    assert outcome.exit_status == "completed", outcome.error
+    run = read_run(outcome.path)
+    assert run.channels["tip_velocity"].data.size == RECORD
+    assert run.channel_attrs["tip_velocity"]["sensitivity"] == pytest.approx(8.0)
+    assert run.channel_attrs["tip_velocity"]["t0"] == pytest.approx(-1.1e-3)
+    vibrometer = run.instruments["vibrometer"]
+    assert vibrometer["settings"]["signal_delay_source"] == "decoder"
+    assert run.instruments["acquisition"]["settings"]["visa_address"].startswith("TCPIP0::")
+    assert not bench_threads()
+
+
+def test_embedded_address_needs_the_embedded_bench(tmp_path):
+    path = bench_profile(tmp_path / "p.toml")
+    path.write_text(path.read_text().replace("embedded = true", "embedded = false"))
+    registry = lab_registry()
+    outcome = Runner(load_profile(path, registry), registry, tmp_path / "runs",
+                     analyze=False).run()
+    assert outcome.exit_status == "failed"
+    assert ("shaker-amplifier (amplifier): address 'embedded' names the embedded simulated "
+            "bench, but the profile does not say [bench] embedded = true") in outcome.error
+
+
+def test_unreachable_instrument_is_named_with_its_address(tmp_path):
+    import socket
+
+    with socket.socket() as probe:  # a port nobody listens on
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    from benchkit import settings
+
+    from fsi_lab.instruments import shaker_amplifier
+
+    address = f"TCPIP0::127.0.0.1::{port}::SOCKET"
+    with pytest.raises(InstrumentError, match=rf"shaker-amplifier at {address}: "):
+        shaker_amplifier.PLUGIN.open(address, settings(shaker_amplifier, timeout_s=0.5), {})
