@@ -156,6 +156,11 @@ class VisaLink:
             raise self._fail(command, what) from None
         except OSError as exc:
             raise self._fail(command, f"the connection was lost ({exc.strerror or exc})") from None
+        except BaseException:
+            # Ctrl+C mid-exchange: a late reply may still come, so nothing read on this
+            # connection can be trusted any more (the safe state reconnects).
+            self.broken = f"the exchange of {command!r} was interrupted"
+            raise
 
     def _peer_closed(self) -> bool:
         """Whether the TCP peer has closed a socket resource (best effort)."""

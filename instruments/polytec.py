@@ -83,6 +83,10 @@ class SerialLine:
         """Send ``line`` and return the reply line."""
         import serial
 
+        try:
+            self.serial.reset_input_buffer()  # a late reply to an interrupted question
+        except (serial.SerialException, OSError) as exc:
+            raise self._error(line, f"the serial port failed ({exc})") from None
         self.send(line)
         try:
             raw = self.serial.read_until(b"\n")

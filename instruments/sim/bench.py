@@ -241,6 +241,13 @@ class SimBench:
                 return reply, False
         return exchange
 
+    def inject_fault(self, kind: str, target: str | None = None) -> None:
+        """Make a fault happen now (see :meth:`.faults.FaultPlan.inject`); ``"none"`` ends
+        a persistent one."""
+        with self.lock:
+            self.faults.inject(kind, target)
+            self._log(f"fault injected: {self.faults.describe()}")
+
     # ------------------------------------------------------------------ the world
     @property
     def data_time(self) -> float | None:

@@ -95,7 +95,8 @@ class FaultPlan:
         if self.kind == "none":
             return "none"
         where = f" on the {self.target}" if self.kind in LINK_FAULTS else ""
-        return f"{self.kind}{where} at {self.after_s:g} s of the record"
+        when = "now" if self.immediate else f"at {self.after_s:g} s of the record"
+        return f"{self.kind}{where} {when}"
 
 
 def garble(reply: bytes) -> bytes:

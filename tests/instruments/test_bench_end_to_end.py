@@ -67,3 +67,21 @@ def test_fsi_lab_bench_serves_a_profile_run_by_fsi_lab_run(tmp_path):
             bench.kill()
             bench.wait(timeout=10)
     assert code == 0
+
+
+def test_ctrl_c_aborts_a_real_time_run_in_the_safe_state(tmp_path):
+    out = tmp_path / "runs"
+    proc = start_cli("run", str(DRY), "--out", str(out), "--verbose", "--set", "bench.fast=false",
+                     "--set", "run.duration=30")
+    try:
+        LineReader(proc.stderr).wait_for(lambda text: text.startswith("[debug] flushed"), 60)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=30) == 130
+    finally:
+        proc.kill()
+        proc.wait(timeout=10)
+    run = read_run(next(out.glob("*.h5")))
+    assert run.attrs["exit_status"] == "aborted"
+    assert run.instruments["amplifier"]["final_state"]["output_enabled"] is False
+    assert run.instruments["source"]["final_state"]["output_enabled"] is False
+    assert 0 < run.channels["tip_velocity"].data.size < 300000
