@@ -47,7 +47,7 @@ BAD_CASES = [
      "specimen.fluid: got 'oil'; expected one of 'air', 'water'"),
     ("unit mismatch", 'unit = "m/s^2"', 'unit = "m/s"',
      "channels.base_acceleration.unit: 'm/s' is a unit of velocity"),
-    ("unknown analysis", "chain = []", 'chain = ["hilbert"]',
+    ("unknown analysis", 'chain = ["spectrum"', 'chain = ["hilbert"',
      "analysis.hilbert.plugin: unknown analysis plugin 'hilbert'"),
     ("negative geometry", "length = 0.08", "length = -0.08",
      "specimen.length: -0.08 is out of bounds; expected a number > 0 m"),
