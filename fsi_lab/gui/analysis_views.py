@@ -14,13 +14,13 @@ is shown as "not computed" or with its failure message, never as an exception):
   (third-party ones included) in a browser.
 
 The parameter panel edits the chain's parameters with forms from the plugins' schemas; a change
-re-runs the analysis off the UI thread, as ``fsi-lab analyze RUN.h5 --set ...`` would (the
-chain runs in order because later plugins use earlier results), then the views reload.
+re-runs the analysis as ``fsi-lab analyze RUN.h5 --set ...`` in a child process (see
+:mod:`fsi_lab.gui.analysis_job`; the chain runs in order because later plugins use earlier
+results), then the views reload.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -32,14 +32,14 @@ from PySide6.QtWidgets import (
     QTableWidget, QTableWidgetItem, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget,
 )
 
-from fsi_lab.chain import DEFAULT_CHAIN, analyse_and_store
+from fsi_lab.chain import DEFAULT_CHAIN
 from fsi_lab.errors import FsiLabError
+from fsi_lab.gui.analysis_job import AnalysisJob
 from fsi_lab.gui.forms import ParamForm, value_text
 from fsi_lab.gui.results import PluginResult, RunResults
 from fsi_lab.gui.worker import TaskPool
 from fsi_lab.profile import ANALYSIS_PARAMS, parse_profile
 from fsi_lab.registry import Registry
-from fsi_lab.runfile import read_run
 
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2",
            "#17becf")
@@ -148,22 +148,6 @@ def _format_ci(value: Any) -> str:
     if isinstance(value, (list, tuple)) and len(value) == 2:
         return f"[{value[0]:.4g}, {value[1]:.4g}]"
     return "" if value is None else str(value)
-
-
-def reanalyse(path: str | Path, registry: Registry, overrides: list[str]) -> dict[str, Any]:
-    """Run the run file's analysis chain again with ``overrides`` and store it (worker thread).
-
-    The same steps as ``fsi-lab analyze RUN.h5 --set ...``.
-    """
-    run = read_run(path)
-    text = run.profile_text
-    if not text.strip():
-        chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
-        text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
-    profile = parse_profile(text, f"{path}:/profile", registry, overrides,
-                            sections=("analysis", "specimen"))
-    return analyse_and_store(Path(path), run.channels, profile.analysis,
-                             profile.analysis_params, registry, profile.specimen)
 
 
 def chain_of(results: RunResults, registry: Registry) -> tuple[dict[str, Any], dict[str, dict]]:
@@ -946,7 +930,7 @@ class AnalysisViews(QWidget):
         self.registry = registry
         self.pool = pool
         self.results: RunResults | None = None
-        self.busy = False
+        self.job: AnalysisJob | None = None
         self.title = QLabel("No run open: runs appear here when they finish or when you open "
                             "a run file.")
         self.title.setObjectName("analysis-title")
@@ -1024,26 +1008,43 @@ class AnalysisViews(QWidget):
         return {view.title: view.filled for view in self.views}
 
     # ------------------------------------------------------------------ re-analysis
-    def rerun(self, overrides: list[str]) -> None:
-        if self.results is None or self.busy:
-            return
-        path = self.results.path
-        self.busy = True
-        self.parameters.button.setEnabled(False)
-        self.parameters.note.setText("re-running the analysis ...")
-        self.pool.start(reanalyse, path, self.registry, list(overrides),
-                        on_done=lambda summary, p=path: self._rerun_done(p),
-                        on_error=self._rerun_failed, name="re-analyse")
+    @property
+    def busy(self) -> bool:
+        return self.job is not None
 
-    def _rerun_done(self, path: Path) -> None:
-        self.busy = False
+    def analyse(self, path: str | Path, overrides: list[str] = ()) -> bool:
+        """Run the chain on ``path`` with ``overrides`` in a child process (``fsi-lab analyze``);
+        ``reanalysed(path)`` or ``message`` follows. False if an analysis is already running."""
+        if self.job is not None:
+            return False
+        self.job = AnalysisJob(path, list(overrides), self)
+        self.job.succeeded.connect(self._job_done)
+        self.job.failed.connect(self._job_failed)
+        self.parameters.button.setEnabled(False)
+        self.parameters.note.setText("analysing (fsi-lab analyze in a separate process) ...")
+        self.job.start()
+        return True
+
+    def rerun(self, overrides: list[str]) -> None:
+        if self.results is not None:
+            self.analyse(self.results.path, overrides)
+
+    def wait(self, timeout_ms: int = 30000) -> None:
+        if self.job is not None:
+            self.job.wait(timeout_ms)
+
+    def _end_job(self) -> None:
+        job, self.job = self.job, None
+        if job is not None:
+            job.deleteLater()
         self.parameters.button.setEnabled(True)
+
+    def _job_done(self, path: Path, summary: object) -> None:
+        self._end_job()
         self.parameters.note.setText("analysis stored in the run file")
         self.reanalysed.emit(path)
 
-    def _rerun_failed(self, exc: BaseException, text: str) -> None:
-        self.busy = False
-        self.parameters.button.setEnabled(True)
-        message = str(exc) if isinstance(exc, FsiLabError) else f"{type(exc).__name__}: {exc}"
+    def _job_failed(self, path: Path, message: str) -> None:
+        self._end_job()
         self.parameters.note.setText(f"failed: {message}")
-        self.message.emit("ERROR", f"re-analysis failed: {message}")
+        self.message.emit("ERROR", f"analysis of {Path(path).name} failed: {message}")

@@ -79,6 +79,8 @@ class MainWindow(QMainWindow):
         self.forwarder = EventForwarder(self)
         self.session = ProfileSession(self.registry, self.pool, self)
         self._closing = False
+        self._run_overrides: list[str] = []
+        self._run_profile: Any = None
         self._show_when_loaded: set[Path] = set()
         self.last_run: Path | None = None
 
@@ -232,6 +234,8 @@ class MainWindow(QMainWindow):
 
     # ------------------------------------------------------------------ runs
     def _run_started(self, profile: Any) -> None:
+        self._run_profile = profile
+        self._run_overrides = [o for o in profile.overrides if o.startswith("analysis.")]
         self.live.configure({name: c.unit for name, c in profile.channels.items()},
                             profile.run["sample_rate"])
         self.messages.hide()
@@ -248,6 +252,10 @@ class MainWindow(QMainWindow):
                                    f"state.{kept}")
         if outcome.path is not None:
             self.last_run = Path(outcome.path).resolve()
+            chain = self._run_profile.analysis["chain"] if self._run_profile else []
+            if outcome.exit_status == "completed" and chain and not self._closing:
+                self.run_control.state_label.setText("completed; analysing ...")
+                self.analysis.analyse(outcome.path, list(self._run_overrides))
             self.open_runs([outcome.path], show=True)
         if self._closing:
             QTimer.singleShot(0, self.close)
@@ -268,11 +276,13 @@ class MainWindow(QMainWindow):
         self.analysis.show_results(results)
 
     def _reanalysed(self, path: Path) -> None:
+        if Path(path).resolve() == self.last_run and self.run_control.state == "completed":
+            self.run_control.state_label.setText("completed; analysed")
         self.open_runs([path], show=True)
 
     # ------------------------------------------------------------------ closing
     def busy(self) -> bool:
-        return self.run_control.running or self.pool.busy
+        return self.run_control.running or self.pool.busy or self.analysis.busy
 
     def closeEvent(self, event) -> None:  # noqa: N802 - Qt override
         if self.run_control.running:
@@ -283,6 +293,7 @@ class MainWindow(QMainWindow):
             event.ignore()
             return
         self.live.timer.stop()
+        self.analysis.wait()
         self.pool.wait_all()
         super().closeEvent(event)
 
@@ -299,7 +310,7 @@ def wait_until_idle(window: MainWindow, timeout_s: float = 120.0) -> bool:
         app.processEvents(QEventLoop.ProcessEventsFlag.AllEvents, 50)
         pending = window.runs.pending or window._show_when_loaded
         checking = window.session.loaded and window.session.current is None
-        if not window.pool.busy and not pending and not checking:
+        if not window.busy() and not pending and not checking:
             app.processEvents()
             return True
         time.sleep(0.01)

@@ -15,7 +15,7 @@ from typing import Mapping
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import QTimer
+from PySide6.QtCore import QEvent, QTimer
 from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from fsi_lab.events import DataBlock
@@ -88,6 +88,9 @@ class LivePlots(QWidget):
         self.curves: dict[str, pg.PlotDataItem] = {}
         self.spectra: dict[str, pg.PlotDataItem] = {}
         self.time_plots: dict[str, pg.PlotItem] = {}
+        self.spectrum_plots: dict[str, pg.PlotItem] = {}
+        self._y_ranges: dict[str, tuple[float, float] | None] = {}
+        self._s_ranges: dict[str, tuple[float, float] | None] = {}
         self.sample_rate = 0.0
         self.t_end = 0.0
         self.t_first = None
@@ -102,10 +105,17 @@ class LivePlots(QWidget):
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.status)
         layout.addWidget(self.graphics, 1)
+        self.paints = 0
+        self.graphics.viewport().installEventFilter(self)
         self.timer = QTimer(self)
         self.timer.setInterval(max(1, int(1000 / fps)))
         self.timer.timeout.connect(self.refresh)
         self.timer.start()
+
+    def eventFilter(self, watched, event) -> bool:  # noqa: N802 - Qt override
+        if event.type() == QEvent.Type.Paint:
+            self.paints += 1
+        return False
 
     # ------------------------------------------------------------------ setup
     def configure(self, units: Mapping[str, str], sample_rate: float) -> None:
@@ -118,30 +128,43 @@ class LivePlots(QWidget):
         self.curves.clear()
         self.spectra.clear()
         self.time_plots.clear()
+        self.spectrum_plots.clear()
         self.t_end = 0.0
         self.t_first = None
         self.blocks = 0
         self._dirty = False
+        first: pg.PlotItem | None = None
+        last_row = len(self.units) - 1
         for row, (name, unit) in enumerate(self.units.items()):
             colour = COLOURS[row % len(COLOURS)]
             plot = self.graphics.addPlot(row=row, col=0)
-            plot.setLabel("left", name, units=None if not unit else unit)
-            plot.showGrid(x=True, y=True, alpha=0.2)
-            plot.setMenuEnabled(False)
-            if row == len(self.units) - 1:
-                plot.setLabel("bottom", "time", units="s")
-            curve = plot.plot(pen=pg.mkPen(colour, width=1))
             spec = self.graphics.addPlot(row=row, col=1)
-            spec.setLogMode(y=True)
-            spec.showGrid(x=True, y=True, alpha=0.2)
-            spec.setMenuEnabled(False)
+            for item in (plot, spec):
+                # Axes are redrawn only when their range changes, and the layout never moves:
+                # fixed axis widths, y ranges that change only when the data leaves them.
+                item.setMenuEnabled(False)
+                item.hideButtons()
+                item.getAxis("left").setWidth(64)
+                item.enableAutoRange(False, False)
+                if row != last_row:
+                    item.hideAxis("bottom")
+            plot.setLabel("left", name, units=None if not unit else unit)
             spec.setLabel("left", f"|{name}|")
-            if row == len(self.units) - 1:
+            spec.setLogMode(y=True)
+            spec.setXRange(0, self.sample_rate / 2, padding=0)
+            if row == last_row:
+                plot.setLabel("bottom", "time", units="s")
                 spec.setLabel("bottom", "frequency", units="Hz")
-            spectrum = spec.plot(pen=pg.mkPen(colour, width=1))
-            self.curves[name] = curve
-            self.spectra[name] = spectrum
+            if first is None:
+                first = plot
+            else:
+                plot.setXLink(first)
+            self.curves[name] = plot.plot(pen=pg.mkPen(colour, width=1), antialias=False)
+            self.spectra[name] = spec.plot(pen=pg.mkPen(colour, width=1), antialias=False)
             self.time_plots[name] = plot
+            self.spectrum_plots[name] = spec
+            self._y_ranges[name] = None
+            self._s_ranges[name] = None
         self.graphics.ci.layout.setColumnStretchFactor(0, 3)
         self.graphics.ci.layout.setColumnStretchFactor(1, 2)
         self.status.setText(
@@ -188,11 +211,13 @@ class LivePlots(QWidget):
             t = self.t_end - (y.size - np.arange(y.size)) / rate
             td, yd = min_max_decimate(t, y, self.max_points)
             self.curves[name].setData(td, yd, skipFiniteCheck=True)
+            self._y_ranges[name] = _sticky(self.time_plots[name], self._y_ranges[name],
+                                           float(yd.min()), float(yd.max()))
             if with_spectrum and y.size >= 16:
                 self._spectrum(name, y[-self.spectrum_samples:], rate)
         lo = max(self.t_first or 0.0, self.t_end - self.window_s)
-        for plot in self.time_plots.values():
-            plot.setXRange(lo, max(self.t_end, lo + 1e-3), padding=0)
+        first = next(iter(self.time_plots.values()))
+        first.setXRange(lo, max(self.t_end, lo + 1e-3), padding=0)  # the others are linked
         self.frames += 1
         self.last_frame_s = time.perf_counter() - started
 
@@ -210,3 +235,25 @@ class LivePlots(QWidget):
             ad = ad[:used].reshape(bins, per).max(axis=1)
             fd = fd[:used].reshape(bins, per)[:, 0]
         self.spectra[name].setData(fd, ad, skipFiniteCheck=True)
+        logs = np.log10(ad[ad > 1e-300])
+        if logs.size:
+            self._s_ranges[name] = _sticky(self.spectrum_plots[name], self._s_ranges[name],
+                                           float(logs.min()), float(logs.max()), log=True)
+
+
+def _sticky(plot: pg.PlotItem, current: tuple[float, float] | None, lo: float, hi: float,
+            log: bool = False) -> tuple[float, float]:
+    """Set the y range only when the data leaves it or fills less than a third of it."""
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return current or (0.0, 1.0)
+    if hi <= lo:
+        hi = lo + (1.0 if log else max(abs(lo) * 1e-3, 1e-12))
+    if current is not None:
+        c_lo, c_hi = current
+        inside = c_lo <= lo and hi <= c_hi
+        if inside and (hi - lo) >= (c_hi - c_lo) / 3:
+            return current
+    margin = 0.1 * (hi - lo)
+    new = (lo - margin, hi + margin)
+    plot.setYRange(*new, padding=0)
+    return new

@@ -169,7 +169,10 @@ class RunControl(QWidget):
         bus = EventBus()
         bus.subscribe(self.forwarder)
         try:
-            self.runner = Runner(profile, self.session.registry, Path(self.out_dir.text()), bus=bus)
+            # The analysis runs afterwards in a child process (see fsi_lab.gui.analysis_job):
+            # in this process its compiled code would hold the interpreter lock and freeze the UI.
+            self.runner = Runner(profile, self.session.registry, Path(self.out_dir.text()),
+                                 bus=bus, analyze=False)
         except Exception as exc:  # noqa: BLE001
             self.refused.emit(str(exc))
             return False

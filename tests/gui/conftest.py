@@ -43,7 +43,7 @@ def make_window(qtbot, tmp_path):
         if window.run_control.running:
             window.run_control.abort()
             qtbot.waitUntil(lambda w=window: not w.run_control.running, timeout=RUN_TIMEOUT_MS)
-        qtbot.waitUntil(lambda w=window: not w.pool.busy, timeout=RUN_TIMEOUT_MS)
+        qtbot.waitUntil(lambda w=window: not w.busy(), timeout=RUN_TIMEOUT_MS)
         window.close()
         assert not window.isVisible()
         window.pool.wait_all()

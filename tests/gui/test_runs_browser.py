@@ -24,6 +24,7 @@ def test_compare_two_runs_and_export(qtbot, make_window, registry, tmp_path):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 5000
     assert b"<svg" in svg.read_bytes()[:2000]
     rows = list(csv.DictReader(window.runs.export_csv(tmp_path / "out" / "results.csv").open()))
+    rows.sort(key=lambda r: (r["run"], r["component"]))
     assert [(r["run"], r["component"]) for r in rows] == [
         ("run A", "0"), ("run A", "1"), ("run B", "0"), ("run B", "1")]
     assert float(rows[0]["c_i"]) == 0.6 and float(rows[2]["c_f"]) == 36.0
@@ -35,8 +36,9 @@ def test_compare_two_runs_and_export(qtbot, make_window, registry, tmp_path):
     assert all(r["x"] != "nan" for r in curves)
 
     # picking a run in the browser shows it in the analysis views
-    window.runs.list.setCurrentItem(window.runs.list.topLevelItem(1))
-    window.runs._picked(window.runs.list.currentItem())
+    item = next(window.runs.list.topLevelItem(i) for i in range(2)
+                if window.runs.list.topLevelItem(i).text(0) == "run B")
+    window.runs._picked(item)
     assert window.analysis.results.name == "run B"
     window.runs.close_run(a)
     assert len(window.runs.runs) == 1

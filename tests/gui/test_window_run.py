@@ -53,9 +53,11 @@ def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_pa
     assert outcome.exit_status == "completed", outcome.error
     assert window.run_control.exit_label.text().startswith("completed")
 
-    # the analysis views fill from the run file
+    # the analysis (fsi-lab analyze, in a child process) fills the views from the run file
     qtbot.waitUntil(lambda: window.analysis.results is not None
-                    and window.analysis.results.path == outcome.path.resolve(), timeout=20000)
+                    and window.analysis.results.path == outcome.path.resolve()
+                    and bool(window.analysis.results.analysis), timeout=RUN_TIMEOUT_MS)
+    assert window.run_control.state_label.text() == "completed; analysed"
     results = window.analysis.results
     groups = results.analysis["tip_velocity"]
     assert set(groups) == set(chain)
