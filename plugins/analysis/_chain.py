@@ -14,9 +14,12 @@ Conventions of the chain (documented for plugin users in each plugin's help):
   spectrum above 3 x the dominant frequency), scaled to the component's band (an HVD component
   keeps its frequency +- 1.5 cut-off; a whole channel about 3 x its frequency) and divided by
   2 pi f per integration. An HVD component is band-limited, so its own spectrum shows no noise
-  floor: the tail of a decay sunk into noise would otherwise be measured as garbage.
+  floor: the tail of a decay sunk into noise would otherwise be measured as garbage. Nor are
+  HVD-component cycles below ``HVD_RANGE`` (1e-3) of the record's largest envelope (the
+  decomposition leaves a residue of about 1e-4 of it in every component).
 - Backbone and damping points closer than one period to a record end, or inside HVD's
-  untrusted edge, are left out.
+  untrusted edge, are left out, and so are those before the largest amplitude (``decay_only``:
+  the excitation is still feeding the mode there - a forced build-up is no free decay).
 """
 
 from __future__ import annotations
@@ -30,6 +33,10 @@ import numpy as np
 
 from fsi_lab.contract import AnalysisContext
 from fsi_lab.errors import AnalysisError
+
+#: Dynamic range of HVD components: cycles below this fraction of the largest envelope of the
+#: record are decomposition residue (about 1e-4) rather than signal.
+HVD_RANGE = 1e-3
 
 #: Units of the displacement, velocity and acceleration quantities.
 SI_UNITS = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2"}
@@ -56,6 +63,13 @@ class Component:
     noise_floor
         Smallest cycle amplitude worth measuring (10 x the noise RMS in the component), in
         ``unit``, or None to let the analysis estimate it.
+    settle
+        Time (s) over which the component's filters smear a sudden change (HVD: 2 / cutoff):
+        a free decay is taken to start that long after the largest amplitude.
+    t0
+        Time of the first sample relative to the channel's first sample, s (HVD ``start_s``).
+    frequency
+        Approximate frequency of the component, Hz (None if unknown).
     """
 
     index: int
@@ -65,6 +79,9 @@ class Component:
     sample_rate: float
     edge_mask: np.ndarray | None = None
     noise_floor: float | None = None
+    settle: float = 0.0
+    t0: float = 0.0
+    frequency: float | None = None
 
 
 @dataclass
@@ -77,6 +94,9 @@ class ComponentSignals:
     signals: dict[int, np.ndarray]
     edge_masks: dict[int, np.ndarray | None]
     noise_floors: dict[int, float | None] = field(default_factory=dict)
+    settles: dict[int, float] = field(default_factory=dict)
+    t0s: dict[int, float] = field(default_factory=dict)
+    frequencies: dict[int, float | None] = field(default_factory=dict)
 
 
 def where(plugin: str, context: AnalysisContext) -> str:
@@ -94,8 +114,24 @@ def guarded(plugin: str, context: AnalysisContext) -> Iterator[None]:
         raise AnalysisError(text if text.startswith(prefix) else f"{prefix}: {text}") from None
 
 
+_NOISE_CACHE: dict[int, tuple[Any, tuple[float, float]]] = {}
+
+
 def _channel_noise(context: AnalysisContext) -> tuple[float, float]:
-    """White-noise RMS of the raw channel (unit of the channel) and its dominant frequency."""
+    """White-noise RMS of the raw channel (unit of the channel) and its dominant frequency;
+    computed once per channel data array (every plugin of the chain asks)."""
+    data = context.channel.data
+    hit = _NOISE_CACHE.get(id(data))
+    if hit is not None and hit[0] is data:
+        return hit[1]
+    value = _channel_noise_uncached(context)
+    if len(_NOISE_CACHE) > 16:
+        _NOISE_CACHE.clear()
+    _NOISE_CACHE[id(data)] = (data, value)
+    return value
+
+
+def _channel_noise_uncached(context: AnalysisContext) -> tuple[float, float]:
     from fsi_lab.plugins.analysis.instantaneous import noise_rms
     from fsi_lab.plugins.analysis.spectrum import spectral_peaks
 
@@ -132,17 +168,24 @@ def components(context: AnalysisContext, order: int = 0) -> list[Component]:
     if hvd is not None and hvd.values is not None:
         res = hvd.values
         out = []
+        largest = float(np.max(res.envelopes[~res.edge_mask])) if (~res.edge_mask).any() \
+            else float(np.max(res.envelopes))
         for k in range(res.components.shape[0]):
             f_k = res.mean_frequency(k)
             # The demodulation keeps f_k +- 1.5 cutoff.
-            floor = _floor(sigma, fs, f_k, 3.0 * float(res.cutoffs[k]), order)
+            floor = _floor(sigma, fs, f_k, 3.0 * float(res.cutoffs[k]), order) or 0.0
+            # The decomposition leaves a residue of about 1e-4 of the largest component in
+            # the others: cycles below 10 x that are not measured either.
+            floor = max(floor, HVD_RANGE * largest / (2 * math.pi * f_k) ** order) \
+                if f_k > 0 else floor
             out.append(Component(k, res.components[k], ch.quantity, ch.unit, res.sample_rate,
-                                 res.edge_mask[k], floor))
+                                 res.edge_mask[k], floor, 2.0 / float(res.cutoffs[k]),
+                                 float(getattr(res, "t0", 0.0)), f_k if f_k > 0 else None))
         return out
     # A cycle-by-cycle measurement feels the noise near the oscillation: about 3 f wide.
     floor = _floor(sigma, fs, f_dom, 3.0 * f_dom, order)
     return [Component(0, np.asarray(ch.data, dtype=np.float64), ch.quantity, ch.unit, fs, None,
-                      floor)]
+                      floor, frequency=f_dom if f_dom > 0 else None)]
 
 
 def displacement_components(context: AnalysisContext, plugin: str) -> list[Component]:
@@ -154,7 +197,8 @@ def displacement_components(context: AnalysisContext, plugin: str) -> list[Compo
             and integ.values.quantity == "displacement":
         v = integ.values
         return [Component(k, sig, "displacement", v.unit, v.sample_rate, v.edge_masks.get(k),
-                          v.noise_floors.get(k)) for k, sig in sorted(v.signals.items())]
+                          v.noise_floors.get(k), v.settles.get(k, 0.0), v.t0s.get(k, 0.0),
+                          v.frequencies.get(k)) for k, sig in sorted(v.signals.items())]
     quantity = context.channel.quantity
     if quantity == "displacement":
         return components(context)
@@ -167,7 +211,8 @@ def displacement_components(context: AnalysisContext, plugin: str) -> list[Compo
     out = []
     for c in components(context, order):
         out.append(Component(c.index, integrate(c.signal, c.sample_rate, order=order),
-                             "displacement", "m", c.sample_rate, c.edge_mask, c.noise_floor))
+                             "displacement", "m", c.sample_rate, c.edge_mask, c.noise_floor,
+                             c.settle, c.t0, c.frequency))
     return out
 
 
@@ -184,10 +229,12 @@ def velocity_components(context: AnalysisContext) -> list[Component] | None:
             and integ.values.quantity == "velocity":
         v = integ.values
         return [Component(k, sig, "velocity", v.unit, v.sample_rate, v.edge_masks.get(k),
-                          v.noise_floors.get(k)) for k, sig in sorted(v.signals.items())]
+                          v.noise_floors.get(k), v.settles.get(k, 0.0), v.t0s.get(k, 0.0),
+                          v.frequencies.get(k)) for k, sig in sorted(v.signals.items())]
     if quantity == "acceleration":
         return [Component(c.index, integrate(c.signal, c.sample_rate, order=1), "velocity",
-                          "m/s", c.sample_rate, c.edge_mask, c.noise_floor)
+                          "m/s", c.sample_rate, c.edge_mask, c.noise_floor, c.settle, c.t0,
+                          c.frequency)
                 for c in components(context, 1)]
     return None
 
@@ -218,15 +265,22 @@ def error_entries(errors: dict[int, str], key: str) -> tuple[list[dict], dict[st
     return entries, attrs
 
 
-def trusted_times(times: np.ndarray, comp: Component, period: float) -> np.ndarray:
-    """Boolean mask of ``times`` (s) not in the component's untrusted edge and at least one
-    ``period`` (s) from either record end."""
+def trusted_times(times: np.ndarray, comp: Component, period: float,
+                  amplitude: np.ndarray | None = None, decay_only: bool = True) -> np.ndarray:
+    """Boolean mask of ``times`` (s) not in the component's untrusted edge, at least one
+    ``period`` (s) from either record end and - with ``amplitude`` and ``decay_only`` - not
+    before the largest amplitude among those points plus the component's ``settle`` time (the
+    free decay starts when the excitation has stopped feeding the mode - a forced build-up is no
+    free vibration - and the HVD filters smear the onset over about 1 / cutoff)."""
     n = comp.signal.size
     fs = comp.sample_rate
     ok = (times >= period) & (times <= (n - 1) / fs - period)
     if comp.edge_mask is not None and comp.edge_mask.any():
         idx = np.clip(np.rint(times * fs).astype(np.int64), 0, n - 1)
         ok &= ~comp.edge_mask[idx]
+    if decay_only and amplitude is not None and ok.any():
+        start = times[ok][int(np.argmax(amplitude[ok]))] + comp.settle
+        ok &= times >= start
     return ok
 
 

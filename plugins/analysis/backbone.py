@@ -79,7 +79,7 @@ from fsi_lab.plugins.analysis._chain import (  # noqa: E402
     Component, displacement_components, error_entries, guarded, jsonable, per_component,
     stack_rows, trusted_times, velocity_components,
 )
-from fsi_lab.plugins.analysis.instantaneous import INSTANT_PARAMS  # noqa: E402
+from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS  # noqa: E402
 
 
 def trusted_backbone(c: Component, params: dict[str, Any], plugin: str,
@@ -89,15 +89,16 @@ def trusted_backbone(c: Component, params: dict[str, Any], plugin: str,
     with guarded(plugin, context):
         inst = instantaneous(c.signal, c.sample_rate, offset=params["offset"],
                              smooth=params["smooth_points"],
-                             min_amplitude=params["min_amplitude"], noise_floor=c.noise_floor)
+                             min_amplitude=params["min_amplitude"], noise_floor=c.noise_floor,
+                             frequency_hint=c.frequency)
         bb = backbone_from(inst)
         period = 1.0 / float(np.median(bb.frequency))
-        keep = trusted_times(bb.time, c, period)
+        keep = trusted_times(bb.time, c, period, bb.amplitude, params.get("decay_only", True))
         if keep.sum() < 2:
             from fsi_lab.plugins.analysis._signal import fail
             raise fail("backbone", f"only {int(keep.sum())} period(s) away from the untrusted "
                                    "record ends; need at least 2 - a longer record")
-        return Backbone(bb.time[keep], bb.amplitude[keep], bb.frequency[keep])
+        return Backbone(bb.time[keep] + c.t0, bb.amplitude[keep], bb.frequency[keep])
 
 
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
@@ -146,6 +147,7 @@ PLUGIN = AnalysisPlugin(
         Param("smooth_points", "int", "", 0, minimum=0,
               help="Centred moving average, points each side (the paper uses 5; 0 = none)."),
         *INSTANT_PARAMS,
+        DECAY_ONLY,
     ),
     run=_run,
     help="Backbone curves: zero-crossing frequency against displacement amplitude (m) and "

@@ -306,17 +306,20 @@ from fsi_lab.plugins.analysis._chain import (  # noqa: E402
     Component, displacement_components, error_entries, guarded, jsonable, per_component,
     stack_rows, trusted_times,
 )
-from fsi_lab.plugins.analysis.instantaneous import INSTANT_PARAMS  # noqa: E402
+from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS  # noqa: E402
 
 
 def trusted_peaks(c: Component, params: dict[str, Any]):
-    """Extrema (times s, amplitudes, frequencies Hz) of a component, without the untrusted
-    record ends (the HVD edge mask and one period at each end)."""
+    """Extrema (times s from the channel's first sample, amplitudes, frequencies Hz) of a
+    component, without the untrusted record ends (the HVD edge mask and one period at each
+    end) and, with ``decay_only``, before the free decay."""
     inst = instantaneous(c.signal, c.sample_rate, offset=params.get("offset", "cycles"),
-                         min_amplitude=params.get("min_amplitude"), noise_floor=c.noise_floor)
+                         min_amplitude=params.get("min_amplitude"), noise_floor=c.noise_floor,
+                         frequency_hint=c.frequency)
     period = 1.0 / float(np.median(inst.frequency))
-    keep = trusted_times(inst.peak_times, c, period)
-    return inst.peak_times[keep], inst.peak_amplitudes[keep], inst.peak_frequency[keep]
+    keep = trusted_times(inst.peak_times, c, period, inst.peak_amplitudes,
+                         params.get("decay_only", True))
+    return inst.peak_times[keep] + c.t0, inst.peak_amplitudes[keep], inst.peak_frequency[keep]
 
 
 def curve_for(c: Component, params: dict[str, Any]) -> DampingCurve:
@@ -368,6 +371,7 @@ PLUGIN = AnalysisPlugin(
         Param("smooth_points", "int", "", 0, minimum=0,
               help="Centred moving average of the curve, points each side (paper: 5)."),
         *INSTANT_PARAMS,
+        DECAY_ONLY,
     ),
     run=_run,
     help="Damping ratio against displacement amplitude (m) per component, from the refined "

@@ -285,7 +285,7 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     prior = context.results.get("damping")
     prior_curves = prior.values if prior is not None and isinstance(prior.values, dict) else {}
     defaults = {"method": "decrement", "span": 2, "window": 6, "smooth_points": 0,
-                "offset": "cycles", "min_amplitude": None}
+                "offset": "cycles", "min_amplitude": None, "decay_only": True}
     conventions: dict[int, str] = {}
 
     def scale_for(k: int, f_hz: float) -> float:

@@ -35,6 +35,7 @@ Numerical choices (see the module constants):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -92,6 +93,9 @@ class HVDResult:
         Low-pass cut-off used for each component, Hz, shape ``(K,)``.
     sample_rate
         Hz.
+    t0
+        Time of the first sample relative to the channel's first sample, s (the ``hvd``
+        plugin's ``start_s``; 0 for :func:`hvd`).
     """
 
     components: np.ndarray
@@ -101,6 +105,7 @@ class HVDResult:
     edge_mask: np.ndarray
     cutoffs: np.ndarray
     sample_rate: float
+    t0: float = 0.0
 
     @property
     def n_components(self) -> int:
@@ -116,11 +121,13 @@ class HVDResult:
 
 
 # ----------------------------------------------------------------------------- kernels
-@numba.njit(cache=True, parallel=True)
+# The band-rate kernels run serially (their arrays are small after the band reduction, where
+# waking a thread pool costs more than it saves); the full-rate reconstruction is parallel.
+@numba.njit(cache=True)
 def _inst_omega(z: np.ndarray, out: np.ndarray) -> None:
     """Instantaneous angular frequency, rad/sample: central phase difference of ``z``."""
     m = z.shape[0]
-    for n in numba.prange(1, m - 1):
+    for n in range(1, m - 1):
         p = z[n + 1] * np.conj(z[n - 1])
         out[n] = 0.5 * math.atan2(p.imag, p.real)
     p0 = z[1] * np.conj(z[0])
@@ -129,10 +136,10 @@ def _inst_omega(z: np.ndarray, out: np.ndarray) -> None:
     out[m - 1] = math.atan2(p1.imag, p1.real)
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True)
 def _demodulate(z: np.ndarray, phi: np.ndarray, out: np.ndarray) -> None:
     """out = z * exp(-i phi)."""
-    for n in numba.prange(z.shape[0]):
+    for n in range(z.shape[0]):
         c = math.cos(phi[n])
         s = math.sin(phi[n])
         zr = z[n].real
@@ -140,10 +147,10 @@ def _demodulate(z: np.ndarray, phi: np.ndarray, out: np.ndarray) -> None:
         out[n] = complex(zr * c + zi * s, zi * c - zr * s)
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True)
 def _modulate_real(b: np.ndarray, phi: np.ndarray, out: np.ndarray) -> None:
     """out -= Re(b e^{i phi})."""
-    for n in numba.prange(b.shape[0]):
+    for n in range(b.shape[0]):
         out[n] -= b[n].real * math.cos(phi[n]) - b[n].imag * math.sin(phi[n])
 
 
@@ -187,11 +194,11 @@ def _reconstruct(bf: np.ndarray, theta: np.ndarray, slope: float, freq: np.ndarr
         residual[n] -= y
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True)
 def _band_frequency(om_f: np.ndarray, bf: np.ndarray, scale: float, out: np.ndarray) -> None:
     """out = (omega_f + d arg(bf)/dn) * scale (central difference of the phase correction)."""
     m = bf.shape[0]
-    for n in numba.prange(1, m - 1):
+    for n in range(1, m - 1):
         q = bf[n + 1] * np.conj(bf[n - 1])
         out[n] = (om_f[n] + 0.5 * math.atan2(q.imag, q.real)) * scale
     out[0] = out[1]
@@ -358,6 +365,7 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
     b = np.empty(m_b, dtype=np.complex128)
     fband = np.empty(m_b)
     to_hz = fs_b / (2.0 * math.pi)
+    assigned: set[int] = set()
     for k in range(k_total):
         if k > 0:
             z = _analytic(sfft.rfft(r_b, workers=FFT_WORKERS), m_b, m_b, None)
@@ -370,15 +378,23 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
             # smaller components only add a ripple), snapped to the nearest spectral peak of
             # the record (or kept if no peak is within 25 %: a component below the peak
             # threshold).
-            inner = (hi_b - lo_b) // 10           # away from the ends, where earlier
-            stride = max(1, (hi_b - lo_b) // 20000)  # components leave their largest errors
+            # (After the first component, 5 % at each end are left out: earlier components
+            # leave their largest errors there.)
+            inner = 0 if k == 0 else (hi_b - lo_b) // 20
+            stride = max(1, (hi_b - lo_b) // 20000)
             sel = slice(lo_b + inner, hi_b - inner, stride)
             mag = np.abs(z[sel])
             f_res = abs(float(np.median(omega[sel][mag >= 0.3 * mag.max()]))) * to_hz
             near = int(np.argmin(np.abs(peaks - f_res)))
+            free = [i for i in range(peaks.size) if i not in assigned]
             if abs(peaks[near] - f_res) <= 0.25 * f_res:
-                f_k = float(peaks[near])
-                fc = _cutoff_for(f_k, peaks)
+                assigned.add(near)
+                fc = _cutoff_for(float(peaks[near]), peaks)
+            elif free:
+                # No peak near: the residual is not dominated by one component (its phase
+                # wanders); take the largest spectral peak not yet extracted.
+                assigned.add(free[0])
+                fc = _cutoff_for(float(peaks[free[0]]), peaks)
             else:                                    # a component below the peak threshold
                 fc = _cutoff_for(f_res, np.append(peaks, f_res))
         cutoffs[k] = fc
@@ -417,11 +433,62 @@ from fsi_lab.params import Param  # noqa: E402
 from fsi_lab.plugins.analysis._chain import guarded  # noqa: E402
 
 
+def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
+                    ) -> tuple[np.ndarray, str | None]:
+    """The channel, minus the base motion when asked (``mode`` "yes", or "auto" with a base
+    acceleration reference): the beam's motion relative to its clamp, the coordinate of the
+    modal model (Eq. 13). Returns the samples and the reference used (or None).
+
+    The reference acceleration is integrated to the channel's quantity with
+    :func:`.integrate.integrate`, high-passed at half the lowest spectral peak of the channel
+    (so the base motion at the beam's modes is kept).
+    """
+    from fsi_lab.errors import AnalysisError
+    from fsi_lab.plugins.analysis._chain import where
+    from fsi_lab.plugins.analysis.integrate import integrate, lowest_mode
+
+    ch = context.channel
+    data = np.asarray(ch.data, dtype=np.float64)
+    ref_name = context.reference
+    ref = context.channels.get(ref_name) if ref_name else None
+    usable = (ref is not None and ref_name != ch.name and ref.quantity == "acceleration"
+              and ch.quantity in ("displacement", "velocity", "acceleration"))
+    if mode == "no" or (mode == "auto" and not usable):
+        return data, None
+    if not usable:
+        raise AnalysisError(
+            f"{where(plugin, context)}: relative = 'yes' needs a base acceleration reference "
+            "channel (the profile's [analysis] reference) and a displacement, velocity or "
+            f"acceleration channel; reference is {ref_name!r}")
+    if abs(float(ref.sample_rate) - float(ch.sample_rate)) > 1e-9 * float(ch.sample_rate) \
+            or ref.data.size != data.size:
+        raise AnalysisError(
+            f"{where(plugin, context)}: reference {ref_name!r} ({ref.data.size} samples at "
+            f"{ref.sample_rate:g} Hz) does not match the channel ({data.size} samples at "
+            f"{ch.sample_rate:g} Hz); cannot subtract the base motion")
+    order = {"acceleration": 0, "velocity": 1, "displacement": 2}[ch.quantity]
+    if order == 0:
+        return data - np.asarray(ref.data, dtype=np.float64), ref_name
+    with guarded(plugin, context):
+        f_lo, _ = lowest_mode(data, float(ch.sample_rate), plugin)
+        base = integrate(ref.data, ch.sample_rate, order=order, highpass=0.5 * f_lo)
+    return data - base, ref_name
+
+
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     ch = context.channel
+    data, relative_to = relative_signal(context, params["relative"])
+    i0 = int(round((params["start_s"] or 0.0) * float(ch.sample_rate)))
+    if i0 >= data.size - 32:
+        from fsi_lab.errors import AnalysisError
+        from fsi_lab.plugins.analysis._chain import where
+        raise AnalysisError(f"{where('hvd', context)}: start_s = {params['start_s']:g} s leaves "
+                            f"{max(data.size - i0, 0)} samples of a {data.size / ch.sample_rate:g}"
+                            " s record; expected a start inside the record")
     with guarded("hvd", context):
-        res = hvd(ch.data, ch.sample_rate, params["components"], params["cutoff_hz"],
+        res = hvd(data[i0:], ch.sample_rate, params["components"], params["cutoff_hz"],
                   padding=params["padding"])
+    res = dataclasses.replace(res, t0=i0 / float(ch.sample_rate))
     comps = []
     for k in range(res.n_components):
         good = ~res.edge_mask[k]
@@ -435,8 +502,11 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                   "edge_mask": res.edge_mask.astype(np.uint8), "cutoffs": res.cutoffs},
         units={"components": ch.unit, "envelopes": ch.unit, "frequencies": "Hz",
                "residual": ch.unit, "edge_mask": "", "cutoffs": "Hz"},
+        # (rows start at start_s: sample j of a row is at t = start_s + j / sample_rate)
         attrs={"n_components": res.n_components, "sample_rate": res.sample_rate,
                "padding": params["padding"],
+               "relative_to": relative_to if relative_to else "none (the channel as measured)",
+               "start_s": res.t0,
                "edge_mask_meaning": "1 where the sample is too close to a record end to be "
                                     "trusted (within 1 / cutoff)",
                "order": "components sorted by decreasing RMS envelope; row k = index k"},
@@ -454,11 +524,19 @@ PLUGIN = AnalysisPlugin(
                    "to the nearest other spectral peak)."),
         Param("padding", "str", "", "predict", choices=PADDINGS,
               help="Record-end extension: linear prediction (default) or mirror image."),
+        Param("start_s", "float", "s", None, minimum=0.0,
+              help="Decompose from this time on (e.g. after the excitation: a forced start "
+                   "disturbs the first cycles of the free decay); unset = the whole record."),
+        Param("relative", "str", "", "auto", choices=("auto", "yes", "no"),
+              help="Subtract the base motion (integrated reference acceleration) first, so the "
+                   "components are motion relative to the clamp as in the modal model; auto = "
+                   "when the chain has a base acceleration reference."),
     ),
     run=_run,
-    help="Hilbert Vibration Decomposition (Feldman): splits the channel into quasi-harmonic "
-         "components with time-varying envelope and frequency, by decreasing amplitude. Later "
-         "analyses of the chain work per component.",
+    help="Hilbert Vibration Decomposition (Feldman): splits the channel (relative to the base "
+         "when a reference acceleration is given) into quasi-harmonic components with "
+         "time-varying envelope and frequency, by decreasing amplitude. Later analyses of the "
+         "chain work per component.",
 )
 
 

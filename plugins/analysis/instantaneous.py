@@ -17,7 +17,7 @@ two crossings. Numerical choices:
 - chatter (several sign changes within a tenth of a half period, from noise near zero) is merged
   into one crossing, the least-squares line through the chatter samples;
 - extrema are refined around the largest sample: by a least-squares parabola over +-5 % of the
-  local period from 20 samples per cycle on, below that by the sinusoid through the three
+  local period (at most +-32 samples) from 20 samples per cycle on, below that by the sinusoid through the three
   samples around it at the local frequency (exact for a sinusoid);
 - the amplitude paired with ``f(t_i)`` is the geometric mean of the two extrema adjacent to
   ``t_i`` (the two half cycles of the period measured): unbiased on exponential decays;
@@ -200,16 +200,21 @@ def _refine_extrema(x: np.ndarray, idx: np.ndarray, half: np.ndarray, wdt: np.nd
 
 
 # ----------------------------------------------------------------------------- offset
-def _extrema(y: np.ndarray, merge: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Crossings (samples), refined extremum positions (samples) and values of ``y``."""
+def _extrema(y: np.ndarray, merge: float, refine: bool = True
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Crossings (samples), refined extremum positions (samples) and values of ``y``
+    (``refine=False``: the largest samples themselves, a quick first estimate)."""
     cross = _crossings(y, merge)
     if cross.size < 2:
         return cross, np.empty(0), np.empty(0)
     bounds = np.concatenate((np.ceil(cross[:-1]), [np.floor(cross[-1]) + 1])).astype(np.int64)
     bounds = np.clip(bounds, 0, y.size)
     imax = _segment_argmax(np.abs(y), bounds)
+    if not refine:
+        return cross, imax.astype(np.float64), y[imax]
     hp = np.diff(cross)
-    half = np.maximum(1, np.rint(0.1 * hp).astype(np.int64))
+    # +-5 % of the period, at most +-32 samples (plenty for the noise; keeps it fast).
+    half = np.clip(np.rint(0.1 * hp).astype(np.int64), 1, 32)
     ppos, pval = _refine_extrema(y, imax, half, np.pi / np.maximum(hp, 1e-9))
     return cross, ppos, pval
 
@@ -224,8 +229,8 @@ def _remove_offset(x: np.ndarray, mode: Any, merge: float, func: str) -> tuple[n
         raise fail(func, f"offset = {mode!r}; expected one of {', '.join(OFFSETS)} or a number")
     off = float(np.mean(x))
     if mode == "cycles":
-        for _ in range(3):
-            _, _, pval = _extrema(x - off, merge)
+        for it in range(3):
+            _, _, pval = _extrema(x - off, merge, refine=it == 2)
             if pval.size < 3:
                 break
             # Successive extrema alternate about the offset; the binomial mean of five,
@@ -254,8 +259,8 @@ def noise_rms(x: np.ndarray, fs: float, f_dom: float) -> float:
 
 # ----------------------------------------------------------------------------- main
 def instantaneous(x: Any, fs: float, *, offset: Any = "cycles", smooth: int = 0,
-                  min_amplitude: float | None = None, noise_floor: float | None = None
-                  ) -> Instantaneous:
+                  min_amplitude: float | None = None, noise_floor: float | None = None,
+                  frequency_hint: float | None = None) -> Instantaneous:
     """Zero-crossing instantaneous frequency and extremum amplitude (paper Eq. 3).
 
     Parameters
@@ -280,6 +285,9 @@ def instantaneous(x: Any, fs: float, *, offset: Any = "cycles", smooth: int = 0,
         Used when ``min_amplitude`` is None: drop the cycles whose amplitude is below this
         absolute value (U) instead of the automatic estimate (for a band-limited component,
         whose own spectrum shows no noise floor, the caller knows the noise better).
+    frequency_hint
+        Approximate frequency of the oscillation, Hz, when the caller knows it (used for the
+        sample-rate check and the chatter merge instead of a spectrum of the record).
 
     Returns
     -------
@@ -302,9 +310,13 @@ def instantaneous(x: Any, fs: float, *, offset: Any = "cycles", smooth: int = 0,
     # Dominant frequency (for the rate check and the chatter merge): the largest spectral
     # peak, or the median crossing interval when the spectrum has no peak.
     from fsi_lab.plugins.analysis.spectrum import spectral_peaks
-    peaks = spectral_peaks(x, fs, window="decay", min_relative=0.05, max_peaks=1, smoothing=0.05)
-    if peaks.frequencies.size:
-        f_dom = float(peaks.frequencies[0])
+    if frequency_hint is not None and frequency_hint > 0:
+        peaks_f = np.array([float(frequency_hint)])
+    else:
+        peaks_f = spectral_peaks(x, fs, window="decay", min_relative=0.05, max_peaks=1,
+                                 smoothing=0.05).frequencies
+    if peaks_f.size:
+        f_dom = float(peaks_f[0])
     else:
         raw = _sign_changes(x - np.mean(x))
         f_dom = fs / (2.0 * float(np.median(np.diff(raw)))) if raw.size > 2 else 0.0
@@ -372,6 +384,12 @@ INSTANT_PARAMS = (
 )
 
 
+#: Shared by backbone and damping: leave out the points before the largest amplitude.
+DECAY_ONLY = Param("decay_only", "bool", "", True,
+                   help="Use only the free decay: points from the largest amplitude on (before "
+                        "it the excitation still feeds the mode).")
+
+
 def analysed_components(context: AnalysisContext, plugin: str):
     """Displacement components when the channel can give them, else the components as they
     are (a voltage channel is analysed in volts)."""
@@ -392,7 +410,7 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
             return instantaneous(c.signal, c.sample_rate, offset=params["offset"],
                                  smooth=params["smooth_points"],
                                  min_amplitude=params["min_amplitude"],
-                                 noise_floor=c.noise_floor)
+                                 noise_floor=c.noise_floor, frequency_hint=c.frequency)
 
     done, errors = per_component("instantaneous", context, comps, work)
     unit = comps[0].unit
@@ -401,7 +419,9 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                                                   / np.sum(r.amplitude ** 2))}
                for k, r in done.items()]
     err_entries, err_attrs = error_entries(errors, "instantaneous")
-    rows = {name: stack_rows({k: getattr(r, name) for k, r in done.items()}, count)
+    t0 = {c.index: c.t0 for c in comps}
+    rows = {name: stack_rows({k: getattr(r, name) + (t0[k] if name.endswith("times") else 0.0)
+                              for k, r in done.items()}, count)
             for name in ("frequency_times", "frequency", "amplitude", "peak_times",
                          "peak_values")}
     return AnalysisResult(

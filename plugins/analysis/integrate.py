@@ -147,11 +147,15 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     values = ComponentSignals(quantity=target, unit=unit, sample_rate=float(ch.sample_rate),
                               signals=done,
                               edge_masks={c.index: c.edge_mask for c in comps},
-                              noise_floors={c.index: c.noise_floor for c in comps})
+                              noise_floors={c.index: c.noise_floor for c in comps},
+                              settles={c.index: c.settle for c in comps},
+                              t0s={c.index: c.t0 for c in comps},
+                              frequencies={c.index: c.frequency for c in comps})
     return AnalysisResult(
         datasets={"signals": stack_rows(done, len(comps))},
         units={"signals": unit},
         attrs={"quantity": target, "order": order, "from_quantity": ch.quantity,
+               "start_s": comps[0].t0,
                "highpass_hz": params["highpass_hz"] if params["highpass_hz"] is not None
                else "auto (half the lowest spectral peak)", **err_attrs},
         summary={"components": entries + err_entries}, values=values)

@@ -14,6 +14,7 @@ spectral_peaks
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,25 +27,38 @@ from fsi_lab.plugins.analysis._signal import (as_record, check_rate, fail, rfft)
 WINDOWS = ("hann", "blackmanharris", "flattop", "boxcar", "decay")
 
 
+@functools.lru_cache(maxsize=8)
 def _window(name: str, n: int) -> np.ndarray:
-    """Window samples; ``"decay"`` is flat over the first half and a half-Hann over the second,
-    which keeps the early, large part of a free decay (and fast-decaying modes) at full weight."""
+    """Window samples (cached, read-only); ``"decay"`` is flat over the first half and a
+    half-Hann over the second, which keeps the early, large part of a free decay (and
+    fast-decaying modes) at full weight."""
     if name == "boxcar":
-        return np.ones(n)
-    if name == "decay":
+        w = np.ones(n)
+    elif name == "decay":
         w = np.ones(n)
         k = n // 2
         w[n - k:] = 0.5 * (1.0 + np.cos(np.pi * np.arange(1, k + 1) / k))
-        return w
-    return ssig.get_window(name, n, fftbins=False)
+    else:
+        w = ssig.get_window(name, n, fftbins=False)
+    w.setflags(write=False)
+    return w
+
+
+@functools.lru_cache(maxsize=8)
+def _ramp(n: int) -> np.ndarray:
+    """Centred ramp i - (n - 1) / 2 (cached: records of one run share their length)."""
+    t = np.arange(n, dtype=np.float64) - 0.5 * (n - 1)
+    t.setflags(write=False)
+    return t
 
 
 def _detrend(x: np.ndarray) -> np.ndarray:
     """x minus its least-squares straight line (closed form, no matrix solve)."""
-    n = x.size
-    t = np.arange(n, dtype=np.float64) - 0.5 * (n - 1)
-    slope = float(t @ x) / float(t @ t)
-    return x - (x.mean() + slope * t)
+    t = _ramp(x.size)
+    slope = float(np.sum(t * x)) / float(np.sum(t * t))     # (no BLAS thread wake-up)
+    out = x - x.mean()
+    out -= slope * t
+    return out
 
 
 def amplitude_spectrum(x: Any, fs: float, *, window: str = "hann", detrend: bool = True,
