@@ -140,7 +140,11 @@ def _timed_run(*extra: str) -> tuple[float, str]:
                                "--out", out, "--json", *extra], capture_output=True, text=True,
                               timeout=300)
         wall = time.perf_counter() - started
-    status = json.loads(proc.stdout)["exit_status"] if proc.stdout.strip() else proc.stderr[-200:]
+    try:
+        answer = json.loads(proc.stdout)
+    except ValueError:
+        answer = {}
+    status = answer.get("exit_status") or f"error: {answer.get('error') or proc.stderr[-200:]}"
     return wall, status
 
 

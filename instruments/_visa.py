@@ -154,6 +154,9 @@ class VisaLink:
             else:
                 what = f"VISA error {exc.description}"
             raise self._fail(command, what) from None
+        except ConnectionRefusedError:
+            raise self._fail(command, "nothing answers at this address (connection refused): "
+                                      "is the instrument on, and is the address right?") from None
         except OSError as exc:
             raise self._fail(command, f"the connection was lost ({exc.strerror or exc})") from None
         except BaseException:
@@ -217,6 +220,7 @@ class VisaLink:
 
     # ------------------------------------------------------------------ typed queries
     def query_float(self, command: str) -> float:
+        """A query whose reply is a number."""
         reply = self.query(command)
         try:
             return float(reply)
@@ -224,6 +228,7 @@ class VisaLink:
             raise self._fail(command, f"unexpected reply {reply!r}; expected a number") from None
 
     def query_int(self, command: str) -> int:
+        """A query whose reply is an integer."""
         reply = self.query(command)
         try:
             return int(reply.strip().lstrip("+"))
@@ -231,6 +236,7 @@ class VisaLink:
             raise self._fail(command, f"unexpected reply {reply!r}; expected an integer") from None
 
     def query_bool(self, command: str) -> bool:
+        """A query whose reply is 0/1 (or OFF/ON)."""
         reply = self.query(command).strip().upper()
         if reply in ("1", "ON"):
             return True

@@ -71,6 +71,7 @@ class SerialLine:
         return InstrumentError(f"{NAME} at {self.port}: {what} (after sending {line!r})")
 
     def send(self, line: str) -> None:
+        """Send one line (a ``Set``: no reply is expected)."""
         import serial
 
         try:

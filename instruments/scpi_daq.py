@@ -103,6 +103,7 @@ class ScpiDaq(Acquisition):
         return rate
 
     def arm(self) -> None:
+        """``INIT``: wait for the trigger (or start, with trigger = \"immediate\")."""
         self._fetched = 0
         self.link.send_checked("INIT")
 

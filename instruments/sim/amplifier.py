@@ -48,6 +48,7 @@ class AmplifierState:
 
     @property
     def bits(self) -> int:
+        """The ``STAT:INTL?`` bitfield of the latched interlocks."""
         return sum(1 << INTERLOCK_BITS[name] for name in self.latched)
 
 
@@ -72,6 +73,7 @@ class AmplifierSim:
         c.add("MEASure:CURRent?", lambda a, s: f"{self.state.current_rms_a:.6E}")
 
     def handle(self, message: bytes) -> bytes | None:
+        """Run one program message; the reply bytes (with newline) or None."""
         with self.bench.lock:
             self.bench.catch_up()
             return self.commands.run(message)

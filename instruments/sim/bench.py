@@ -181,6 +181,7 @@ class SimBench:
 
     @property
     def running(self) -> bool:
+        """Whether the servers are up."""
         return self._loop is not None
 
     def _warm_up(self) -> None:
@@ -264,6 +265,7 @@ class SimBench:
                   f"{', '.join(map(str, inputs))}")
 
     def end_record(self) -> None:
+        """Stop simulating (abort, reset, new record); keep the record's overloads."""
         if self.record is not None:
             self.last_overloads = dict(self.record.overloads)
             self.record = None

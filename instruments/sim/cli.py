@@ -20,6 +20,7 @@ from fsi_lab.instruments.sim.faults import FAULTS, ROLES
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
+    """Add the options of ``fsi-lab bench`` to ``parser``."""
     parser.add_argument("--profile", type=Path, metavar="PROFILE",
                         help="take the physics and the [bench] fast/fault keys from this profile")
     parser.add_argument("--fast", action="store_true", default=None,
@@ -65,6 +66,7 @@ def _profile_sections(path: Path):
 
 
 def run(args: argparse.Namespace) -> int:
+    """Start the bench, print its addresses, serve until SIGINT or SIGTERM; the exit code."""
     import json
     import signal
     import threading

@@ -54,6 +54,7 @@ class DigitiserState:
         self.reset()
 
     def reset(self) -> None:
+        """``*RST`` values."""
         self.rate = 51200.0
         self.points = 1024
         self.enabled = {n: False for n in INPUTS}
@@ -68,6 +69,7 @@ class DigitiserState:
 
     @property
     def inputs(self) -> list[int]:
+        """Enabled inputs in ascending order (the column order of the data blocks)."""
         return [n for n in INPUTS if self.enabled[n]]
 
 
@@ -107,6 +109,7 @@ class DigitiserSim:
         c.add("FETCh?", self._fetch)
 
     def handle(self, message: bytes) -> bytes | None:
+        """Run one program message; the reply bytes (with newline) or None."""
         with self.bench.lock:
             self.bench.catch_up()
             return self.commands.run(message)
@@ -132,6 +135,7 @@ class DigitiserSim:
                                 [state.iepe[n] for n in state.inputs])
 
     def record_complete(self) -> None:
+        """Every sample of the record has been simulated."""
         if self.state.mode == "RUN":
             self.state.mode = "DONE"
 

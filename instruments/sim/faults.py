@@ -92,6 +92,7 @@ class FaultPlan:
         return 0.0 if self.immediate else self.after_s
 
     def describe(self) -> str:
+        """The fault in words, for logs."""
         if self.kind == "none":
             return "none"
         where = f" on the {self.target}" if self.kind in LINK_FAULTS else ""

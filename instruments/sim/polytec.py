@@ -48,6 +48,7 @@ class PolytecSim:
         self.state = VibrometerState(opts.vibrometer_delay_s, opts.vibrometer_decoder_index)
 
     def handle(self, line: bytes) -> bytes | None:
+        """Answer one line; the reply line (with LF) or None."""
         with self.bench.lock:
             self.bench.catch_up()
             reply = self._run(line)

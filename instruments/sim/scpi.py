@@ -46,6 +46,7 @@ class ErrorQueue:
         self._entries: list[tuple[int, str]] = []
 
     def push(self, code: int, detail: str = "") -> None:
+        """Queue error ``code`` (see :data:`ERRORS`) with a detail; -350 once full."""
         if len(self._entries) >= self.LIMIT:
             self._entries[-1] = (-350, ERRORS[-350])
             return
@@ -60,6 +61,7 @@ class ErrorQueue:
         return f'{code:+d},"{text}"'
 
     def clear(self) -> None:
+        """``*CLS``: forget every queued error."""
         self._entries.clear()
 
     def __len__(self) -> int:
@@ -198,6 +200,7 @@ class CommandSet:
         self._table: list[tuple[list[_Node], bool, Handler]] = []
 
     def add(self, pattern: str, handler: Handler) -> None:
+        """Run ``handler`` for headers matching ``pattern`` (queries and settings apart)."""
         nodes, query = _compile(pattern)
         self._table.append((nodes, query, handler))
 

@@ -92,5 +92,6 @@ def test_unreachable_instrument_is_named_with_its_address(tmp_path):
     from fsi_lab.instruments import shaker_amplifier
 
     address = f"TCPIP0::127.0.0.1::{port}::SOCKET"
-    with pytest.raises(InstrumentError, match=rf"shaker-amplifier at {address}: "):
+    with pytest.raises(InstrumentError, match=rf"shaker-amplifier at {address}: nothing answers "
+                                              r"at this address \(connection refused\)"):
         shaker_amplifier.PLUGIN.open(address, settings(shaker_amplifier, timeout_s=0.5), {})
