@@ -235,7 +235,12 @@ class SimBench:
                 if action == "drop":
                     self._log(f"fault: the {role} drops its connection")
                     return None, True
-                reply = handle(message)
+                try:
+                    reply = handle(message)
+                except Exception as exc:  # noqa: BLE001 - a simulation failure, not the client's
+                    self._log(f"the simulated {role} failed on {message[:40]!r}: "
+                              f"{type(exc).__name__}: {exc}; it drops its connection")
+                    return None, True
                 if reply is not None and self.faults.garble_now(role, self.data_time):
                     self._log(f"fault: the {role}'s reply is garbled")
                     reply = garble(reply)
