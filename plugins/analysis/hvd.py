@@ -478,11 +478,18 @@ def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     ch = context.channel
     data, relative_to = relative_signal(context, params["relative"])
-    i0 = int(round((params["start_s"] or 0.0) * float(ch.sample_rate)))
+    if params["start_s"] is None:
+        # Automatic: the free decay starts where the excitation leaves the structure, at the
+        # largest sample (0 for a record that starts with the decay).
+        i0 = int(np.argmax(np.abs(data)))
+        start_rule = "auto: at the largest sample (end of the excitation)"
+    else:
+        i0 = int(round(params["start_s"] * float(ch.sample_rate)))
+        start_rule = "given"
     if i0 >= data.size - 32:
         from fsi_lab.errors import AnalysisError
         from fsi_lab.plugins.analysis._chain import where
-        raise AnalysisError(f"{where('hvd', context)}: start_s = {params['start_s']:g} s leaves "
+        raise AnalysisError(f"{where('hvd', context)}: start_s = {i0 / ch.sample_rate:g} s leaves "
                             f"{max(data.size - i0, 0)} samples of a {data.size / ch.sample_rate:g}"
                             " s record; expected a start inside the record")
     with guarded("hvd", context):
@@ -506,7 +513,7 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
         attrs={"n_components": res.n_components, "sample_rate": res.sample_rate,
                "padding": params["padding"],
                "relative_to": relative_to if relative_to else "none (the channel as measured)",
-               "start_s": res.t0,
+               "start_s": res.t0, "start_rule": start_rule,
                "edge_mask_meaning": "1 where the sample is too close to a record end to be "
                                     "trusted (within 1 / cutoff)",
                "order": "components sorted by decreasing RMS envelope; row k = index k"},
@@ -525,8 +532,9 @@ PLUGIN = AnalysisPlugin(
         Param("padding", "str", "", "predict", choices=PADDINGS,
               help="Record-end extension: linear prediction (default) or mirror image."),
         Param("start_s", "float", "s", None, minimum=0.0,
-              help="Decompose from this time on (e.g. after the excitation: a forced start "
-                   "disturbs the first cycles of the free decay); unset = the whole record."),
+              help="Decompose from this time on: the free decay after the excitation (a forced "
+                   "start disturbs its first cycles); unset = from the largest sample of the "
+                   "record (automatic), 0 = the whole record."),
         Param("relative", "str", "", "auto", choices=("auto", "yes", "no"),
               help="Subtract the base motion (integrated reference acceleration) first, so the "
                    "components are motion relative to the clamp as in the modal model; auto = "
