@@ -320,6 +320,13 @@ def cmd_gui(args) -> int:
     return gui_main(args)
 
 
+def _interval(bounds) -> str:
+    """``[lo, hi]`` with four significant digits (95 % interval), or nothing."""
+    if not bounds or any(b is None for b in bounds):
+        return ""
+    return f"(95 %: {bounds[0]:.4g} to {bounds[1]:.4g})"
+
+
 def format_summary(summary: dict[str, Any]) -> str:
     """The analysis summary as a few readable lines."""
     lines = []
@@ -333,8 +340,9 @@ def format_summary(summary: dict[str, Any]) -> str:
                 text += f" at {component['frequency_hz']:.3f} Hz"
             eq = component.get("equivalent_damping")
             if eq and eq.get("c_i") is not None:
-                text += (f": C_i = {eq['c_i']:.4g} {eq.get('c_i_ci95', '')}, "
-                         f"C_f = {eq['c_f']:.4g} {eq.get('c_f_ci95', '')}, R^2 = {eq['r2']:.3f}")
+                text += (f": C_i = {eq['c_i']:.4g} kg/(m s) {_interval(eq.get('c_i_ci95'))}, "
+                         f"C_f = {eq['c_f']:.4g} kg/m^2 {_interval(eq.get('c_f_ci95'))}, "
+                         f"R^2 = {eq['r2']:.3f}")
             lines.append(text)
         for error in info.get("errors", []):
             lines.append(f"  failed {error['plugin']}: {error['message']}")
