@@ -164,7 +164,8 @@ def _role_schema(registry: Registry, role: str, table: Mapping[str, Any]) -> Sch
     descriptor = _plugin(registry, "instrument", _plugin_name(table, where), where)
     if descriptor.role != role:
         raise ParameterError(
-            f"{where}.plugin: {descriptor.name!r} is a {descriptor.role} driver, not a {role}"
+            f"{where}.plugin: {descriptor.name!r} is a {descriptor.role} driver, not "
+            f"{'an' if role[0] in 'aeiou' else 'a'} {role}"
         )
     return descriptor.params
 

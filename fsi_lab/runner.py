@@ -244,8 +244,15 @@ class Runner:
             writer.write_instrument(role, {
                 "identity": identity, "plugin": config.plugin, "address": config.address,
                 "plugin_version": self.registry.version_of("instrument", config.plugin),
-            }, {**config.settings, **instrument.settings()})
+            }, {})
             self.bus.log("INFO", f"{role}: {identity}")
+        self._record_settings(writer)
+
+    def _record_settings(self, writer: RunFileWriter) -> None:
+        """Store each instrument's settings: the profile's, updated by what the driver reports."""
+        for role, instrument in self.instruments.items():
+            settings = {**self.profile.roles[role].settings, **instrument.settings()}
+            writer.write_instrument(role, {}, settings)
 
     def _acquire(self, writer: RunFileWriter, waveform: np.ndarray, rate: float) -> None:
         profile = self.profile
@@ -271,6 +278,7 @@ class Runner:
                 "sensitivity_units": f"V/({channel.unit})", "input": channel.input,
                 "source_instrument": channel.sensor or "acquisition",
             })
+        self._record_settings(writer)  # now with what configuration set (rates, ranges)
         writer.flush()
         self._check_abort()
 
@@ -306,13 +314,19 @@ class Runner:
             now = time.monotonic()
             if now - last_poll >= INTERLOCK_POLL_S:
                 last_poll = now
-                tripped = [name for name, on in amplifier.interlocks().items() if on]
-                if tripped:
-                    raise InstrumentError(
-                        f"amplifier interlock tripped: {', '.join(tripped)}; the output was "
-                        "switched off by the amplifier"
-                    )
+                self._check_interlocks(amplifier)
+        # A fast bench can finish between two polls: a trip must never pass as completed.
+        self._check_interlocks(amplifier)
         writer.flush()
+
+    @staticmethod
+    def _check_interlocks(amplifier) -> None:
+        tripped = [name for name, on in amplifier.interlocks().items() if on]
+        if tripped:
+            raise InstrumentError(
+                f"amplifier interlock tripped: {', '.join(tripped)}; the output was switched "
+                "off by the amplifier"
+            )
 
     def _check_abort(self) -> None:
         if self._abort.is_set():

@@ -5,7 +5,7 @@ import json
 import h5py
 import numpy as np
 import pytest
-from conftest import cli, cli_json
+from support import cli, cli_json
 
 from fsi_lab.runfile import read_run
 

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import cli, cli_json
+from support import cli, cli_json
 
 from fsi_lab.runfile import read_run
 from fsi_lab.units import STANDARD_GRAVITY

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import PROFILES, cli, cli_json
+from support import PROFILES, cli, cli_json
 
 from fsi_lab.runfile import read_run
 

@@ -1,7 +1,7 @@
 """Profiles: every kind of bad profile is refused with one clear message and exit code 2."""
 
 import pytest
-from conftest import PROFILES, cli, cli_json
+from support import PROFILES, cli, cli_json
 
 from fsi_lab.errors import ProfileError
 from fsi_lab.profile import load_profile
@@ -39,10 +39,10 @@ BAD_CASES = [
      "safety.max_gain: missing; expected a number > 0 V/V"),
     ("unknown plugin", 'plugin = "ramp-derivative"', 'plugin = "ramp"',
      "excitation.plugin: unknown excitation plugin 'ramp'; installed excitation plugins:"),
-    ("unknown instrument", 'plugin = "inprocess-amplifier"', 'plugin = "pa25e"',
+    ("unknown instrument", 'plugin = "shaker-amplifier"', 'plugin = "pa25e"',
      "bench.amplifier.plugin: unknown instrument plugin 'pa25e'"),
-    ("wrong role", 'plugin = "inprocess-amplifier"', 'plugin = "inprocess-source"',
-     "bench.amplifier.plugin: 'inprocess-source' is a source driver, not a amplifier"),
+    ("wrong role", 'plugin = "shaker-amplifier"', 'plugin = "keysight33500"',
+     "bench.amplifier.plugin: 'keysight33500' is a source driver, not an amplifier"),
     ("bad choice", 'fluid = "water"', 'fluid = "oil"',
      "specimen.fluid: got 'oil'; expected one of 'air', 'water'"),
     ("unit mismatch", 'unit = "m/s^2"', 'unit = "m/s"',

@@ -1,7 +1,7 @@
 """Plugin discovery through the fsi_lab entry-point group, with a real installed distribution."""
 
 import pytest
-from conftest import cli_json
+from support import cli_json
 
 from fsi_lab.errors import PluginError
 from fsi_lab.registry import load_registry

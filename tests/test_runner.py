@@ -9,7 +9,7 @@ import threading
 import h5py
 import numpy as np
 import pytest
-from conftest import LineReader, start_cli
+from support import LineReader, start_cli
 
 from fsi_lab.events import DataBlock, EventBus, StateChanged
 from fsi_lab.profile import load_profile

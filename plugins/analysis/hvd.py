@@ -468,10 +468,17 @@ def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
             f"{ch.sample_rate:g} Hz); cannot subtract the base motion")
     order = {"acceleration": 0, "velocity": 1, "displacement": 2}[ch.quantity]
     if order == 0:
-        return data - np.asarray(ref.data, dtype=np.float64), ref_name
-    with guarded(plugin, context):
-        f_lo, _ = lowest_mode(data, float(ch.sample_rate), plugin)
-        base = integrate(ref.data, ch.sample_rate, order=order, highpass=0.5 * f_lo)
+        base = np.asarray(ref.data, dtype=np.float64)
+    else:
+        with guarded(plugin, context):
+            f_lo, _ = lowest_mode(data, float(ch.sample_rate), plugin)
+            base = integrate(ref.data, ch.sample_rate, order=order, highpass=0.5 * f_lo)
+    # The channels may start at different times (a vibrometer's signal delay makes its t0
+    # negative): take the base motion at the channel's own sample times.
+    shift = float(ch.t0) - float(ref.t0)
+    if shift:
+        t = np.arange(data.size) / float(ch.sample_rate)
+        base = np.interp(t + shift, t, base)
     return data - base, ref_name
 
 

@@ -12,7 +12,7 @@ import subprocess
 import sys
 
 from benchkit import bench_profile, lab_registry, run_profile
-from conftest import PROFILES, LineReader
+from support import PROFILES, LineReader
 
 from fsi_lab.runfile import read_run
 

@@ -4,7 +4,7 @@ subcommand as installed through their entry points (pyproject.toml)."""
 import json
 import signal
 
-from conftest import PROFILES, LineReader, cli, cli_json, start_cli
+from support import PROFILES, LineReader, cli, cli_json, start_cli
 
 from fsi_lab.runfile import read_run
 

@@ -14,7 +14,7 @@ import tomllib
 
 import numpy as np
 import pytest
-from conftest import PROFILES, cli_json
+from support import PROFILES, cli_json
 
 from fsi_lab.runfile import read_run
 

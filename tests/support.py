@@ -1,0 +1,136 @@
+"""Helpers shared by the test modules (fixtures live in conftest.py).
+
+Kept out of conftest.py so that test modules in sub-folders with a conftest of their own can
+import them unambiguously: ``from support import cli``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PROFILES = ROOT / "profiles"
+EXAMPLE_PLUGIN = Path(__file__).resolve().parent / "example_plugin"
+
+
+def cli(*args: str, env: dict | None = None, timeout: float = 120, cwd: Path | None = None,
+        input_text: str | None = None) -> subprocess.CompletedProcess:
+    """Run ``fsi-lab ARGS`` in a subprocess and return the completed process."""
+    full_env = {**os.environ, **(env or {})}
+    return subprocess.run([sys.executable, "-m", "fsi_lab.cli", *args], capture_output=True,
+                          text=True, timeout=timeout, env=full_env, cwd=cwd, input=input_text)
+
+
+def cli_json(*args: str, **kwargs) -> tuple[dict, subprocess.CompletedProcess]:
+    """Run with ``--json`` and parse stdout, which must be exactly one JSON object."""
+    proc = cli(*args, "--json", **kwargs)
+    return json.loads(proc.stdout), proc
+
+
+SIM_PROFILE = """
+[run]
+duration = {duration}
+sample_rate = 2000.0
+block_duration = 0.05
+
+[safety]
+max_drive_v = 2.0
+max_gain = 10.0
+max_stroke_mm = 5.0
+
+[shaker]
+suspension_hz = 30.0
+damping_ratio = 0.08
+mm_per_volt = 0.5
+
+[specimen]
+fluid = "water"
+
+[model]
+c_i = 0.65
+c_f = 33.0
+
+[bench.source]
+plugin = "inprocess-source"
+
+[bench.amplifier]
+plugin = "inprocess-amplifier"
+gain = 2.0
+{amplifier_extra}
+
+[bench.vibrometer]
+plugin = "inprocess-vibrometer"
+range = "125mm/s/V"
+
+[bench.acquisition]
+plugin = "inprocess-acquisition"
+realtime = {realtime}
+{acquisition_extra}
+
+[channels.base_acceleration]
+quantity = "acceleration"
+unit = "m/s^2"
+sensitivity = 0.0102
+input = 2
+
+[channels.tip_velocity]
+quantity = "velocity"
+unit = "m/s"
+input = 3
+sensor = "vibrometer"
+
+[excitation]
+plugin = "step"
+amplitude = {amplitude}
+duration = 0.5
+{analysis}
+"""
+
+
+class LineReader:
+    """Reads a subprocess's stream on a thread so tests can wait for a line with a timeout."""
+
+    def __init__(self, stream) -> None:
+        import queue
+        import threading
+
+        self.lines: list[str] = []
+        self._queue: queue.Queue = queue.Queue()
+        self._thread = threading.Thread(target=self._pump, args=(stream,), daemon=True)
+        self._thread.start()
+
+    def _pump(self, stream) -> None:
+        for line in iter(stream.readline, ""):
+            self._queue.put(line)
+        self._queue.put(None)
+
+    def wait_for(self, predicate, timeout: float) -> str:
+        """The first line (from now on) for which ``predicate`` is true; AssertionError on timeout."""
+        import queue
+        import time
+
+        deadline = time.monotonic() + timeout
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise AssertionError(f"no matching line within {timeout} s; got {self.lines[-20:]}")
+            try:
+                line = self._queue.get(timeout=remaining)
+            except queue.Empty:
+                continue
+            if line is None:
+                raise AssertionError(f"stream ended without a matching line; got {self.lines[-20:]}")
+            self.lines.append(line)
+            if predicate(line):
+                return line
+
+
+def start_cli(*args: str, env: dict | None = None) -> subprocess.Popen:
+    """Start ``fsi-lab ARGS`` without waiting; stderr is a text pipe."""
+    return subprocess.Popen([sys.executable, "-m", "fsi_lab.cli", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, **(env or {})})
