@@ -204,7 +204,11 @@ class Runner:
         if signals.pending:
             self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
         elif outcome.exit_status == "completed" and self.analyze and self.profile.analysis["chain"]:
-            outcome.summary = self._analyse(outcome.path)
+            try:
+                outcome.summary = self._analyse(outcome.path)
+            except (FsiLabError, OSError) as exc:  # the record is safe; only the analysis is lost
+                outcome.error = f"analysis not stored: {exc}; run `fsi-lab analyze` on the file"
+                self.bus.log("ERROR", outcome.error)
         return outcome
 
     def _root_attrs(self, run_uuid: str, started: str) -> dict[str, Any]:
@@ -233,6 +237,9 @@ class Runner:
                                          self.bench_context)
             interface = ROLE_INTERFACES[role]
             if not isinstance(instrument, interface):
+                close = getattr(instrument, "close", None)
+                if callable(close):
+                    close()
                 raise InstrumentError(
                     f"bench.{role}: plugin {config.plugin!r} returned "
                     f"{type(instrument).__name__}, which is not a {interface.__name__}"
