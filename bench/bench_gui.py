@@ -7,15 +7,15 @@ Rows:
   (decimation, spectra on every third frame, a synchronous repaint of the 1400 x 900 plot area);
   the reference is the same plots fed the raw 100,000 samples per channel (no decimation);
 - the longest stall of the UI thread during a real run: the paper's wet experiment on the
-  in-process simulated bench, paced in real time, 4 channels at 10 kS/s for 10 s, its whole
-  analysis chain, and the analysis views filling at the end. A 5 ms heartbeat timer on the UI
-  thread records the longest gap between its ticks.
+  in-process simulated bench, paced in real time, 4 channels at 10 kS/s for 10 s (the run runs
+  in a child process, the live plots in the window); then, separately, the longest stall while
+  its analysis chain runs (``fsi-lab analyze`` in a child process) and the analysis views are
+  drawn. A 5 ms heartbeat timer on the UI thread records the longest gap between its ticks.
 """
 
 from __future__ import annotations
 
 import os
-import re
 import sys
 import tempfile
 import time
@@ -87,21 +87,90 @@ def _frames_per_second(max_points: int) -> tuple[float, float]:
     return frames / elapsed, slowest * 1e3
 
 
+#: The wet experiment on the in-process simulated bench (as in tests/gui/conftest.py).
+WET_INPROCESS = """
+[run]
+name = "wet beam on the in-process bench"
+duration = {duration}
+sample_rate = {sample_rate}
+block_duration = 0.1
+
+[safety]
+max_drive_v = 2.0
+max_gain = 10.0
+max_stroke_mm = 5.0
+
+[shaker]
+suspension_hz = 30.0
+damping_ratio = 0.08
+mm_per_volt = 0.5
+
+[specimen]
+length = 0.08
+width = 0.01275
+thickness = 0.00008
+youngs_modulus = 240e9
+density = 7200.0
+fluid = "water"
+drag_coefficient = 1.8
+measurement_point = 0.08
+
+[model]
+modes = 4
+c_i = 0.65
+c_f = 33.0
+
+[bench.source]
+plugin = "inprocess-source"
+
+[bench.amplifier]
+plugin = "inprocess-amplifier"
+gain = 2.0
+
+[bench.vibrometer]
+plugin = "inprocess-vibrometer"
+range = "125mm/s/V"
+
+[bench.acquisition]
+plugin = "inprocess-acquisition"
+realtime = true
+
+[channels.drive]
+quantity = "voltage"
+unit = "V"
+sensitivity = 1.0
+input = 1
+
+[channels.base_acceleration]
+quantity = "acceleration"
+unit = "m/s^2"
+sensitivity = 0.0102
+input = 2
+
+[channels.tip_velocity]
+quantity = "velocity"
+unit = "m/s"
+input = 3
+sensor = "vibrometer"
+{extra_channels}
+"""
+
+
 def _profile(folder: Path) -> Path:
-    """The wet experiment at 10 kS/s for 10 s in real time, with the spare input recorded."""
-    text = (ROOT / "profiles" / "wet-beam-sim.toml").read_text()
-    text = re.sub(r"(?m)^duration = 10\.0", "duration = 10.0", text, count=1)
-    text = text.replace('plugin = "inprocess-acquisition"',
-                        'plugin = "inprocess-acquisition"\nrealtime = true')
-    text += ('\n[channels.spare]\nquantity = "voltage"\nunit = "V"\nsensitivity = 1.0\n'
-             'input = 4\n')
+    """10 s at 10 kS/s in real time, 4 channels (drive, base acceleration, tip velocity,
+    spare), the wet profile's excitation and analysis chain."""
+    wet = (ROOT / "profiles" / "wet-beam-sim.toml").read_text()
+    spare = '\n[channels.spare]\nquantity = "voltage"\nunit = "V"\nsensitivity = 1.0\ninput = 4\n'
     path = folder / "wet-gui-bench.toml"
-    path.write_text(text)
+    path.write_text(WET_INPROCESS.format(duration=WINDOW_S, sample_rate=RATE,
+                                         extra_channels=spare)
+                    + "\n" + wet[wet.index("[excitation]"):])
     return path
 
 
 def _longest_stall() -> tuple[float, float, str]:
-    """Longest UI-thread stall during acquisition and over the whole run (ms), exit status."""
+    """Longest UI-thread stall while the run goes (start to safe state and file closed) and
+    afterwards while its analysis runs and the views are drawn (ms), and the exit status."""
     from PySide6.QtCore import QCoreApplication, QEvent, QTimer
 
     from fsi_lab.gui.app import MainWindow
@@ -117,7 +186,7 @@ def _longest_stall() -> tuple[float, float, str]:
         while not window.run_control.can_start() and time.monotonic() < deadline:
             app.processEvents()
             time.sleep(0.005)
-        gaps = {"acquire": 0.0, "all": 0.0}
+        gaps = {"acquire": 0.0, "all": 0.0, "end": 0.0}
         last = [time.perf_counter()]
 
         def beat() -> None:
@@ -127,21 +196,33 @@ def _longest_stall() -> tuple[float, float, str]:
             gaps["all"] = max(gaps["all"], gap)
             if os.environ.get("FSI_LAB_BENCH_TRACE") and gap > 0.03:
                 print(f"stall {gap * 1e3:.0f} ms in state {window.run_control.state} "
-                      f"t={now - t_start[0]:.2f}s", file=sys.stderr)
-            if window.run_control.state == "running":
+                      f"t={now - t_start[0]:.2f}s blocks={window.live.blocks} "
+                      f"frames={window.live.frames} paints={window.live.paints} "
+                      f"last frame {window.live.last_frame_s * 1e3:.0f} ms", file=sys.stderr)
+            if window.run_control.running:
                 gaps["acquire"] = max(gaps["acquire"], gap)
+            else:
+                gaps["end"] = max(gaps["end"], gap)
 
         heartbeat = QTimer()
         heartbeat.setInterval(HEARTBEAT_MS)
         heartbeat.timeout.connect(beat)
+        settle = time.monotonic() + 1.0  # the experimenter looks at the window before Start
+        while time.monotonic() < settle:
+            app.processEvents()
+            time.sleep(0.005)
         t_start = [time.perf_counter()]
         window.run_control.start()
         last[0] = time.perf_counter()
         heartbeat.start()
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline and (
-                window.run_control.running or window.pool.busy
-                or window.analysis.results is None):
+                window.run_control.running or window.busy()
+                or window.analysis.results is None or not window.analysis.results.analysis):
+            app.processEvents()
+            time.sleep(0.001)
+        settle = time.monotonic() + 1.0  # the analysis views are drawn and painted
+        while time.monotonic() < settle:
             app.processEvents()
             time.sleep(0.001)
         heartbeat.stop()
@@ -151,21 +232,24 @@ def _longest_stall() -> tuple[float, float, str]:
         window.deleteLater()
         QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
         app.processEvents()
-    return gaps["acquire"] * 1e3, gaps["all"] * 1e3, status
+    return gaps["acquire"] * 1e3, gaps["end"] * 1e3, status
 
 
 def rows() -> list[Row]:
     fps, slowest = _frames_per_second(max_points=2000)
     raw_fps, raw_slowest = _frames_per_second(max_points=10 ** 9)
-    acquire_ms, all_ms, status = _longest_stall()
+    run_ms, end_ms, status = _longest_stall()
     return [
         Row("GUI live plots, 4 ch x 10 s at 10 kS/s: frames per second",
             f"{fps:.0f} fps (slowest frame {slowest:.0f} ms)",
             f"undecimated: {raw_fps:.1f} fps (slowest {raw_slowest:.0f} ms)",
             ">= 30 fps", fps >= 30),
-        Row("GUI longest UI-thread stall during a 10 s run (4 ch at 10 kS/s, analysis, views)",
-            f"{all_ms:.0f} ms ({acquire_ms:.0f} ms while acquiring; run {status})",
-            f"heartbeat every {HEARTBEAT_MS} ms", "< 50 ms", all_ms < 50 and status == "completed"),
+        Row("GUI longest UI-thread stall during a 10 s run (4 ch at 10 kS/s, real time)",
+            f"{run_ms:.0f} ms (run {status})", f"heartbeat every {HEARTBEAT_MS} ms",
+            "< 50 ms", run_ms < 50 and status == "completed"),
+        Row("GUI longest UI-thread stall after the run (analysis in a child process, "
+            "views drawn)", f"{end_ms:.0f} ms", f"heartbeat every {HEARTBEAT_MS} ms",
+            "< 50 ms", end_ms < 50),
     ]
 
 

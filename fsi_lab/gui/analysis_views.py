@@ -37,6 +37,7 @@ from fsi_lab.errors import FsiLabError
 from fsi_lab.gui.analysis_job import AnalysisJob
 from fsi_lab.gui.forms import ParamForm, value_text
 from fsi_lab.gui.results import PluginResult, RunResults
+from fsi_lab.gui.session import min_max_decimate
 from fsi_lab.gui.worker import TaskPool
 from fsi_lab.profile import ANALYSIS_PARAMS, parse_profile
 from fsi_lab.registry import Registry
@@ -181,6 +182,8 @@ class View(QWidget):
 
     title = ""
     plugins: tuple[str, ...] = ()
+    #: Plot cells (row, column) the view usually draws, built ahead of time by :meth:`prebuild`.
+    cells: tuple[tuple[int, int], ...] = ((0, 0),)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -189,14 +192,41 @@ class View(QWidget):
         self.note.setWordWrap(True)
         self.note.setObjectName("view-note")
         self.graphics = pg.GraphicsLayoutWidget()
+        # Plot items are costly to build: they are kept between drawings and emptied.
+        self._plots: dict[tuple[int, int], pg.PlotItem] = {}
+        self._labels: dict[tuple[int, int], pg.LabelItem] = {}
+        self._used: set[tuple[int, int]] = set()
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addWidget(self.note)
         layout.addWidget(self.graphics, 1)
 
     def clear(self) -> None:
-        self.graphics.clear()
+        for plot in self._plots.values():
+            plot.clear()
+            if plot.legend is not None:
+                plot.legend.clear()
+            plot.setTitle(None)
+            plot.setLogMode(False, False)
+            plot.enableAutoRange()
+            plot.setXLink(None)
+        for label in self._labels.values():
+            label.setText("")
+        self._used.clear()
         self.filled = False
+
+    def prebuild(self) -> None:
+        """Build the usual plot items now (idle time), hidden until a drawing uses them."""
+        for row, col in self.cells:
+            self.add_plot(row, col, "", "")
+        self._used.clear()
+        self._prune()
+
+    def _prune(self) -> None:
+        """Hide the plots and labels the last drawing did not use (kept for the next)."""
+        for store in (self._plots, self._labels):
+            for key, item in store.items():
+                item.setVisible(key in self._used)
 
     def show_results(self, results: RunResults, channel: str) -> None:
         self.clear()
@@ -204,9 +234,13 @@ class View(QWidget):
             self.filled = bool(self.draw(results, channel))
         except Exception as exc:  # noqa: BLE001 - an odd dataset must not take the window down
             self.clear()
+            self._prune()
             self.note.setText(f"cannot draw this view: {type(exc).__name__}: {exc}")
             self.note.setStyleSheet("color: #b00020;")
             return
+        if not self.filled:
+            self.clear()
+        self._prune()
         if not self.filled:
             self.note.setText(self.missing(results, channel))
             self.note.setStyleSheet("color: #666;")
@@ -225,26 +259,47 @@ class View(QWidget):
 
     def add_plot(self, row: int, col: int, left: str, bottom: str, left_units: str | None = None,
                  bottom_units: str | None = None) -> pg.PlotItem:
-        plot = self.graphics.addPlot(row=row, col=col)
+        key = (row, col)
+        plot = self._plots.get(key)
+        if plot is None:
+            plot = self._plots[key] = self.graphics.addPlot(row=row, col=col)
+            plot.addLegend(offset=(-10, 10))
+        plot.setVisible(True)
+        self._used.add(key)
         plot.setLabel("left", left, units=left_units)
         plot.setLabel("bottom", bottom, units=bottom_units)
-        plot.showGrid(x=True, y=True, alpha=0.2)
-        plot.addLegend(offset=(-10, 10))
         return plot
+
+    def add_label(self, row: int, col: int, text: str) -> pg.LabelItem:
+        key = (row, col)
+        label = self._labels.get(key)
+        if label is None:
+            label = self._labels[key] = pg.LabelItem(justify="left", size="10pt")
+            self.graphics.addItem(label, row=row, col=col)
+        label.setVisible(True)
+        self._used.add(key)
+        label.setText(text, size="10pt")
+        return label
 
     def set_note(self, text: str) -> None:
         self.note.setText(text)
         self.note.setStyleSheet("")
 
 
+#: Curves longer than this are drawn decimated (min and max per bin: no peak is lost).
+DRAW_POINTS = 6000
+
+
 def _line(plot: pg.PlotItem, x, y, colour: str, name: str | None = None, width: float = 1.2,
           style=Qt.PenStyle.SolidLine) -> pg.PlotDataItem:
-    item = plot.plot(np.asarray(x, dtype=float), np.asarray(y, dtype=float),
-                     pen=pg.mkPen(colour, width=width, style=style), name=name,
-                     connect="finite")
-    item.setDownsampling(auto=True, method="peak")
-    item.setClipToView(True)
-    return item
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if y.size > DRAW_POINTS and np.all(np.isfinite(y)):
+        x, y = min_max_decimate(x, y, DRAW_POINTS)
+    elif y.size > DRAW_POINTS:
+        step = int(np.ceil(y.size / DRAW_POINTS))
+        x, y = x[::step], y[::step]
+    return plot.plot(x, y, pen=pg.mkPen(colour, width=width, style=style), name=name,
+                     connect="finite", skipFiniteCheck=False)
 
 
 def _points(plot: pg.PlotItem, x, y, colour: str, name: str | None = None, size: int = 5
@@ -289,6 +344,7 @@ def active_span(t: np.ndarray, envelope: np.ndarray, fraction: float = 0.01
 class HVDView(View):
     title = "HVD components"
     plugins = ("hvd",)
+    cells = ((0, 0), (1, 0), (2, 0))
 
     def __init__(self, max_components: int = MAX_COMPONENTS_DRAWN,
                  parent: QWidget | None = None) -> None:
@@ -391,6 +447,7 @@ class _AmplitudeView(View):
     def __init__(self, compact: bool = False, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.compact = compact
+        self.cells = ((0, 0),) if compact else ((0, 0), (0, 1))
     summary_section = ""
     summary_y = ""
 
@@ -526,8 +583,7 @@ class EquivalentDampingView(View):
             return False
         robust_range(plot, [finite_pairs([(w, c)])[0][1] for w, c in zip(rows_w, rows_cq)
                             if finite_pairs([(w, c)])])
-        label = pg.LabelItem("<br>".join(lines), justify="left", size="10pt")
-        self.graphics.addItem(label, row=1, col=0)
+        self.add_label(1, 0, "<br>".join(lines))
         convention = result.scalar("amplitude_convention")
         self.set_note("C_q = 2 ζ (μ + M) 2π f against displacement amplitude W, and its "
                       "first-order fit C_q = C_i + 8 C_f ω W / 3π (Eq. 24)")
@@ -602,6 +658,7 @@ class ModalModelView(View):
 class SpectrumView(View):
     title = "Spectrum / FRF"
     plugins = ("spectrum", "frf")
+    cells = ((0, 0), (1, 0), (2, 0))
 
     def draw(self, results: RunResults, channel: str) -> bool:
         drawn = False
@@ -664,11 +721,35 @@ class OverviewView(QWidget):
         for i, part in enumerate(self.parts):
             grid.addWidget(part, i // 2, i % 2)
         self.filled = False
+        self._pending: list[tuple] = []
+        self._next = QTimer(self)  # owned by the view: it dies with it
+        self._next.setSingleShot(True)
+        self._next.setInterval(0)
+        self._next.timeout.connect(self._draw_next)
 
     def show_results(self, results: RunResults, channel: str) -> None:
+        """Draw the first part now and the others in the next turns of the event loop, so
+        that the window keeps answering while the four figures are built."""
+        self._pending = [(part, results, channel) for part in self.parts]
+        self._draw_next()
+
+    def _draw_next(self) -> None:
+        if not self._pending:
+            return
+        part, results, channel = self._pending.pop(0)
+        part.show_results(results, channel)
+        self.filled = any(p.filled for p in self.parts)
+        if self._pending:
+            self._next.start()
+
+    def prebuild(self) -> None:
         for part in self.parts:
-            part.show_results(results, channel)
-        self.filled = any(part.filled for part in self.parts)
+            part.prebuild()
+
+    def finish(self) -> None:
+        """Draw what is still pending at once (tests, screenshots, exports)."""
+        while self._pending:
+            self._draw_next()
 
 
 class SummaryView(QWidget):
@@ -946,6 +1027,14 @@ class AnalysisViews(QWidget):
         self.tabs.setObjectName("analysis-tabs")
         for view in self.views:
             self.tabs.addTab(view, view.title)
+        self._drawn: set[int] = set()  # views drawn for the run and channel shown
+        self.tabs.currentChanged.connect(self._draw_current)
+        # build the figures' plot items in idle time, one view per turn of the event loop
+        self._prebuild = [v for v in self.views if hasattr(v, "prebuild")]
+        self._prebuild_timer = QTimer(self)
+        self._prebuild_timer.setSingleShot(True)
+        self._prebuild_timer.timeout.connect(self._prebuild_next)
+        self._prebuild_timer.start(200)
         self.parameters = AnalysisParameters(registry)
         self.parameters.rerun.connect(self.rerun)
         bar = QHBoxLayout()
@@ -962,6 +1051,19 @@ class AnalysisViews(QWidget):
         layout.addLayout(bar)
         layout.addWidget(self.state)
         layout.addWidget(splitter, 1)
+
+    def stop_drawing(self) -> None:
+        """Cancel drawings scheduled for later turns of the event loop (closing)."""
+        self._prebuild.clear()
+        self._prebuild_timer.stop()
+        overview = self.view(OverviewView)
+        overview._pending.clear()
+        overview._next.stop()
+
+    def _prebuild_next(self) -> None:
+        if self._prebuild and self.results is None:
+            self._prebuild.pop(0).prebuild()
+            self._prebuild_timer.start(0)
 
     def view(self, cls: type) -> Any:
         return next(v for v in self.views if isinstance(v, cls))
@@ -998,13 +1100,24 @@ class AnalysisViews(QWidget):
         self._redraw()
 
     def _redraw(self) -> None:
-        if self.results is None:
+        """Views are drawn when shown: the current one now, the others on their turn."""
+        self._drawn.clear()
+        self._draw_current()
+
+    def _draw_current(self, *args) -> None:
+        self._draw(self.tabs.currentIndex())
+
+    def _draw(self, index: int) -> None:
+        if self.results is None or index < 0 or index in self._drawn:
             return
-        channel = self.channel.currentData() or ""
-        for view in self.views:
-            view.show_results(self.results, channel)
+        self._drawn.add(index)
+        self.views[index].show_results(self.results, self.channel.currentData() or "")
 
     def filled(self) -> dict[str, bool]:
+        """Whether each view shows data (draws the views not drawn yet)."""
+        for index in range(len(self.views)):
+            self._draw(index)
+        self.view(OverviewView).finish()
         return {view.title: view.filled for view in self.views}
 
     # ------------------------------------------------------------------ re-analysis

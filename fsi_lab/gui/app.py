@@ -9,6 +9,7 @@ the tabs and in the log; the application keeps running.
 
 from __future__ import annotations
 
+import gc
 import sys
 import time
 from pathlib import Path
@@ -96,6 +97,10 @@ class MainWindow(QMainWindow):
         self._build_layout()
         self._build_menu()
         self._connect()
+        # The window's objects live as long as it does: keep them out of the garbage
+        # collector's full passes, which would otherwise pause the UI thread now and then.
+        gc.collect()
+        gc.freeze()
         for record in self.registry.records:
             if record.status in ("failed", "invalid"):
                 self.log.add(LogRecord("WARNING", f"plugin {record.name} ({record.distribution}) "
@@ -170,7 +175,7 @@ class MainWindow(QMainWindow):
         f.log.connect(self.log.add)
         f.state.connect(self.bench.on_state)
         self.session.open_failed.connect(lambda text: self.notify("ERROR", text))
-        self.session.checked.connect(lambda _: self.run_control.update_buttons())
+        self.session.checked.connect(self._checked)
         self.run_control.started.connect(self._run_started)
         self.run_control.finished.connect(self._run_finished)
         self.run_control.refused.connect(lambda text: self.notify("ERROR", f"run refused: {text}"))
@@ -188,6 +193,14 @@ class MainWindow(QMainWindow):
         self.messages.show_message(level, text)
         self.log.add(LogRecord(level, text))
         self.statusBar().showMessage(text.splitlines()[0][:200], 10000)
+
+    def _checked(self, checked: Any) -> None:
+        self.run_control.update_buttons()
+        profile = checked.profile
+        if profile is not None and profile.channels and not self.run_control.running:
+            # lay out the live plots now: building them at Start would pause the window
+            self.live.configure({name: c.unit for name, c in profile.channels.items()},
+                                profile.run["sample_rate"])
 
     def _forms_valid(self) -> bool:
         return self.designer.forms_valid() and self.bench.forms_valid()
@@ -244,7 +257,12 @@ class MainWindow(QMainWindow):
     def _run_finished(self, outcome: Any) -> None:
         self.bench.on_run_finished(outcome)
         kept = f" The data acquired so far is kept in {outcome.path}." if outcome.path else ""
-        if outcome.exit_status == "failed":
+        if outcome.exit_status == "failed" and outcome.path is None and not outcome.final_states:
+            # the run process died before it could make the bench safe: do it from here
+            self.notify("ERROR", f"run failed: {outcome.error}. Putting the bench in its safe "
+                                 "state now.")
+            self.bench.safe_state()
+        elif outcome.exit_status == "failed":
             self.notify("ERROR", f"run failed: {outcome.error}. The bench was put in its safe "
                                  f"state.{kept}")
         elif outcome.exit_status == "aborted":
@@ -293,6 +311,7 @@ class MainWindow(QMainWindow):
             event.ignore()
             return
         self.live.timer.stop()
+        self.analysis.stop_drawing()
         self.analysis.wait()
         self.pool.wait_all()
         super().closeEvent(event)
@@ -321,6 +340,7 @@ def take_screenshot(window: MainWindow, path: Path) -> bool:
     """Render the whole window into ``path`` (PNG)."""
     if window.analysis.results is not None:
         window.tabs.setCurrentWidget(window.analysis)
+        window.analysis.filled()  # every view drawn now
     app = QApplication.instance()
     for _ in range(5):
         app.processEvents()

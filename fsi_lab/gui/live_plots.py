@@ -119,12 +119,29 @@ class LivePlots(QWidget):
 
     # ------------------------------------------------------------------ setup
     def configure(self, units: Mapping[str, str], sample_rate: float) -> None:
-        """Empty the plots and prepare one row per channel (``units``: name -> unit)."""
-        self.graphics.clear()
+        """Empty the plots and prepare one row per channel (``units``: name -> unit).
+
+        The plot items are kept when the channels and the rate are those already shown
+        (building them is the costly part), so configuring again before a run is cheap.
+        """
+        same = dict(units) == self.units and float(sample_rate) == self.sample_rate \
+            and bool(self.curves)
         self.units = dict(units)
         self.sample_rate = float(sample_rate)
         capacity = int(round(self.window_s * self.sample_rate)) if sample_rate > 0 else 1
         self.buffers = {name: RingBuffer(capacity) for name in self.units}
+        self.t_end = 0.0
+        self.t_first = None
+        self.blocks = 0
+        self._dirty = False
+        if same:
+            for name in self.units:
+                self.curves[name].setData([], [])
+                self.spectra[name].setData([], [])
+                self._y_ranges[name] = None
+                self._s_ranges[name] = None
+            return
+        self.graphics.clear()
         self.curves.clear()
         self.spectra.clear()
         self.time_plots.clear()

@@ -1,9 +1,10 @@
 """Run control: start a run, abort it, follow its progress, exit status and log.
 
-A run is :meth:`fsi_lab.runner.Runner.run` on a thread of its own; its events reach the UI
-through :class:`~fsi_lab.gui.worker.EventForwarder`. Abort calls :meth:`Runner.abort`, which is
-thread-safe: the runner puts the bench in its safe state (amplifier first), keeps the data
-acquired so far and records the exit status in the run file.
+A run is :meth:`fsi_lab.runner.Runner.run` in a child process followed by a worker thread
+(:mod:`fsi_lab.gui.run_process` says why); its events reach the UI through
+:class:`~fsi_lab.gui.worker.EventForwarder`. Abort makes the child call :meth:`Runner.abort`: the
+runner puts the bench in its safe state (amplifier first), keeps the data acquired so far and
+records the exit status in the run file.
 """
 
 from __future__ import annotations
@@ -18,10 +19,11 @@ from PySide6.QtWidgets import (
     QProgressBar, QPushButton, QToolButton, QVBoxLayout, QWidget,
 )
 
-from fsi_lab.events import EventBus, LogRecord, Progress, StateChanged
+from fsi_lab.events import LogRecord, Progress, StateChanged
 from fsi_lab.gui.session import ProfileSession
 from fsi_lab.gui.worker import EventForwarder, Task
-from fsi_lab.runner import Runner, RunOutcome
+from fsi_lab.gui.run_process import RunProcess
+from fsi_lab.runner import RunOutcome
 
 LEVELS = {"DEBUG": 10, "INFO": 20, "WARNING": 30, "ERROR": 40}
 STATUS_STYLE = {
@@ -86,7 +88,7 @@ class RunControl(QWidget):
         self.session = session
         self.forwarder = forwarder
         self.ready = ready
-        self.runner: Runner | None = None
+        self.run_process: RunProcess | None = None
         self.task: Task | None = None
         self.outcome: RunOutcome | None = None
         self.state = "idle"
@@ -166,16 +168,9 @@ class RunControl(QWidget):
         if not self.can_start():
             return False
         profile = self.session.current.profile
-        bus = EventBus()
-        bus.subscribe(self.forwarder)
-        try:
-            # The analysis runs afterwards in a child process (see fsi_lab.gui.analysis_job):
-            # in this process its compiled code would hold the interpreter lock and freeze the UI.
-            self.runner = Runner(profile, self.session.registry, Path(self.out_dir.text()),
-                                 bus=bus, analyze=False)
-        except Exception as exc:  # noqa: BLE001
-            self.refused.emit(str(exc))
-            return False
+        # The analysis runs afterwards as fsi-lab analyze (see fsi_lab.gui.analysis_job).
+        self.run_process = RunProcess(profile.text, profile.path, list(profile.overrides),
+                                      Path(self.out_dir.text()), self.forwarder)
         self.outcome = None
         self.exit_label.setText("")
         self.exit_label.setStyleSheet("")
@@ -183,7 +178,7 @@ class RunControl(QWidget):
         self.progress.setValue(0)
         self.state = "starting"
         self.state_label.setText("starting")
-        self.task = Task(self.runner.run, name="run")
+        self.task = Task(self.run_process.follow, name="run")
         self.task.succeeded.connect(self._on_outcome)
         self.task.failed.connect(self._on_error)
         self.task.done.connect(self._on_done)
@@ -194,8 +189,8 @@ class RunControl(QWidget):
 
     def abort(self) -> None:
         """Ask the runner to stop now (safe state first, data kept)."""
-        if self.runner is not None and self.running:
-            self.runner.abort()
+        if self.run_process is not None and self.running:
+            self.run_process.abort()
             self.state_label.setText("aborting ...")
 
     def wait(self, timeout_ms: int = 30000) -> bool:

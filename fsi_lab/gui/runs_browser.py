@@ -83,6 +83,7 @@ class RunsBrowser(QWidget):
         self.pool = pool
         self.runs: dict[Path, RunResults] = {}
         self.pending: set[Path] = set()
+        self._stale = False
         self.list = QTreeWidget()
         self.list.setObjectName("runs-list")
         self.list.setHeaderLabels(["run", "status", "start", "file"])
@@ -250,8 +251,18 @@ class RunsBrowser(QWidget):
             return channel
         return channels[0] if channels else None
 
-    def compare(self, *args) -> None:
-        """Overlay the ticked runs' curves and list their identified values."""
+    def showEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().showEvent(event)
+        if self._stale:
+            self.compare(force=True)
+
+    def compare(self, *args, force: bool = False) -> None:
+        """Overlay the ticked runs' curves and list their identified values (drawn when the
+        browser is on screen; until then only marked as out of date)."""
+        if not (force or self.isVisible()):
+            self._stale = True
+            return
+        self._stale = False
         self.graphics.clear()
         runs = self._compared()
         plots = {}
@@ -337,10 +348,14 @@ class RunsBrowser(QWidget):
     # ------------------------------------------------------------------ exports
     def export_figure(self, path: str | Path) -> Path:
         """The comparison plots as PNG or SVG (by the suffix)."""
+        if self._stale:
+            self.compare(force=True)
         return export_figure(self.graphics, path)
 
     def export_csv(self, path: str | Path) -> Path:
         """The identified values of the ticked runs, one row per component."""
+        if self._stale:
+            self.compare(force=True)
         return write_csv(path, SUMMARY_COLUMNS, self.summary_rows())
 
     def export_curves_csv(self, path: str | Path) -> Path:

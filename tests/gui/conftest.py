@@ -20,7 +20,88 @@ from PySide6.QtCore import QCoreApplication, QEvent  # noqa: E402
 from fsi_lab.gui.app import MainWindow, _configure_pyqtgraph  # noqa: E402
 from fsi_lab.runfile import RunFileWriter, write_analysis  # noqa: E402
 
+ROOT = Path(__file__).resolve().parents[2]
 CHECK_TIMEOUT_MS = 15000
+
+#: The paper's wet experiment on the in-process simulated bench paced in real time; the
+#: excitation and the analysis chain are those of profiles/wet-beam-sim.toml.
+WET_INPROCESS = """
+[run]
+name = "wet beam on the in-process bench"
+duration = {duration}
+sample_rate = {sample_rate}
+block_duration = 0.1
+
+[safety]
+max_drive_v = 2.0
+max_gain = 10.0
+max_stroke_mm = 5.0
+
+[shaker]
+suspension_hz = 30.0
+damping_ratio = 0.08
+mm_per_volt = 0.5
+
+[specimen]
+length = 0.08
+width = 0.01275
+thickness = 0.00008
+youngs_modulus = 240e9
+density = 7200.0
+fluid = "water"
+drag_coefficient = 1.8
+measurement_point = 0.08
+
+[model]
+modes = 4
+c_i = 0.65
+c_f = 33.0
+
+[bench.source]
+plugin = "inprocess-source"
+
+[bench.amplifier]
+plugin = "inprocess-amplifier"
+gain = 2.0
+
+[bench.vibrometer]
+plugin = "inprocess-vibrometer"
+range = "125mm/s/V"
+
+[bench.acquisition]
+plugin = "inprocess-acquisition"
+realtime = true
+
+[channels.drive]
+quantity = "voltage"
+unit = "V"
+sensitivity = 1.0
+input = 1
+
+[channels.base_acceleration]
+quantity = "acceleration"
+unit = "m/s^2"
+sensitivity = 0.0102
+input = 2
+
+[channels.tip_velocity]
+quantity = "velocity"
+unit = "m/s"
+input = 3
+sensor = "vibrometer"
+{extra_channels}
+"""
+
+
+def wet_inprocess_profile(folder: Path, duration: float = 3.0, sample_rate: float = 10000.0,
+                          extra_channels: str = "") -> Path:
+    """WET_INPROCESS followed by the [excitation] and [analysis] of the wet profile."""
+    wet = (ROOT / "profiles" / "wet-beam-sim.toml").read_text()
+    tail = wet[wet.index("[excitation]"):]
+    path = folder / "wet-inprocess.toml"
+    path.write_text(WET_INPROCESS.format(duration=duration, sample_rate=sample_rate,
+                                         extra_channels=extra_channels) + "\n" + tail)
+    return path
 RUN_TIMEOUT_MS = 60000
 
 

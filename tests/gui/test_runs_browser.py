@@ -13,6 +13,7 @@ def test_compare_two_runs_and_export(qtbot, make_window, registry, tmp_path):
     qtbot.waitUntil(lambda: len(window.runs.runs) == 2 and not window.runs.pending,
                     timeout=10000)
     assert any("foreign.h5" in text for _, text in window.messages.messages)
+    window.tabs.setCurrentWidget(window.runs)
     window.runs.set_checked([a, b])
     assert window.runs.note.text() == "2 run(s) compared"
     assert window.runs.table.rowCount() == 4          # 2 runs x 2 components

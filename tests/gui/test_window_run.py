@@ -1,33 +1,15 @@
 """The real window drives runs on the in-process simulated bench (paced in real time)."""
 
-import re
-from pathlib import Path
-
 import numpy as np
 import pytest
-from conftest import RUN_TIMEOUT_MS, wait_checked, wait_finished
+from conftest import RUN_TIMEOUT_MS, wait_checked, wait_finished, wet_inprocess_profile
 from PySide6.QtCore import Qt
 
 from fsi_lab.chain import DEFAULT_CHAIN
 from fsi_lab.runfile import read_run
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def wet_profile(tmp_path, duration: float = 3.0) -> Path:
-    """The paper's wet experiment (profiles/wet-beam-sim.toml) shortened and paced in real
-    time, with its analysis chain."""
-    text = (ROOT / "profiles" / "wet-beam-sim.toml").read_text()
-    text = re.sub(r"(?m)^duration = 10\.0", f"duration = {duration}", text, count=1)
-    text = text.replace('plugin = "inprocess-acquisition"',
-                        'plugin = "inprocess-acquisition"\nrealtime = true')
-    path = tmp_path / "wet.toml"
-    path.write_text(text)
-    return path
-
-
 def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_path):
-    path = wet_profile(tmp_path)
+    path = wet_inprocess_profile(tmp_path)
     window = make_window(registry)
     assert window.open_profile(path)
     chain = list(window.session.base.analysis["chain"])
