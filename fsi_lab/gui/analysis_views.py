@@ -134,15 +134,29 @@ def summary_series(results: RunResults, channel: str, section: str, x: str, y: s
 
 def time_axis(results: RunResults, channel: str, result: PluginResult | None, n: int
               ) -> np.ndarray:
-    """Sample times of a dataset of ``n`` samples: its own time dataset or the channel's."""
+    """Sample times of a dataset of ``n`` samples: its own time dataset, else the channel's
+    sample times from where the decomposition started (``start_s`` of hvd)."""
     if result is not None:
         t = result.get(*TIME)
         if t is not None and np.asarray(t).size == n:
             return np.asarray(t, dtype=float)
     data = results.channels.get(channel)
     if data is not None and data.sample_rate > 0:
-        return data.t0 + np.arange(n) / data.sample_rate
+        return origin(results, channel, result) + np.arange(n) / data.sample_rate
     return np.arange(n, dtype=float)
+
+
+def origin(results: RunResults, channel: str, result: PluginResult | None = None) -> float:
+    """Time (s, on the run's clock) of sample 0 of the analysed components: the channel's t0
+    plus the start the decomposition chose (``start_s``), when there is one."""
+    data = results.channels.get(channel)
+    t0 = float(data.t0) if data is not None else 0.0
+    for candidate in (result, results.result(channel, "hvd")):
+        if candidate is not None:
+            start = candidate.scalar("start_s")
+            if isinstance(start, (int, float)):
+                return t0 + float(start)
+    return t0
 
 
 def _format_ci(value: Any) -> str:
@@ -363,9 +377,17 @@ class HVDView(View):
         t = time_axis(results, channel, hvd, n)
         unit = results.channels[channel].unit if channel in results.channels else ""
         top = self.add_plot(0, 0, channel, "time", unit or None, "s")
-        measured = results.channels.get(channel)
-        if measured is not None and measured.data.size == n:
-            _line(top, t, measured.data, "#9e9e9e", "measured", 1.0)
+        residual = hvd.get("residual")
+        if components and residual is not None and np.asarray(residual).size == n:
+            record = np.sum(components, axis=0) + np.asarray(residual, dtype=float)
+            relative = hvd.scalar("relative_to")
+            _line(top, t, record, "#9e9e9e",
+                  f"decomposed record (relative to {relative})" if isinstance(relative, str)
+                  and not relative.startswith("none") else "decomposed record", 1.0)
+        else:
+            measured = results.channels.get(channel)
+            if measured is not None and measured.data.size == n:
+                _line(top, t, measured.data, "#9e9e9e", "measured", 1.0)
         if components:
             _line(top, t, np.sum(components, axis=0), "#000000", "sum of components", 1.0,
                   Qt.PenStyle.DashLine)
@@ -423,8 +445,9 @@ class FrequencyView(View):
         if inst is not None and inst.ok:
             times = per_component(inst, ZC_TIME)
             freqs = per_component(inst, ZC_FREQUENCY)
+            shift = origin(results, channel, inst)
             for k, (t, f) in enumerate(finite_pairs(zip(times, freqs))):
-                _points(plot, t, f, COLOURS[k % len(COLOURS)],
+                _points(plot, t + shift, f, COLOURS[k % len(COLOURS)],
                         f"zero crossings, component {k}", 4)
                 shown.append(f)
                 drawn = True

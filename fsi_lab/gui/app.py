@@ -146,7 +146,7 @@ class MainWindow(QMainWindow):
         log_dock.setObjectName("log-dock")
         log_dock.setWidget(self.log)
         self.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, log_dock)
-        self.resizeDocks([bench_dock], [340], Qt.Orientation.Horizontal)
+        self.resizeDocks([bench_dock], [370], Qt.Orientation.Horizontal)
         self.resizeDocks([log_dock], [140], Qt.Orientation.Vertical)
         self.status_label = QLabel(f"{sum(len(v) for v in self.registry.descriptors.values())} "
                                    "plugins loaded")

@@ -167,8 +167,9 @@ class LivePlots(QWidget):
                     item.hideAxis("bottom")
             plot.setLabel("left", name, units=None if not unit else unit)
             spec.setLabel("left", f"|{name}|")
-            spec.setLogMode(y=True)
-            spec.setXRange(0, self.sample_rate / 2, padding=0)
+            spec.setLogMode(x=True, y=True)  # beam modes sit at a few hertz to a few hundred
+            spec.setXRange(np.log10(self.sample_rate / self.spectrum_samples),
+                           np.log10(self.sample_rate / 2), padding=0)
             if row == last_row:
                 plot.setLabel("bottom", "time", units="s")
                 spec.setLabel("bottom", "frequency", units="Hz")
