@@ -344,6 +344,12 @@ def format_summary(summary: dict[str, Any]) -> str:
                          f"C_f = {eq['c_f']:.4g} kg/m^2 {_interval(eq.get('c_f_ci95'))}, "
                          f"R^2 = {eq['r2']:.3f}")
             lines.append(text)
+            model = component.get("modal_model")
+            if model and model.get("envelope_rms_error") is not None:
+                lines.append(
+                    f"    modal model (C_i = {model['c_i']:.4g}, C_f = {model['c_f']:.4g}) vs "
+                    f"measurement: envelope RMS error {100 * model['envelope_rms_error']:.1f} %, "
+                    f"frequency error {model['frequency_error_pct']:+.2f} %")
         for error in info.get("errors", []):
             lines.append(f"  failed {error['plugin']}: {error['message']}")
     return "\n".join(lines)
