@@ -35,9 +35,9 @@ from PySide6.QtWidgets import (
 from fsi_lab.chain import DEFAULT_CHAIN
 from fsi_lab.errors import FsiLabError
 from fsi_lab.gui.analysis_job import AnalysisJob
-from fsi_lab.gui.forms import ParamForm, value_text
+from fsi_lab.gui.forms import ParamForm
 from fsi_lab.gui.results import PluginResult, RunResults
-from fsi_lab.gui.session import min_max_decimate
+from fsi_lab.gui.decimate import min_max_decimate
 from fsi_lab.gui.worker import TaskPool
 from fsi_lab.profile import ANALYSIS_PARAMS, parse_profile
 from fsi_lab.registry import Registry

@@ -19,7 +19,7 @@ from PySide6.QtCore import QEvent, QTimer
 from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from fsi_lab.events import DataBlock
-from fsi_lab.gui.session import min_max_decimate
+from fsi_lab.gui.decimate import min_max_decimate
 
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2",
            "#17becf")

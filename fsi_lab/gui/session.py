@@ -23,6 +23,7 @@ from fsi_lab.profile import Profile, parse_profile
 from fsi_lab.registry import Registry
 from fsi_lab.runner import check_safety
 from fsi_lab.safety import SafetyReport
+from fsi_lab.gui.decimate import min_max_decimate
 from fsi_lab.gui.worker import TaskPool
 
 PREVIEW_POINTS = 4000
@@ -51,23 +52,6 @@ def with_excitation_plugin(text: str, plugin: str) -> str:
     if end is None:
         end = len(lines)
     return "".join(lines[:start]) + body + "\n" + "".join(lines[end:])
-
-
-def min_max_decimate(t: np.ndarray, y: np.ndarray, points: int) -> tuple[np.ndarray, np.ndarray]:
-    """At most about ``points`` samples that keep every peak (min and max of each bin)."""
-    n = y.size
-    if n <= points:
-        return t, y
-    bins = max(1, points // 2)
-    per = n // bins
-    used = per * bins
-    blocks = y[:used].reshape(bins, per)
-    lo = blocks.argmin(axis=1) + np.arange(bins) * per
-    hi = blocks.argmax(axis=1) + np.arange(bins) * per
-    idx = np.sort(np.concatenate([lo, hi]))
-    if used < n:
-        idx = np.concatenate([idx, [n - 1]])
-    return t[idx], y[idx]
 
 
 @dataclass

@@ -1,11 +1,10 @@
 """Live plots: ring buffers and decimated drawing whose cost does not grow with the run."""
 
 import numpy as np
-import pytest
 
 from fsi_lab.events import DataBlock
 from fsi_lab.gui.live_plots import LivePlots, RingBuffer
-from fsi_lab.gui.session import min_max_decimate
+from fsi_lab.gui.decimate import min_max_decimate
 
 
 def test_ring_buffer_keeps_the_latest_samples_in_order():
