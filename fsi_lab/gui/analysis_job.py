@@ -13,7 +13,7 @@ import json
 import sys
 from pathlib import Path
 
-from PySide6.QtCore import QObject, QProcess, Signal
+from PySide6.QtCore import QObject, QProcess, QTimer, Signal
 
 
 class AnalysisJob(QObject):
@@ -21,6 +21,7 @@ class AnalysisJob(QObject):
 
     succeeded = Signal(object, object)
     failed = Signal(object, str)
+    MAX_ATTEMPTS = 3
 
     def __init__(self, path: str | Path, overrides: list[str] = (),
                  parent: QObject | None = None) -> None:
@@ -31,6 +32,7 @@ class AnalysisJob(QObject):
         self.process.finished.connect(self._finished)
         self.process.errorOccurred.connect(self._error)
         self._reported = False
+        self.attempts = 0
 
     def arguments(self) -> list[str]:
         args = ["-m", "fsi_lab.cli", "analyze", str(self.path), "--json", "--quiet"]
@@ -65,6 +67,11 @@ class AnalysisJob(QObject):
             self._report(self.succeeded, self.path, answer)
             return
         message = answer.get("error") or _last_lines(err) or f"fsi-lab analyze ended with {code}"
+        if "unable to lock file" in message and self.attempts < self.MAX_ATTEMPTS:
+            # another program is reading the file this very moment: try again shortly
+            self.attempts += 1
+            QTimer.singleShot(500 * self.attempts, self.start)
+            return
         self._report(self.failed, self.path, message)
 
     def _error(self, error: QProcess.ProcessError) -> None:

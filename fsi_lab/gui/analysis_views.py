@@ -1023,10 +1023,12 @@ class AnalysisParameters(QGroupBox):
 class AnalysisViews(QWidget):
     """The views of one run, a channel selector and the parameter panel.
 
-    Signals: ``reanalysed(path)`` after a re-analysis was stored, ``message(level, text)``.
+    Signals: ``reanalysed(path)`` after an analysis was stored, ``analysis_failed(path)``,
+    ``message(level, text)``.
     """
 
     reanalysed = Signal(object)
+    analysis_failed = Signal(object)
     message = Signal(str, str)
 
     def __init__(self, registry: Registry, pool: TaskPool, parent: QWidget | None = None) -> None:
@@ -1184,3 +1186,4 @@ class AnalysisViews(QWidget):
         self._end_job()
         self.parameters.note.setText(f"failed: {message}")
         self.message.emit("ERROR", f"analysis of {Path(path).name} failed: {message}")
+        self.analysis_failed.emit(path)

@@ -97,10 +97,6 @@ class MainWindow(QMainWindow):
         self._build_layout()
         self._build_menu()
         self._connect()
-        # The window's objects live as long as it does: keep them out of the garbage
-        # collector's full passes, which would otherwise pause the UI thread now and then.
-        gc.collect()
-        gc.freeze()
         for record in self.registry.records:
             if record.status in ("failed", "invalid"):
                 self.log.add(LogRecord("WARNING", f"plugin {record.name} ({record.distribution}) "
@@ -186,6 +182,7 @@ class MainWindow(QMainWindow):
         self.runs.failed.connect(self._run_failed)
         self.analysis.message.connect(self.notify)
         self.analysis.reanalysed.connect(self._reanalysed)
+        self.analysis.analysis_failed.connect(lambda path: self.open_runs([path], show=True))
 
     # ------------------------------------------------------------------ messages
     def notify(self, level: str, text: str) -> None:
@@ -271,15 +268,20 @@ class MainWindow(QMainWindow):
         if outcome.path is not None:
             self.last_run = Path(outcome.path).resolve()
             chain = self._run_profile.analysis["chain"] if self._run_profile else []
-            if outcome.exit_status == "completed" and chain and not self._closing:
+            if outcome.exit_status == "completed" and chain and not self._closing \
+                    and self.analysis.analyse(outcome.path, list(self._run_overrides)):
+                # the file is read once the analysis has written to it (HDF5 files are locked
+                # while a process writes them)
                 self.run_control.state_label.setText("completed; analysing ...")
-                self.analysis.analyse(outcome.path, list(self._run_overrides))
-            self.open_runs([outcome.path], show=True)
+            else:
+                self.open_runs([outcome.path], show=True)
         if self._closing:
             QTimer.singleShot(0, self.close)
 
     def _run_loaded(self, results: RunResults) -> None:
         path = results.path.resolve()
+        if path == self.last_run:
+            self.bench.show_identities(results.instruments)
         if path in self._show_when_loaded:
             self._show_when_loaded.discard(path)
             self._show_run(results)
@@ -315,6 +317,14 @@ class MainWindow(QMainWindow):
         self.analysis.wait()
         self.pool.wait_all()
         super().closeEvent(event)
+
+
+def freeze_startup_objects() -> None:
+    """Keep the objects built so far (the window, its plots, the plugins) out of the garbage
+    collector's full passes, which would otherwise pause the UI thread now and then. For the
+    application's own process only: frozen objects are never collected."""
+    gc.collect()
+    gc.freeze()
 
 
 def _configure_pyqtgraph() -> None:
@@ -366,6 +376,7 @@ def main(args: Any) -> int:
     window = MainWindow(out_dir=getattr(args, "out", None) or "runs")
     window.resize(1680, 1050)
     window.show()
+    freeze_startup_objects()
     window.open_paths(paths)
     if screenshot is None:
         code = app.exec()

@@ -26,7 +26,6 @@ from fsi_lab.gui.session import ProfileSession
 from fsi_lab.gui.worker import TaskPool
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
-from fsi_lab.runfile import read_run
 from fsi_lab.runner import OPEN_ORDER, SAFE_ORDER, Runner
 
 LED_CLEAR = "background: #c8e6c9; color: #1b5e20; border-radius: 3px; padding: 1px 4px;"
@@ -327,11 +326,10 @@ class BenchPanel(QWidget):
         self.check_button.setEnabled(bool(self.boxes))
         self.status.setText(f"run {outcome.exit_status}: instruments left in their safe state"
                             if outcome.final_states else f"run {outcome.exit_status}")
-        if outcome.path is not None:
-            self.pool.start(lambda p=outcome.path: read_run(p, load_data=False).instruments,
-                            on_done=self._show_identities, name="read instruments")
 
-    def _show_identities(self, instruments: dict[str, dict[str, Any]]) -> None:
+    def show_identities(self, instruments: dict[str, dict[str, Any]]) -> None:
+        """Identities as the run file recorded them (the window passes them on once it has
+        read the file: reading it here too could collide with the analysis writing it)."""
         for role, info in instruments.items():
             box = self.boxes.get(role)
             if box is not None and info.get("identity"):

@@ -83,6 +83,7 @@ class RunsBrowser(QWidget):
         self.pool = pool
         self.runs: dict[Path, RunResults] = {}
         self.pending: set[Path] = set()
+        self._again: set[Path] = set()
         self._stale = False
         self.list = QTreeWidget()
         self.list.setObjectName("runs-list")
@@ -138,7 +139,8 @@ class RunsBrowser(QWidget):
         """Read each file off the UI thread; ``loaded`` or ``failed`` follows for each."""
         for path in paths:
             path = Path(path).resolve()
-            if path in self.pending:
+            if path in self.pending:  # read again once the current reading is done
+                self._again.add(path)
                 continue
             self.pending.add(path)
             self.pool.start(load_results, path,
@@ -148,9 +150,18 @@ class RunsBrowser(QWidget):
 
     reload = open
 
+    def _read_again(self, path: Path) -> bool:
+        if path in self._again:
+            self._again.discard(path)
+            self.open([path])
+            return True
+        return False
+
     def _loaded(self, results: RunResults) -> None:
         path = results.path.resolve()
         self.pending.discard(path)
+        if self._read_again(path):
+            return
         self.runs[path] = results
         self._refresh_list(path)
         self.compare()
@@ -158,6 +169,8 @@ class RunsBrowser(QWidget):
 
     def _failed(self, path: Path, exc: BaseException) -> None:
         self.pending.discard(path)
+        if self._read_again(path):
+            return
         message = str(exc) if isinstance(exc, FsiLabError) else (
             f"{path}: cannot be read as a run file ({type(exc).__name__}: {exc})")
         self.failed.emit(path, message)

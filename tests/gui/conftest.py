@@ -6,6 +6,7 @@ end of its test (a run still going is aborted first).
 
 from __future__ import annotations
 
+import gc
 from pathlib import Path
 
 import h5py
@@ -130,6 +131,7 @@ def make_window(qtbot, tmp_path):
         window.pool.wait_all()
         window.deleteLater()
     QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+    gc.collect()  # wrappers of deleted Qt objects go before the next test builds plots
 
 
 def wait_checked(qtbot, window, ok: bool | None = True):

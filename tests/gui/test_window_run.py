@@ -36,9 +36,14 @@ def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_pa
     assert window.run_control.exit_label.text().startswith("completed")
 
     # the analysis (fsi-lab analyze, in a child process) fills the views from the run file
-    qtbot.waitUntil(lambda: window.analysis.results is not None
-                    and window.analysis.results.path == outcome.path.resolve()
-                    and bool(window.analysis.results.analysis), timeout=RUN_TIMEOUT_MS)
+    try:
+        qtbot.waitUntil(lambda: window.analysis.results is not None
+                        and window.analysis.results.path == outcome.path.resolve()
+                        and bool(window.analysis.results.analysis), timeout=RUN_TIMEOUT_MS)
+    except Exception:
+        raise AssertionError(f"no analysis shown: state {window.run_control.state_label.text()!r}, "
+                             f"job {window.analysis.job}, messages {window.messages.messages}, "
+                             f"results {window.analysis.results and window.analysis.results.path}")
     assert window.run_control.state_label.text() == "completed; analysed"
     results = window.analysis.results
     groups = results.analysis["tip_velocity"]
