@@ -272,11 +272,11 @@ class View(QWidget):
         raise NotImplementedError
 
     def add_plot(self, row: int, col: int, left: str, bottom: str, left_units: str | None = None,
-                 bottom_units: str | None = None) -> pg.PlotItem:
+                 bottom_units: str | None = None, colspan: int = 1) -> pg.PlotItem:
         key = (row, col)
         plot = self._plots.get(key)
         if plot is None:
-            plot = self._plots[key] = self.graphics.addPlot(row=row, col=col)
+            plot = self._plots[key] = self.graphics.addPlot(row=row, col=col, colspan=colspan)
             plot.addLegend(offset=(-10, 10))
         plot.setVisible(True)
         self._used.add(key)
@@ -633,48 +633,77 @@ class EquivalentDampingView(View):
 
 
 class ModalModelView(View):
+    """The modal model (Eq. 20 with the identified C_i and C_f, driven by the measured base
+    motion) against the measurement: the decomposed signals, envelopes, backbone and damping."""
+
     title = "Modal model"
     plugins = ("modal-model",)
+    cells = ((0, 0), (1, 0), (2, 0), (2, 1))
 
     def draw(self, results: RunResults, channel: str) -> bool:
         model = results.result(channel, "modal-model")
         if model is None or not model.ok or not model.datasets:
             return False
-        measured = results.channels.get(channel)
-        response = per_component(model, ("response", "velocity", "model_response", "simulated"))
+        data = results.channels.get(channel)
+        rate = float(model.scalar("sample_rate") or (data.sample_rate if data else 1.0))
+        t0 = (float(data.t0) if data is not None else 0.0) + float(model.scalar("start_s") or 0.0)
+        unit = data.unit if data is not None else None
         drawn = False
-        if response and measured is not None:
-            plot = self.add_plot(0, 0, channel, "time", measured.unit, "s")
-            t_meas = measured.t0 + np.arange(measured.data.size) / measured.sample_rate
-            _line(plot, t_meas, measured.data, "#9e9e9e", "measured", 1.0)
-            t_model = time_axis(results, channel, model, response[0].size)
-            _line(plot, t_model, response[0], "#000000", "modal model", 1.4,
-                  Qt.PenStyle.DashLine)
+        measured = model.get("velocity_measured", "signal_measured")
+        simulated = model.get("velocity_model", "signal_model")
+        top = None
+        if measured is not None and simulated is not None:
+            top = self.add_plot(0, 0, channel, "time", unit, "s", colspan=2)
+            _line(top, t0 + np.arange(np.size(measured)) / rate, measured, "#9e9e9e",
+                  "measured (decomposed record)", 1.0)
+            _line(top, t0 + np.arange(np.size(simulated)) / rate, simulated, "#000000",
+                  "modal model", 1.2, Qt.PenStyle.DashLine)
             drawn = True
-        row = 1 if drawn else 0
-        for col, (names, label, units, other) in enumerate((
-                (FREQUENCY, "frequency", "Hz", "backbone"), (ZETA, "damping ratio ζ", None,
-                                                             "damping"))):
-            y_model = per_component(model, names)
-            x_model = per_component(model, DISPLACEMENT_AMPLITUDE)
-            pairs = [(a, b) for a, b in zip(x_model, y_model) if a.size == b.size and a.size]
-            if not pairs:
+        times = model.get("envelope_time")
+        if times is not None:
+            env = self.add_plot(1, 0, "envelope", "time", unit, "s", colspan=2)
+            if top is not None:
+                env.setXLink(top)
+            t_env = (float(data.t0) if data is not None else 0.0) + np.asarray(times, float)
+            for k, (m, s_) in enumerate(zip(per_component(model, ("envelope_measured",)),
+                                            per_component(model, ("envelope_model",)))):
+                colour = COLOURS[k % len(COLOURS)]
+                if m.size == t_env.size:
+                    _line(env, t_env, m, colour, f"measured {k}", 1.4)
+                if s_.size == t_env.size:
+                    _line(env, t_env, s_, colour, f"model {k}", 1.4, Qt.PenStyle.DashLine)
+                if k == 0 and m.size == t_env.size:
+                    span = active_span(t_env, m)
+                    if span is not None:
+                        env.setXRange(*span, padding=0)
+            drawn = True
+        for col, (x_name, y_name, label, units) in enumerate((
+                ("backbone_amplitude", "backbone_frequency", "frequency", "Hz"),
+                ("damping_amplitude", "damping_zeta", "damping ratio ζ", None))):
+            meas = finite_pairs(zip(per_component(model, (f"{x_name}_measured",)),
+                                    per_component(model, (f"{y_name}_measured",))))
+            sim = finite_pairs(zip(per_component(model, (f"{x_name}_model",)),
+                                   per_component(model, (f"{y_name}_model",))))
+            if not meas and not sim:
                 continue
-            plot = self.add_plot(row, col, label, "displacement amplitude", units, "m")
-            measured_result = results.result(channel, other)
-            if measured_result is not None and measured_result.ok:
-                for k, (a, b) in enumerate(zip(per_component(measured_result,
-                                                             DISPLACEMENT_AMPLITUDE),
-                                               per_component(measured_result, names))):
-                    if a.size == b.size and a.size:
-                        _points(plot, a, b, COLOURS[k % len(COLOURS)], f"measured {k + 1}", 4)
-            for k, (a, b) in enumerate(pairs):
-                _line(plot, a, b, "#000000", "modal model" if k == 0 else None, 1.6,
+            plot = self.add_plot(2, col, label, "displacement amplitude", units, "m")
+            for k, (a, b) in enumerate(meas):
+                _points(plot, a, b, COLOURS[k % len(COLOURS)], f"measured {k}", 4)
+            for k, (a, b) in enumerate(sim):
+                order = np.argsort(a)
+                _line(plot, a[order], b[order], COLOURS[k % len(COLOURS)], f"model {k}", 1.6,
                       Qt.PenStyle.DashLine)
+            robust_range(plot, [b for _, b in meas + sim])
             drawn = True
         if drawn:
-            self.set_note(f"the modal model (Eq. 20 with the identified C_i and C_f) against "
-                          f"the measurement of {channel}")
+            c_i, c_f = model.scalar("c_i"), model.scalar("c_f")
+            source = model.scalar("c_source")
+            coefficients = (f" with C_i = {c_i:.4g} kg/(m s), C_f = {c_f:.4g} kg/m²"
+                            if isinstance(c_i, (int, float)) and isinstance(c_f, (int, float))
+                            else "")
+            self.set_note(f"modal model (Eq. 20){coefficients}"
+                          + (f" ({source})" if isinstance(source, str) else "")
+                          + f" against the measurement of {channel}; dashed: model")
         return drawn
 
 

@@ -54,6 +54,8 @@ def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_pa
                 "Cq fit", "Spectrum / FRF", "Results", "All datasets"}
     if set(installed) >= {"hvd", "backbone", "damping", "equivalent-damping"}:
         assert {title for title, ok in filled.items() if ok} >= expected
+    if "modal-model" in chain:
+        assert filled["Modal model"]
     assert window.tabs.currentWidget() is window.analysis
     assert set(window.analysis.parameters.forms) == set(chain)
     # the bench panel shows the state read back after the safe state
