@@ -3,6 +3,10 @@
 Whatever ends a run (success, an error, Ctrl+C, SIGTERM, an instrument that stops answering,
 an abort from the GUI), the amplifier output is disabled and the source set to 0 V first; then
 the instruments' state is read back and the run file is finalized with its exit status.
+
+A run can also be stopped early (:meth:`Runner.stop`): the acquisition ends after the block in
+hand, the bench goes to the same safe state, and the shortened record is a completed run that is
+analysed like any other (root attribute ``stopped_early``).
 """
 
 from __future__ import annotations
@@ -44,11 +48,13 @@ class RunOutcome:
     safety: SafetyReport | None = None
     summary: dict[str, Any] | None = None
     final_states: dict[str, dict[str, Any]] = field(default_factory=dict)
+    stopped_early: bool = False
 
     def as_json(self) -> dict[str, Any]:
         return {
             "run": str(self.path) if self.path else None,
             "exit_status": self.exit_status,
+            "stopped_early": self.stopped_early,
             "error": self.error,
             "safety": self.safety.as_dict() if self.safety else None,
             "final_state": self.final_states,
@@ -148,6 +154,7 @@ class Runner:
         self.bus = bus or EventBus()
         self.analyze = analyze
         self._abort = threading.Event()
+        self._stop = threading.Event()
         self.instruments: dict[str, Instrument] = {}
         # Shared by the instruments of this run; simulated ones find the physics here, and
         # register in "cleanup" what must be stopped once every instrument is closed.
@@ -159,6 +166,15 @@ class Runner:
     def abort(self) -> None:
         """Ask the run to stop as soon as possible and go to the safe state (thread-safe)."""
         self._abort.set()
+
+    def stop(self) -> None:
+        """End the acquisition after the current block and keep the run (thread-safe).
+
+        The bench goes to its safe state as on every exit; unlike :meth:`abort`, the record is
+        a completed run (marked ``stopped_early``) and the analysis chain runs on it. Before
+        the excitation has started, a stop ends the run as aborted: there is nothing to keep.
+        """
+        self._stop.set()
 
     # ------------------------------------------------------------------ the run
     def run(self) -> RunOutcome:
@@ -187,6 +203,7 @@ class Runner:
             }, self.profile.excitation)
             self._acquire(writer, waveform, rate)
             outcome.exit_status = "completed"
+            outcome.stopped_early = self._stop.is_set()
         except (KeyboardInterrupt, RunAborted) as exc:
             outcome.exit_status = "aborted"
             outcome.error = str(exc) or "interrupted (Ctrl+C)"
@@ -293,6 +310,8 @@ class Runner:
         amplifier.enable_output(True)
         self.bus.emit(StateChanged("armed"))
         self._check_abort()
+        if self._stop.is_set():
+            raise RunAborted("stopped by the operator before the excitation started")
         source.start()
         self.bus.emit(StateChanged("running"))
         duration = profile.run["duration"]
@@ -322,6 +341,10 @@ class Runner:
             if now - last_poll >= INTERLOCK_POLL_S:
                 last_poll = now
                 self._check_interlocks(amplifier)
+            if self._stop.is_set():
+                self.bus.log("INFO", f"stopped by the operator after {samples / sample_rate:.3g} s "
+                                     f"of {duration:g} s")
+                break
         # A fast bench can finish between two polls: a trip must never pass as completed.
         self._check_interlocks(amplifier)
         writer.flush()
@@ -382,6 +405,7 @@ class Runner:
         writer.set_attrs({
             "stop_time": utc_now(),
             "exit_status": outcome.exit_status,
+            "stopped_early": outcome.stopped_early,
             "error": outcome.error or "",
             "traceback": outcome.traceback,
         })

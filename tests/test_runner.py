@@ -111,6 +111,39 @@ def test_abort_from_another_thread(sim_profile, registry, tmp_path):
     _assert_safe(outcome.path)
 
 
+def test_stop_keeps_a_shortened_completed_run_and_analyses_it(sim_profile, registry, tmp_path):
+    analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
+    runner, run, events = _run(sim_profile(duration=20.0, realtime="true", analysis=analysis),
+                               registry, tmp_path)
+    blocks = []
+
+    def stop_after_three_blocks(event):
+        if isinstance(event, DataBlock):
+            blocks.append(event)
+            if len(blocks) == 3:
+                runner.stop()
+
+    runner.bus.subscribe(stop_after_three_blocks)
+    outcome = run()
+    assert outcome.exit_status == "completed" and outcome.stopped_early
+    assert outcome.as_json()["stopped_early"] is True
+    record = _assert_safe(outcome.path)
+    assert record.attrs["exit_status"] == "completed" and record.attrs["stopped_early"] is True
+    kept = read_run(outcome.path).channels["tip_velocity"].data
+    # the block in hand when Stop came is the last one stored, far short of 20 s at 2 kHz
+    assert kept.size == sum(len(b.data["tip_velocity"]) for b in blocks) < 40000
+    assert "spectrum_peaks_hz" in outcome.summary["channels"]["tip_velocity"]
+    states = [e.state for e in events if isinstance(e, StateChanged)]
+    assert states[-2:] == ["completed", "analyzing"]
+
+
+def test_completed_run_is_not_marked_stopped(sim_profile, registry, tmp_path):
+    _, run, _ = _run(sim_profile(duration=0.5), registry, tmp_path)
+    outcome = run()
+    assert outcome.exit_status == "completed" and not outcome.stopped_early
+    assert read_run(outcome.path, load_data=False).attrs["stopped_early"] is False
+
+
 @pytest.mark.parametrize("signum, expected_code", [(signal.SIGINT, 130), (signal.SIGTERM, 130)])
 def test_signal_aborts_the_run_in_safe_state(sim_profile, tmp_path, signum, expected_code):
     out = tmp_path / "runs"
