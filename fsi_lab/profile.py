@@ -210,8 +210,14 @@ def schema_for(raw: Mapping[str, Any], path: list[str], registry: Registry) -> P
 
 
 def apply_overrides(raw: dict[str, Any], overrides: list[str], registry: Registry) -> dict:
-    """Return a copy of ``raw`` with each ``key.path=value`` of ``overrides`` applied."""
+    """Return a copy of ``raw`` with each ``key.path=value`` of ``overrides`` applied.
+
+    ``excitation.plugin=NAME`` is applied first, whatever its place: it replaces the
+    ``[excitation]`` table by that plugin with its default parameters (the profile's are another
+    plugin's), and the other ``excitation.*`` overrides then set the new plugin's parameters.
+    """
     raw = copy.deepcopy(raw)
+    parsed = []
     for item in overrides:
         key, sep, text = item.partition("=")
         path = [part for part in key.strip().split(".") if part]
@@ -219,6 +225,15 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], registry: Registr
             raise ParameterError(
                 f"--set {item!r}: expected key.path=value, e.g. excitation.amplitude=0.5"
             )
+        parsed.append((path, text))
+    parsed.sort(key=lambda entry: entry[0] != ["excitation", "plugin"])
+    for path, text in parsed:
+        if path == ["excitation", "plugin"]:
+            name = text.strip()
+            _plugin(registry, "excitation", name, "excitation")
+            if _table(raw, "excitation", "excitation").get("plugin") != name:
+                raw["excitation"] = {"plugin": name}
+            continue
         param = schema_for(raw, path, registry)
         value = param.parse(text, ".".join(path))
         node = raw

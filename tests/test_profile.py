@@ -95,6 +95,17 @@ def test_set_overrides_any_parameter_by_path(registry):
     assert profile.overrides[0] == "excitation.height=0.02"
 
 
+def test_set_excitation_plugin_starts_from_its_defaults(registry):
+    # the plugin switch applies first wherever it stands; the profile's ramp parameters go
+    profile = load_profile(GOOD, registry, ["excitation.count=4",
+                                           "excitation.plugin=impulse-train"])
+    assert profile.excitation_plugin == "impulse-train"
+    assert profile.excitation["count"] == 4
+    defaults = {p.name: p.default for p in registry.get("excitation", "impulse-train").params}
+    assert profile.excitation["spacing"] == defaults["spacing"]
+    assert "height" not in profile.excitation
+
+
 @pytest.mark.parametrize("override, fragment", [
     ("excitation.hieght=1", "excitation.hieght: unknown key; allowed keys are height,"),
     ("run.duration=long", "run.duration: cannot read 'long'; expected a number"),
@@ -102,6 +113,7 @@ def test_set_overrides_any_parameter_by_path(registry):
     ("nonsense=1", "expected key.path=value"),
     ("excitation.height", "expected key.path=value"),
     ("widget.size=1", "widget.size: no such parameter"),
+    ("excitation.plugin=sawtooth", "excitation.plugin: unknown excitation plugin 'sawtooth'"),
 ])
 def test_bad_set_is_refused(registry, override, fragment):
     with pytest.raises(ProfileError) as info:
