@@ -343,6 +343,10 @@ def format_summary(summary: dict[str, Any]) -> str:
                 text += (f": C_i = {eq['c_i']:.4g} kg/(m s) {_interval(eq.get('c_i_ci95'))}, "
                          f"C_f = {eq['c_f']:.4g} kg/m^2 {_interval(eq.get('c_f_ci95'))}, "
                          f"R^2 = {eq['r2']:.3f}")
+                for name in ("c_i", "c_f"):
+                    bounds = eq.get(f"{name}_ci95")
+                    if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
+                        text += f"; {name[0].upper()}{name[1:]} is not resolved (its interval contains 0)"
             lines.append(text)
             model = component.get("modal_model")
             if model and model.get("envelope_rms_error") is not None:

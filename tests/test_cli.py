@@ -101,3 +101,18 @@ def test_run_json_is_one_object_with_path_status_and_safety(sim_profile, tmp_pat
     assert data["analysis"]["channels"]["tip_velocity"]["rms"] > 0
     assert read_run(data["run"]).attrs["exit_status"] == "completed"
     assert "[state] completed" not in proc.stdout  # logs stay on stderr
+
+
+def test_summary_text_flags_coefficients_whose_interval_contains_zero():
+    from fsi_lab.cli import format_summary
+
+    def summary(c_f_ci95):
+        return {"channels": {"tip_velocity": {"components": [{
+            "index": 0, "frequency_hz": 17.0,
+            "equivalent_damping": {"c_i": 0.65, "c_f": 3.0, "r2": 0.1,
+                                   "c_i_ci95": [0.6, 0.7], "c_f_ci95": c_f_ci95}}]}}}
+
+    unresolved = format_summary(summary([-30.0, 36.0]))
+    assert "C_f is not resolved (its interval contains 0)" in unresolved
+    assert "C_i is not resolved" not in unresolved
+    assert "not resolved" not in format_summary(summary([1.0, 5.0]))
