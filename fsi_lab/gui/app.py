@@ -265,6 +265,9 @@ class MainWindow(QMainWindow):
         elif outcome.exit_status == "aborted":
             self.notify("WARNING", f"run aborted ({outcome.error}); the bench is in its safe "
                                    f"state.{kept}")
+        elif getattr(outcome, "stopped_early", False):
+            self.notify("INFO", f"run stopped early: the bench is in its safe state and the "
+                                f"shortened record is a completed run ({outcome.path}).")
         if outcome.path is not None:
             self.last_run = Path(outcome.path).resolve()
             chain = self._run_profile.analysis["chain"] if self._run_profile else []
@@ -272,7 +275,8 @@ class MainWindow(QMainWindow):
                     and self.analysis.analyse(outcome.path, list(self._run_overrides)):
                 # the file is read once the analysis has written to it (HDF5 files are locked
                 # while a process writes them)
-                self.run_control.state_label.setText("completed; analysing ...")
+                self.run_control.state_label.setText(
+                    f"{self.run_control.status_text}; analysing ...")
             else:
                 self.open_runs([outcome.path], show=True)
         if self._closing:
@@ -297,7 +301,7 @@ class MainWindow(QMainWindow):
 
     def _reanalysed(self, path: Path) -> None:
         if Path(path).resolve() == self.last_run and self.run_control.state == "completed":
-            self.run_control.state_label.setText("completed; analysed")
+            self.run_control.state_label.setText(f"{self.run_control.status_text}; analysed")
         self.open_runs([path], show=True)
 
     # ------------------------------------------------------------------ closing

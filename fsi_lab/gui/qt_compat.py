@@ -6,10 +6,13 @@ one reference to ``None``, every ``Signal.emit()`` one to ``True``, some calls o
 On Python 3.12 and later these objects are immortal and nothing happens; on Python 3.11 a GUI
 that repaints 30 times a second brings the count to zero within minutes and the interpreter
 aborts ("none_dealloc" / "bool_dealloc: ... refcount error in a C extension"). PySide6 6.11.x
-does not have the defect.
+does not have the defect, and the ``gui`` extra of pyproject.toml excludes 6.12.0
+(``PySide6-Essentials>=6.6,!=6.12.0``).
 
-When the loss is measured here (not guessed from version numbers), the three singletons are
-given so many extra references (2**40) that no session can use them up. Nothing else changes.
+The probe stays for environments that install PySide6 some other way: when the loss is measured
+here (not guessed from version numbers), the three singletons are given so many extra
+references (2**40) that no session can use them up. With a binding that loses nothing the probe
+changes nothing.
 """
 
 from __future__ import annotations

@@ -1,10 +1,13 @@
-"""Run control: start a run, abort it, follow its progress, exit status and log.
+"""Run control: start a run, stop it early or abort it, follow its progress, exit status and log.
 
 A run is :meth:`fsi_lab.runner.Runner.run` in a child process followed by a worker thread
 (:mod:`fsi_lab.gui.run_process` says why); its events reach the UI through
 :class:`~fsi_lab.gui.worker.EventForwarder`. Abort makes the child call :meth:`Runner.abort`: the
 runner puts the bench in its safe state (amplifier first), keeps the data acquired so far and
-records the exit status in the run file.
+records the exit status in the run file. Stop (enabled only while the excitation and the
+acquisition are running) makes the child call :meth:`Runner.stop`: the acquisition ends after
+the block in hand, the bench goes to the same safe state, and the shortened record is a
+completed run marked ``stopped_early`` ("completed (stopped early)"), analysed like any other.
 """
 
 from __future__ import annotations
@@ -70,7 +73,7 @@ class LogPanel(QWidget):
 
 
 class RunControl(QWidget):
-    """Start and abort buttons, the output folder, state, progress and exit status.
+    """Start, stop and abort buttons, the output folder, state, progress and exit status.
 
     ``ready`` is asked before Start is enabled (the forms hold only accepted values). Signals:
     ``started(profile)``, ``finished(RunOutcome)``, ``refused(message)`` when the run could not
@@ -102,7 +105,15 @@ class RunControl(QWidget):
         self.abort_button.setToolTip("Stop now: the bench goes to its safe state and the data "
                                      "acquired so far is kept.")
         self.abort_button.setStyleSheet("QPushButton:enabled { color: #b00020; font-weight: bold; }")
+        self.stop_button = QPushButton("Stop")
+        self.stop_button.setObjectName("stop")
+        self.stop_button.setToolTip("End the acquisition after the current block: the bench "
+                                    "goes to its safe state, the shortened record is kept as a "
+                                    "completed run (stopped early) and analysed.")
+        self.stop_button.setStyleSheet("QPushButton:enabled { font-weight: bold; }")
+        self._stopping = False
         self.start_button.clicked.connect(self.start)
+        self.stop_button.clicked.connect(self.stop)
         self.abort_button.clicked.connect(self.abort)
         self.out_dir = QLineEdit(str(out_dir))
         self.out_dir.setObjectName("out-dir")
@@ -124,7 +135,10 @@ class RunControl(QWidget):
 
         grid = QGridLayout(self)
         grid.addWidget(self.start_button, 0, 0)
-        grid.addWidget(self.abort_button, 0, 1)
+        buttons = QHBoxLayout()
+        buttons.addWidget(self.stop_button)
+        buttons.addWidget(self.abort_button)
+        grid.addLayout(buttons, 0, 1)
         folder = QHBoxLayout()
         folder.addWidget(QLabel("Run files in"))
         folder.addWidget(self.out_dir, 1)
@@ -153,8 +167,13 @@ class RunControl(QWidget):
         checked = self.session.current
         return (not self.running and checked is not None and checked.ok and self.ready())
 
+    def can_stop(self) -> bool:
+        """Stop is offered only while the excitation and the acquisition are running."""
+        return self.running and self.state == "running" and not self._stopping
+
     def update_buttons(self, *args) -> None:
         self.start_button.setEnabled(self.can_start())
+        self.stop_button.setEnabled(self.can_stop())
         self.abort_button.setEnabled(self.running)
 
     def _browse(self) -> None:
@@ -172,6 +191,7 @@ class RunControl(QWidget):
         self.run_process = RunProcess(profile.text, profile.path, list(profile.overrides),
                                       Path(self.out_dir.text()), self.forwarder)
         self.outcome = None
+        self._stopping = False
         self.exit_label.setText("")
         self.exit_label.setStyleSheet("")
         self.file_label.setText("")
@@ -187,6 +207,17 @@ class RunControl(QWidget):
         self.started.emit(profile)
         return True
 
+    def stop(self) -> bool:
+        """Ask the runner to end the acquisition after the current block and keep the record
+        as a completed run (stopped early); False if Stop is not possible now."""
+        if self.run_process is None or not self.can_stop():
+            return False
+        self._stopping = True
+        self.run_process.stop()
+        self.state_label.setText("stopping after the current block ...")
+        self.update_buttons()
+        return True
+
     def abort(self) -> None:
         """Ask the runner to stop now (safe state first, data kept)."""
         if self.run_process is not None and self.running:
@@ -199,7 +230,19 @@ class RunControl(QWidget):
 
     def _on_state(self, event: StateChanged) -> None:
         self.state = event.state
-        self.state_label.setText(event.state + (f": {event.detail}" if event.detail else ""))
+        if not (self._stopping and event.state == "running"):
+            self.state_label.setText(event.state + (f": {event.detail}" if event.detail else ""))
+        self.update_buttons()
+
+    @property
+    def status_text(self) -> str:
+        """The exit status as shown: "completed (stopped early)" for a run stopped early."""
+        if self.outcome is None:
+            return ""
+        status = self.outcome.exit_status
+        if status == "completed" and getattr(self.outcome, "stopped_early", False):
+            return "completed (stopped early)"
+        return status
 
     def _on_progress(self, event: Progress) -> None:
         self.progress.setValue(int(round(1000 * max(0.0, min(1.0, event.fraction)))))
@@ -208,12 +251,12 @@ class RunControl(QWidget):
     def _on_outcome(self, outcome: RunOutcome) -> None:
         self.outcome = outcome
         status = outcome.exit_status
-        self.exit_label.setText(status + (f": {outcome.error}" if outcome.error else ""))
+        self.exit_label.setText(self.status_text + (f": {outcome.error}" if outcome.error else ""))
         self.exit_label.setStyleSheet(STATUS_STYLE.get(status, ""))
         if outcome.path is not None:
             self.file_label.setText(f"run file: {outcome.path}")
         self.state = status
-        self.state_label.setText(status)
+        self.state_label.setText(self.status_text)
 
     def _on_error(self, exc: BaseException, text: str) -> None:
         self.state = "refused"

@@ -11,7 +11,10 @@ The child sends the runner's events (state changes, progress, data blocks, log r
 :class:`~fsi_lab.runner.RunOutcome` through a queue; a :class:`~fsi_lab.gui.worker.Task` thread of
 the GUI reads the queue and hands the events to the :class:`~fsi_lab.gui.worker.EventForwarder`.
 Abort sets an event the child watches, which calls :meth:`Runner.abort`; if the child does not
-end in time it is sent SIGTERM (the runner turns it into an abort with the safe state). If the
+end in time it is sent SIGTERM (the runner turns it into an abort with the safe state). Stop sets
+a second event, which calls :meth:`Runner.stop`: the acquisition ends after the block in hand,
+the bench goes to the same safe state, and the shortened record is a completed run (marked
+``stopped_early``) that the GUI analyses like any other. If the
 child dies without an outcome, the run is reported failed and the GUI puts the bench in its safe
 state itself.
 """
@@ -31,7 +34,7 @@ ABORT_GRACE_S = 10.0
 
 
 def _child(text: str, path: str, overrides: list[str], out_dir: str, events: Any,
-           abort: Any) -> None:
+           abort: Any, stop: Any) -> None:
     """Body of the child process (imports no Qt)."""
     from fsi_lab.errors import FsiLabError
     from fsi_lab.events import EventBus
@@ -46,11 +49,12 @@ def _child(text: str, path: str, overrides: list[str], out_dir: str, events: Any
         bus.subscribe(lambda event: events.put(("event", event)))
         runner = Runner(profile, registry, out_dir, bus=bus, analyze=False)
 
-        def watch() -> None:
-            abort.wait()
-            runner.abort()
+        def watch(event: Any, action: Callable[[], None]) -> None:
+            event.wait()
+            action()
 
-        threading.Thread(target=watch, daemon=True).start()
+        threading.Thread(target=watch, args=(abort, runner.abort), daemon=True).start()
+        threading.Thread(target=watch, args=(stop, runner.stop), daemon=True).start()
         outcome = runner.run()
         events.put(("outcome", outcome))
     except FsiLabError as exc:  # refused before anything was started (safety, profile)
@@ -75,8 +79,10 @@ class RunProcess:
         self._context = multiprocessing.get_context("spawn")
         self._events = self._context.Queue()
         self._abort = self._context.Event()
+        self._stop = self._context.Event()
         self._emit = emit
-        self._args = (text, path, list(overrides), str(out_dir), self._events, self._abort)
+        self._args = (text, path, list(overrides), str(out_dir), self._events, self._abort,
+                      self._stop)
         self.process: Any = None
         self._abort_time: float | None = None
 
@@ -85,6 +91,11 @@ class RunProcess:
         self._abort.set()
         if self._abort_time is None:
             self._abort_time = time.monotonic()
+
+    def stop(self) -> None:
+        """Ask the runner to end the acquisition after the current block and keep the run as
+        completed, marked ``stopped_early`` (thread-safe)."""
+        self._stop.set()
 
     def follow(self) -> Any:
         """Start the child, forward its events, return its RunOutcome (or raise if refused)."""

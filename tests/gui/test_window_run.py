@@ -1,5 +1,6 @@
 """The real window drives runs on the in-process simulated bench (paced in real time)."""
 
+import h5py
 import numpy as np
 import pytest
 from conftest import RUN_TIMEOUT_MS, wait_checked, wait_finished, wet_inprocess_profile
@@ -91,6 +92,66 @@ def test_abort_mid_run_keeps_partial_data_in_safe_state(qtbot, make_window, sim_
     assert "output enabled: off" in window.bench.boxes["amplifier"].state.text()
     # the window is ready for the next run
     qtbot.waitUntil(window.run_control.start_button.isEnabled, timeout=5000)
+
+
+def test_stop_mid_run_keeps_a_completed_shortened_run_and_analyses_it(qtbot, make_window,
+                                                                      registry, tmp_path):
+    duration, rate = 20.0, 10000.0
+    path = wet_inprocess_profile(tmp_path, duration=duration, sample_rate=rate)
+    window = make_window(registry)
+    assert window.open_profile(path)
+    wait_checked(qtbot, window)
+    control = window.run_control
+    stop = control.stop_button
+    qtbot.waitUntil(control.start_button.isEnabled, timeout=5000)
+    assert not stop.isEnabled() and not control.stop()      # nothing to stop yet
+    qtbot.mouseClick(control.start_button, Qt.MouseButton.LeftButton)
+    assert control.running
+
+    # Stop is offered once the excitation and the acquisition run; data reaches the plots
+    qtbot.waitUntil(lambda: window.live.blocks >= 25 and window.live.frames >= 1,
+                    timeout=20000)
+    qtbot.waitUntil(stop.isEnabled, timeout=5000)
+    assert control.state == "running" and control.abort_button.isEnabled()
+    x, _ = window.live.curves["tip_velocity"].getData()
+    assert x is not None and len(x) > 0
+    qtbot.mouseClick(stop, Qt.MouseButton.LeftButton)
+    assert not stop.isEnabled()                               # one Stop per run
+    assert control.abort_button.isEnabled()                   # Abort stays available
+
+    outcome = wait_finished(qtbot, window)
+    assert outcome.exit_status == "completed", outcome.error
+    assert outcome.stopped_early is True
+    assert control.exit_label.text().startswith("completed (stopped early)")
+    assert not stop.isEnabled()
+
+    with h5py.File(outcome.path, "r") as handle:
+        assert handle.attrs["stopped_early"] == True  # noqa: E712 - numpy bool
+    run = read_run(outcome.path)
+    assert run.attrs["exit_status"] == "completed" and run.attrs["stopped_early"] is True
+    amplifier = run.instruments["amplifier"]["final_state"]
+    source = run.instruments["source"]["final_state"]
+    assert amplifier["output_enabled"] is False
+    assert source["output_enabled"] is False and source["level_v"] == 0.0
+    kept = run.channels["tip_velocity"].data
+    assert 2.0 * rate <= kept.size < duration * rate / 2      # shortened, not empty
+    assert all(c.data.size == kept.size for c in run.channels.values())
+    assert np.all(np.isfinite(kept))
+
+    # analysed afterwards exactly as a completed run
+    qtbot.waitUntil(lambda: window.analysis.results is not None
+                    and window.analysis.results.path == outcome.path.resolve()
+                    and bool(window.analysis.results.analysis), timeout=RUN_TIMEOUT_MS)
+    assert control.state_label.text() == "completed (stopped early); analysed"
+    assert window.tabs.currentWidget() is window.analysis
+    groups = window.analysis.results.analysis["tip_velocity"]
+    assert set(groups) == set(window.session.base.analysis["chain"])
+    assert groups["spectrum"].ok and groups["hvd"].ok, [g.error for g in groups.values()]
+    filled = window.analysis.filled()
+    assert filled["Overview"] and filled["HVD components"] and filled["Spectrum / FRF"], filled
+    assert "output enabled: off" in window.bench.boxes["amplifier"].state.text()
+    qtbot.waitUntil(control.start_button.isEnabled, timeout=5000)
+    assert not stop.isEnabled()
 
 
 def test_instrument_lost_mid_run_shows_message_and_app_keeps_running(qtbot, make_window,
