@@ -18,8 +18,11 @@ Conventions of the chain (documented for plugin users in each plugin's help):
   HVD-component cycles below ``HVD_RANGE`` (1e-3) of the record's largest envelope (the
   decomposition leaves a residue of about 1e-4 of it in every component).
 - Backbone and damping points closer than one period to a record end, or inside HVD's
-  untrusted edge, are left out, and so are those before the largest amplitude (``decay_only``:
-  the excitation is still feeding the mode there - a forced build-up is no free decay).
+  untrusted edge, are left out, and so are those outside the free decays (``decay_only``:
+  before a decay's largest amplitude the excitation is still feeding the mode - a forced
+  build-up is no free decay). A record may hold several free decays (an impulse train): it is
+  split from the amplitudes themselves (:mod:`._decays`), and estimates from pairs or windows
+  of peaks are made within one decay, never across two.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ import numpy as np
 
 from fsi_lab.contract import AnalysisContext
 from fsi_lab.errors import AnalysisError
+from fsi_lab.plugins.analysis._decays import FreeDecays, split_decays
 
 #: Dynamic range of HVD components: cycles below this fraction of the largest envelope of the
 #: record are decomposition residue (about 1e-4) rather than signal.
@@ -265,23 +269,79 @@ def error_entries(errors: dict[int, str], key: str) -> tuple[list[dict], dict[st
     return entries, attrs
 
 
-def trusted_times(times: np.ndarray, comp: Component, period: float,
-                  amplitude: np.ndarray | None = None, decay_only: bool = True) -> np.ndarray:
-    """Boolean mask of ``times`` (s) not in the component's untrusted edge, at least one
-    ``period`` (s) from either record end and - with ``amplitude`` and ``decay_only`` - not
-    before the largest amplitude among those points plus the component's ``settle`` time (the
-    free decay starts when the excitation has stopped feeding the mode - a forced build-up is no
-    free vibration - and the HVD filters smear the onset over about 1 / cutoff)."""
+def trusted_span(times: np.ndarray, comp: Component, period: float) -> np.ndarray:
+    """Boolean mask of ``times`` (s) not in the component's untrusted edge and at least one
+    ``period`` (s) from either record end."""
     n = comp.signal.size
     fs = comp.sample_rate
     ok = (times >= period) & (times <= (n - 1) / fs - period)
     if comp.edge_mask is not None and comp.edge_mask.any():
         idx = np.clip(np.rint(times * fs).astype(np.int64), 0, n - 1)
         ok &= ~comp.edge_mask[idx]
-    if decay_only and amplitude is not None and ok.any():
-        start = times[ok][int(np.argmax(amplitude[ok]))] + comp.settle
-        ok &= times >= start
     return ok
+
+
+def decay_labels(times: np.ndarray, comp: Component, period: float,
+                 amplitude: np.ndarray | None = None, decay_only: bool = True
+                 ) -> tuple[np.ndarray, FreeDecays | None]:
+    """Free decay of each of ``times`` (s): its index, or -1 where the point is not used.
+
+    Points in the untrusted span (:func:`trusted_span`) are -1. With ``amplitude`` and
+    ``decay_only`` the record is split into its free decays (:func:`._decays.split_decays` on
+    the trusted points: the component's ``settle`` after the first peak, the larger of it and
+    the integration's smear after the later ones, twice that before each next build-up) and
+    only their free parts are kept; otherwise every trusted point is decay 0 and no split is
+    returned.
+    """
+    ok = trusted_span(times, comp, period)
+    labels = np.where(ok, 0, -1)
+    if not (decay_only and amplitude is not None and ok.any()):
+        return labels, None
+    # A build-up inside the record is smeared by the HVD filters (settle) and by the high-pass
+    # of the frequency-domain integration (2 / corner, the corner about half the component's
+    # frequency) on both sides; the smear before it weighs on the small tail of the previous
+    # decay, hence twice the settle time there.
+    # (An HVD component - settle > 0 - starts at the first decay's peak: its first build-up is
+    # not in the record.)
+    later = max(comp.settle, 4.0 / comp.frequency if comp.frequency else 0.0)
+    decays = split_decays(times[ok], amplitude[ok], settle=comp.settle, later_settle=later,
+                          first_build_up=False if comp.settle > 0 else None,
+                          guard=max(2.0 * later, period))
+    labels = np.where(ok, decays.labels(times), -1)
+    return labels, decays
+
+
+def trusted_times(times: np.ndarray, comp: Component, period: float,
+                  amplitude: np.ndarray | None = None, decay_only: bool = True) -> np.ndarray:
+    """Boolean mask of ``times`` (s) not in the component's untrusted edge, at least one
+    ``period`` (s) from either record end and - with ``amplitude`` and ``decay_only`` - inside
+    a free decay: from a decay's largest amplitude plus the component's ``settle`` time (the
+    free decay starts when the excitation has stopped feeding the mode - a forced build-up is no
+    free vibration - and the HVD filters smear the onset over about 1 / cutoff) to just before
+    the next build-up (:func:`decay_labels`)."""
+    return decay_labels(times, comp, period, amplitude, decay_only)[0] >= 0
+
+
+def decay_summary(decays: FreeDecays | None, t0: float = 0.0) -> dict[str, Any]:
+    """``decays`` (count), ``decay_starts_s`` and ``decay_ends_s`` (free parts, s from the
+    channel's first sample given the component's ``t0``) for a summary entry; ``{}`` when the
+    record was not split (``decay_only`` off)."""
+    if decays is None:
+        return {}
+    return {"decays": decays.count, "decay_starts_s": jsonable(decays.starts + t0),
+            "decay_ends_s": jsonable(decays.ends + t0)}
+
+
+def decay_attrs(decays: dict[int, FreeDecays | None], t0s: dict[int, float]) -> dict[str, Any]:
+    """Attributes ``component_<k>_decays``, ``component_<k>_decay_starts_s`` and
+    ``component_<k>_decay_ends_s`` (s from the channel's first sample) of the split records."""
+    out: dict[str, Any] = {}
+    for k, d in sorted(decays.items()):
+        if d is not None:
+            out[f"component_{k}_decays"] = d.count
+            out[f"component_{k}_decay_starts_s"] = [float(v) for v in d.starts + t0s[k]]
+            out[f"component_{k}_decay_ends_s"] = [float(v) for v in d.ends + t0s[k]]
+    return out
 
 
 def jsonable(values: Any) -> Any:

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from fsi_lab.plugins.analysis._decays import FreeDecays, smooth_per_decay
 from fsi_lab.plugins.analysis.instantaneous import Instantaneous, instantaneous
 
 
@@ -28,11 +29,17 @@ class Backbone:
         Instantaneous amplitude, unit of the record (m for a displacement).
     frequency
         Instantaneous frequency, Hz.
+    decay
+        Index of the free decay of each point (:mod:`._decays`), or None (not split).
+    decays
+        The free decays the points were taken from, or None.
     """
 
     time: np.ndarray
     amplitude: np.ndarray
     frequency: np.ndarray
+    decay: np.ndarray | None = None
+    decays: FreeDecays | None = None
 
 
 def backbone_from(inst: Instantaneous) -> Backbone:
@@ -76,29 +83,46 @@ from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult  # 
 from fsi_lab.hookspecs import hookimpl  # noqa: E402
 from fsi_lab.params import Param  # noqa: E402
 from fsi_lab.plugins.analysis._chain import (  # noqa: E402
-    Component, displacement_components, error_entries, guarded, jsonable, per_component,
-    stack_rows, trusted_times, velocity_components,
+    Component, decay_attrs, decay_labels, decay_summary, displacement_components,
+    error_entries, guarded, jsonable, per_component, stack_rows, velocity_components,
 )
+from fsi_lab.plugins.analysis._signal import fail  # noqa: E402
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS  # noqa: E402
+
+
+def decay_backbone(inst: Instantaneous, c: Component, smooth: int = 0,
+                   decay_only: bool = True) -> Backbone:
+    """Backbone of one component's :class:`.instantaneous.Instantaneous` analysis (made with
+    ``smooth = 0``) without the points in untrusted record ends (the HVD edge mask and one
+    period at each end) and, with ``decay_only``, outside its free decays; ``smooth`` is the
+    moving average (points each side) applied within each decay. Times are from the channel's
+    first sample."""
+    freq, amp = inst.frequency, inst.amplitude
+    times = inst.frequency_times
+    if smooth:
+        period = 1.0 / float(np.median(freq))
+        _, split = decay_labels(times, c, period, amp, decay_only)
+        regions = split.regions(times) if split is not None else np.zeros(times.size)
+        freq = smooth_per_decay(freq, regions, smooth)
+        amp = np.exp(smooth_per_decay(np.log(np.maximum(amp, 1e-300)), regions, smooth))
+    period = 1.0 / float(np.median(freq))
+    labels, decays = decay_labels(times, c, period, amp, decay_only)
+    keep = labels >= 0
+    if keep.sum() < 2:
+        raise fail("backbone", f"only {int(keep.sum())} period(s) away from the untrusted "
+                               "record ends and inside a free decay; need at least 2 - a "
+                               "longer record")
+    return Backbone(times[keep] + c.t0, amp[keep], freq[keep], labels[keep], decays)
 
 
 def trusted_backbone(c: Component, params: dict[str, Any], plugin: str,
                      context: AnalysisContext) -> Backbone:
-    """Backbone of one component without the points in untrusted record ends (the HVD edge
-    mask and one period at each end)."""
+    """Backbone of one component as the ``backbone`` plugin gives it (:func:`decay_backbone`)."""
     with guarded(plugin, context):
-        inst = instantaneous(c.signal, c.sample_rate, offset=params["offset"],
-                             smooth=params["smooth_points"],
+        inst = instantaneous(c.signal, c.sample_rate, offset=params["offset"], smooth=0,
                              min_amplitude=params["min_amplitude"], noise_floor=c.noise_floor,
                              frequency_hint=c.frequency)
-        bb = backbone_from(inst)
-        period = 1.0 / float(np.median(bb.frequency))
-        keep = trusted_times(bb.time, c, period, bb.amplitude, params.get("decay_only", True))
-        if keep.sum() < 2:
-            from fsi_lab.plugins.analysis._signal import fail
-            raise fail("backbone", f"only {int(keep.sum())} period(s) away from the untrusted "
-                                   "record ends; need at least 2 - a longer record")
-        return Backbone(bb.time[keep] + c.t0, bb.amplitude[keep], bb.frequency[keep])
+        return decay_backbone(inst, c, params["smooth_points"], params.get("decay_only", True))
 
 
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
@@ -115,10 +139,12 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
             except Exception:  # noqa: BLE001 - the velocity backbone is optional
                 pass
     count = len(disp)
+    t0 = {c.index: c.t0 for c in disp}
     entries = []
     for k, bb in done.items():
         e = {"index": k, "backbone": {"amplitude": jsonable(bb.amplitude),
-                                      "frequency_hz": jsonable(bb.frequency)}}
+                                      "frequency_hz": jsonable(bb.frequency),
+                                      **decay_summary(bb.decays, t0[k])}}
         if k in vdone:
             e["backbone_velocity"] = {"amplitude": jsonable(vdone[k].amplitude),
                                       "frequency_hz": jsonable(vdone[k].frequency)}
@@ -126,8 +152,10 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     err_entries, err_attrs = error_entries(errors, "backbone")
     datasets = {"time": stack_rows({k: b.time for k, b in done.items()}, count),
                 "amplitude": stack_rows({k: b.amplitude for k, b in done.items()}, count),
-                "frequency": stack_rows({k: b.frequency for k, b in done.items()}, count)}
-    units = {"time": "s", "amplitude": "m", "frequency": "Hz"}
+                "frequency": stack_rows({k: b.frequency for k, b in done.items()}, count),
+                "decay": stack_rows({k: b.decay.astype(np.float64) for k, b in done.items()},
+                                    count)}
+    units = {"time": "s", "amplitude": "m", "frequency": "Hz", "decay": ""}
     if vdone:
         datasets["velocity_amplitude"] = stack_rows({k: b.amplitude for k, b in vdone.items()},
                                                     count)
@@ -136,6 +164,7 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
         units.update(velocity_amplitude="m/s", velocity_frequency="Hz")
     return AnalysisResult(datasets=datasets, units=units,
                           attrs={"rows": "one row per component, padded with NaN",
+                                 **decay_attrs({k: b.decays for k, b in done.items()}, t0),
                                  **err_attrs},
                           summary={"components": entries + err_entries},
                           values={"displacement": done, "velocity": vdone})

@@ -24,10 +24,15 @@ estimators:
 
 All take the extrema (times, amplitudes) and the frequency at those times, as produced by
 :func:`.instantaneous.instantaneous`; :func:`damping` runs that analysis on a record first.
+:func:`damping_from_peaks` also takes the free decay of each peak (a record split by
+:func:`._decays.split_decays`, e.g. an impulse train): no decrement, window, cubic or moving
+average then spans two decays, and the envelope law is fitted to all decays at once with one
+``a`` and ``b`` and a starting amplitude per decay.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -35,8 +40,11 @@ from typing import Any
 import numpy as np
 import scipy.optimize as sopt
 
-from fsi_lab.plugins.analysis._signal import fail, moving_average
-from fsi_lab.plugins.analysis.instantaneous import instantaneous
+from fsi_lab.errors import AnalysisError
+
+from fsi_lab.plugins.analysis._decays import FreeDecays, smooth_per_decay
+from fsi_lab.plugins.analysis._signal import fail
+from fsi_lab.plugins.analysis.instantaneous import Instantaneous, instantaneous
 
 METHODS = ("decrement", "envelope-fit", "eq5", "eq7")
 
@@ -61,7 +69,12 @@ class DampingCurve:
         Estimator used.
     params
         Fitted parameters of ``"envelope-fit"`` (``a`` in 1/s, ``b`` in 1/(unit s), ``A0``) or
-        ``"eq7"`` (``k1``, ``k2``, ``k3``, ``lnA0``); empty otherwise.
+        ``"eq7"`` (``k1``, ``k2``, ``k3``, ``lnA0``); empty otherwise. With several decays,
+        ``A0`` and the ``"eq7"`` parameters are those of the first decay.
+    decay
+        Index of the free decay of each estimate (all 0 for a single decay), or None.
+    decays
+        The free decays the peaks were taken from (:func:`.damping.curve_for`), or None.
     """
 
     time: np.ndarray
@@ -71,6 +84,8 @@ class DampingCurve:
     decay_rate: np.ndarray
     method: str
     params: dict[str, float] = field(default_factory=dict)
+    decay: np.ndarray | None = None
+    decays: FreeDecays | None = None
 
 
 def _check(t: Any, amp: Any, freq: Any, func: str, need: int
@@ -145,40 +160,67 @@ def envelope_law(t: np.ndarray, a: float, b: float, a0: float) -> np.ndarray:
     return a * a0 * e / (a + b * a0 * (1.0 - e))
 
 
-def damping_envelope_fit(t: Any, amp: Any, freq: Any) -> DampingCurve:
+def _decay_runs(decay: Any, size: int) -> list[slice]:
+    """Slices of consecutive points of the same decay (one slice when ``decay`` is None)."""
+    if decay is None:
+        return [slice(0, size)]
+    d = np.asarray(decay)
+    if d.shape != (size,):
+        raise fail("damping", f"decay has shape {d.shape}; expected one index per peak ({size})")
+    cuts = np.flatnonzero(np.diff(d)) + 1
+    edges = np.concatenate(([0], cuts, [size]))
+    return [slice(int(lo), int(hi)) for lo, hi in zip(edges[:-1], edges[1:])]
+
+
+def damping_envelope_fit(t: Any, amp: Any, freq: Any, *, decay: Any = None) -> DampingCurve:
     """Fit the linear + quadratic damping envelope law to the peaks (unbiased for that law).
 
     ``A(t)`` is fitted to the peak amplitudes by least squares with ``a >= 0``, ``b >= 0``; the
     curve is then ``zeta = (a + b A) / (2 pi f)`` at every peak (A the fitted envelope).
     ``params`` holds ``a`` (1/s), ``b`` (1/(U s)), ``A0`` (U), their standard errors ``a_se``,
     ``b_se`` and the degrees of freedom ``dof``.
+
+    ``decay`` (optional, one index per peak, constant over each free decay): the law is fitted
+    to every decay at once, with common ``a`` and ``b`` and a starting amplitude per decay
+    (time counted from each decay's first peak); ``A0`` is then the first decay's.
     """
     func = "damping (envelope-fit)"
     t, amp_, f = _check(t, amp, freq, func, 4)
-    t0 = t[0]
-    tt = t - t0
+    runs = _decay_runs(decay, t.size)
+    starts = np.concatenate([np.full(r.stop - r.start, r.start) for r in runs])
+    tt = t - t[starts]
     la = np.log(amp_)
-    # Start: straight line in ln A (b = 0). Residuals in amplitude (not ln A): additive noise
-    # on the record gives peaks with equal absolute scatter, so this is the efficient fit.
-    slope = -np.polyfit(tt, la, 1)[0]
-    x0 = np.array([max(slope, 1e-6), 1e-6 / max(amp_[0], 1e-300), la[0]])
+    # Start: straight line in ln A (b = 0), one intercept per decay. Residuals in amplitude (not
+    # ln A): additive noise on the record gives peaks with equal absolute scatter, so this is
+    # the efficient fit.
+    if len(runs) == 1:
+        slope = -np.polyfit(tt, la, 1)[0]
+    else:
+        dt = np.concatenate([tt[r] - tt[r].mean() for r in runs])
+        dl = np.concatenate([la[r] - la[r].mean() for r in runs])
+        slope = -float(dt @ dl) / max(float(dt @ dt), 1e-300)
+    x0 = np.array([max(slope, 1e-6), 1e-6 / max(amp_[0], 1e-300),
+                   *(la[r.start] for r in runs)])
     scale = float(amp_.max())
+    which = np.concatenate([np.full(r.stop - r.start, i) for i, r in enumerate(runs)])
 
     def resid(p):
-        a, b, la0 = p
-        return (envelope_law(tt, a, b, math.exp(la0)) - amp_) / scale
+        a, b = p[:2]
+        a0 = math.exp(p[2]) if len(runs) == 1 else np.exp(p[2:][which])
+        return (envelope_law(tt, a, b, a0) - amp_) / scale
 
-    res = sopt.least_squares(resid, x0, bounds=([0.0, 0.0, -np.inf], [np.inf, np.inf, np.inf]),
+    k = len(runs)
+    res = sopt.least_squares(resid, x0, bounds=([0.0, 0.0] + [-np.inf] * k, [np.inf] * (2 + k)),
                              x_scale="jac", xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=2000)
-    a, b, la0 = res.x
-    dof = max(1, t.size - 3)
+    a, b, la0 = res.x[:3]
+    dof = max(1, t.size - 2 - k)
     s2 = float(res.fun @ res.fun) / dof
     try:
         cov = np.linalg.inv(res.jac.T @ res.jac) * s2
         se = np.sqrt(np.maximum(np.diag(cov), 0.0))
     except np.linalg.LinAlgError:
-        se = np.full(3, np.nan)
-    a_fit = envelope_law(tt, a, b, math.exp(la0))
+        se = np.full(2 + k, np.nan)
+    a_fit = envelope_law(tt, a, b, math.exp(la0) if len(runs) == 1 else np.exp(res.x[2:][which]))
     rate = a + b * a_fit
     return _curve(t, a_fit, rate, f, "envelope-fit",
                   {"a": float(a), "b": float(b), "A0": float(math.exp(la0)),
@@ -232,30 +274,70 @@ def damping_eq7(t: Any, amp: Any, freq: Any) -> DampingCurve:
                    "t0": float(t0)})
 
 
+def _one_decay(t, amp, freq, method, span, window) -> DampingCurve:
+    if method == "decrement":
+        return damping_decrement(t, amp, freq, span=span)
+    if method == "envelope-fit":
+        return damping_envelope_fit(t, amp, freq)
+    if method == "eq5":
+        return damping_eq5(t, amp, freq, window=window)
+    return damping_eq7(t, amp, freq)
+
+
+def _concatenate(curves: list[tuple[int, DampingCurve]]) -> DampingCurve:
+    """One curve from per-decay curves (in time order), ``decay`` set; parameters of the first."""
+    names = ("time", "amplitude", "zeta", "frequency", "decay_rate")
+    parts = {n: np.concatenate([getattr(c, n) for _, c in curves]) for n in names}
+    decay = np.concatenate([np.full(c.time.size, k) for k, c in curves])
+    return DampingCurve(**parts, method=curves[0][1].method, params=curves[0][1].params,
+                        decay=decay)
+
+
 def damping_from_peaks(t: Any, amp: Any, freq: Any, *, method: str = "decrement",
-                       span: int = 2, window: int = 6, smooth: int = 0) -> DampingCurve:
+                       span: int = 2, window: int = 6, smooth: int = 0, decay: Any = None
+                       ) -> DampingCurve:
     """Damping curve from extrema by one of :data:`METHODS` (see the module notes).
 
     ``smooth`` > 0 applies the paper's centred moving average (``smooth`` points each side) to
     zeta and ln(amplitude) of the resulting curve.
+
+    ``decay`` (optional): the free decay of each peak, an index constant over each decay (from
+    :meth:`._decays.FreeDecays.labels`). Each decay is then analysed on its own (the envelope
+    law is fitted to all of them with common ``a`` and ``b``), a decay with too few peaks for
+    the method is left out, the moving average stays within each decay, and the curves are
+    concatenated in time order with ``decay`` set. Raises AnalysisError when no decay has
+    enough peaks.
     """
     if method not in METHODS:
         raise fail("damping", f"method = {method!r}; expected one of {', '.join(METHODS)}")
-    if method == "decrement":
-        curve = damping_decrement(t, amp, freq, span=span)
+    runs = _decay_runs(decay, np.size(t))
+    if len(runs) == 1:
+        curve = _one_decay(t, amp, freq, method, span, window)
+        ids = np.asarray(decay)[:1] if decay is not None and np.size(decay) else np.zeros(1)
+        curve = dataclasses.replace(curve, decay=np.full(curve.time.size, int(ids[0])))
     elif method == "envelope-fit":
-        curve = damping_envelope_fit(t, amp, freq)
-    elif method == "eq5":
-        curve = damping_eq5(t, amp, freq, window=window)
+        curve = damping_envelope_fit(t, amp, freq, decay=decay)
+        curve = dataclasses.replace(curve, decay=np.asarray(decay, dtype=np.int64).copy())
     else:
-        curve = damping_eq7(t, amp, freq)
+        t_, a_, f_ = (np.asarray(v, dtype=np.float64) for v in (t, amp, freq))
+        f_ = np.broadcast_to(f_, t_.shape)
+        d_ = np.asarray(decay, dtype=np.int64)
+        curves, refused = [], []
+        for r in runs:
+            try:
+                curves.append((int(d_[r.start]),
+                               _one_decay(t_[r], a_[r], f_[r], method, span, window)))
+            except AnalysisError as exc:
+                refused.append(str(exc))
+        if not curves:
+            raise fail("damping", f"no free decay has enough peaks ({len(runs)} decays): "
+                                  f"{refused[0]}")
+        curve = _concatenate(curves)
     if smooth:
-        zeta = moving_average(curve.zeta, smooth)
-        amp_s = np.exp(moving_average(np.log(curve.amplitude), smooth))
-        curve = DampingCurve(time=curve.time, amplitude=amp_s, zeta=zeta,
-                             frequency=curve.frequency,
-                             decay_rate=zeta * 2.0 * math.pi * curve.frequency,
-                             method=curve.method, params=curve.params)
+        zeta = smooth_per_decay(curve.zeta, curve.decay, smooth)
+        amp_s = np.exp(smooth_per_decay(np.log(curve.amplitude), curve.decay, smooth))
+        curve = dataclasses.replace(curve, amplitude=amp_s, zeta=zeta,
+                                    decay_rate=zeta * 2.0 * math.pi * curve.frequency)
     return curve
 
 
@@ -303,29 +385,40 @@ from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult  # 
 from fsi_lab.hookspecs import hookimpl  # noqa: E402
 from fsi_lab.params import Param  # noqa: E402
 from fsi_lab.plugins.analysis._chain import (  # noqa: E402
-    Component, displacement_components, error_entries, guarded, jsonable, per_component,
-    stack_rows, trusted_times,
+    Component, decay_attrs, decay_labels, decay_summary, displacement_components,
+    error_entries, guarded, jsonable, per_component, stack_rows,
 )
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS  # noqa: E402
 
 
+def decay_peaks(inst: Instantaneous, c: Component, decay_only: bool = True):
+    """Extrema of a component's :class:`.instantaneous.Instantaneous` analysis without the
+    untrusted record ends (the HVD edge mask and one period at each end) and, with
+    ``decay_only``, outside its free decays: times (s from the channel's first sample),
+    amplitudes, frequencies (Hz), the decay of each extremum and the free decays found (None
+    without ``decay_only``; times from the component's start)."""
+    period = 1.0 / float(np.median(inst.frequency))
+    labels, decays = decay_labels(inst.peak_times, c, period, inst.peak_amplitudes, decay_only)
+    keep = labels >= 0
+    return (inst.peak_times[keep] + c.t0, inst.peak_amplitudes[keep],
+            inst.peak_frequency[keep], labels[keep], decays)
+
+
 def trusted_peaks(c: Component, params: dict[str, Any]):
-    """Extrema (times s from the channel's first sample, amplitudes, frequencies Hz) of a
-    component, without the untrusted record ends (the HVD edge mask and one period at each
-    end) and, with ``decay_only``, before the free decay."""
+    """:func:`decay_peaks` of a component (its extrema measured with ``params``)."""
     inst = instantaneous(c.signal, c.sample_rate, offset=params.get("offset", "cycles"),
                          min_amplitude=params.get("min_amplitude"), noise_floor=c.noise_floor,
                          frequency_hint=c.frequency)
-    period = 1.0 / float(np.median(inst.frequency))
-    keep = trusted_times(inst.peak_times, c, period, inst.peak_amplitudes,
-                         params.get("decay_only", True))
-    return inst.peak_times[keep] + c.t0, inst.peak_amplitudes[keep], inst.peak_frequency[keep]
+    return decay_peaks(inst, c, params.get("decay_only", True))
 
 
 def curve_for(c: Component, params: dict[str, Any]) -> DampingCurve:
-    t, a, f = trusted_peaks(c, params)
-    return damping_from_peaks(t, a, f, method=params["method"], span=params["span"],
-                              window=params["window"], smooth=params["smooth_points"])
+    """Damping curve of a component, decay by decay (``decays`` holds the split)."""
+    t, a, f, decay, decays = trusted_peaks(c, params)
+    curve = damping_from_peaks(t, a, f, method=params["method"], span=params["span"],
+                               window=params["window"], smooth=params["smooth_points"],
+                               decay=decay)
+    return dataclasses.replace(curve, decays=decays)
 
 
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
@@ -338,9 +431,11 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
 
     done, errors = per_component("damping", context, disp, work)
     count = len(disp)
+    t0 = {c.index: c.t0 for c in disp}
     entries = [{"index": k, "damping": {"amplitude": jsonable(d.amplitude),
                                         "zeta": jsonable(d.zeta), "method": d.method,
-                                        **({"params": d.params} if d.params else {})}}
+                                        **({"params": d.params} if d.params else {}),
+                                        **decay_summary(d.decays, t0[k])}}
                for k, d in done.items()]
     err_entries, err_attrs = error_entries(errors, "damping")
     names = ("time", "amplitude", "zeta", "frequency", "decay_rate")
@@ -348,13 +443,16 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                 for n in names}
     datasets["velocity_amplitude"] = stack_rows(
         {k: 2.0 * math.pi * d.frequency * d.amplitude for k, d in done.items()}, count)
+    datasets["decay"] = stack_rows({k: d.decay.astype(np.float64) for k, d in done.items()},
+                                   count)
     return AnalysisResult(
         datasets=datasets,
         units={"time": "s", "amplitude": "m", "zeta": "", "frequency": "Hz",
-               "decay_rate": "1/s", "velocity_amplitude": "m/s"},
+               "decay_rate": "1/s", "velocity_amplitude": "m/s", "decay": ""},
         attrs={"method": params["method"],
                "velocity_amplitude": "2 pi f times the displacement amplitude",
-               "rows": "one row per component, padded with NaN", **err_attrs},
+               "rows": "one row per component, padded with NaN",
+               **decay_attrs({k: d.decays for k, d in done.items()}, t0), **err_attrs},
         summary={"components": entries + err_entries}, values=done)
 
 

@@ -222,7 +222,8 @@ from fsi_lab.errors import AnalysisError  # noqa: E402
 from fsi_lab.hookspecs import hookimpl  # noqa: E402
 from fsi_lab.params import Param  # noqa: E402
 from fsi_lab.plugins.analysis._chain import (  # noqa: E402
-    displacement_components, error_entries, guarded, jsonable, per_component, where,
+    decay_summary, displacement_components, error_entries, guarded, jsonable, per_component,
+    where,
 )
 
 METHODS = ("regression", "envelope")
@@ -308,8 +309,8 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     def work(c):
         with guarded(plugin, context):
             if params["method"] == "envelope":
-                t, a, f = trusted_peaks(c, defaults)
-                curve = damping_from_peaks(t, a, f, method="envelope-fit")
+                t, a, f, decay, decays = trusted_peaks(c, defaults)
+                curve = damping_from_peaks(t, a, f, method="envelope-fit", decay=decay)
                 p = curve.params
                 scale = scale_for(c.index, float(np.mean(curve.frequency)))
                 c_i, c_f, ci_i, ci_f = equivalent_damping_from_envelope(
@@ -320,13 +321,15 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                 cq = equivalent_coefficient(curve.zeta, curve.frequency, mass)
                 return {"c_i": c_i, "c_f": c_f, "r2": r2, "c_i_ci95": list(ci_i),
                         "c_f_ci95": list(ci_f), "points": int(t.size),
+                        **decay_summary(decays, c.t0),
                         "amplitude": curve.amplitude / scale, "c_q": cq}
             curve = prior_curves.get(c.index) or curve_for(c, defaults)
             scale = scale_for(c.index, float(np.mean(curve.frequency)))
             res = equivalent_damping(curve.amplitude, curve.zeta, curve.frequency, mass,
                                      modal_scale=scale, confidence=params["confidence"],
                                      weighting=params["weighting"])
-            return {**res.as_summary(), "amplitude": res.amplitude, "c_q": res.c_q,
+            return {**res.as_summary(), **decay_summary(curve.decays, c.t0),
+                    "amplitude": res.amplitude, "c_q": res.c_q,
                     "damping_method": curve.method}
 
     done, errors = per_component(plugin, context, disp, work)

@@ -487,9 +487,15 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     data, relative_to = relative_signal(context, params["relative"])
     if params["start_s"] is None:
         # Automatic: the free decay starts where the excitation leaves the structure, at the
-        # largest sample (0 for a record that starts with the decay).
-        i0 = int(np.argmax(np.abs(data)))
-        start_rule = "auto: at the largest sample (end of the excitation)"
+        # largest sample (0 for a record that starts with the decay); for several decays (an
+        # impulse train) at the largest sample of the first one.
+        from fsi_lab.plugins.analysis._chain import _channel_noise
+        from fsi_lab.plugins.analysis._decays import first_decay_peak
+        sigma, f_dom = _channel_noise(context)
+        fs = float(ch.sample_rate)
+        i0 = first_decay_peak(data, fs, 1.0 / f_dom, 10.0 * sigma) if f_dom > 0 \
+            else int(np.argmax(np.abs(data)))
+        start_rule = "auto: at the largest sample of the first free decay (end of the excitation)"
     else:
         i0 = int(round(params["start_s"] * float(ch.sample_rate)))
         start_rule = "given"
@@ -541,7 +547,8 @@ PLUGIN = AnalysisPlugin(
         Param("start_s", "float", "s", None, minimum=0.0,
               help="Decompose from this time on: the free decay after the excitation (a forced "
                    "start disturbs its first cycles); unset = from the largest sample of the "
-                   "record (automatic), 0 = the whole record."),
+                   "first free decay (automatic: the record's largest sample when it holds one "
+                   "decay), 0 = the whole record."),
         Param("relative", "str", "", "auto", choices=("auto", "yes", "no"),
               help="Subtract the base motion (integrated reference acceleration) first, so the "
                    "components are motion relative to the clamp as in the modal model; auto = "

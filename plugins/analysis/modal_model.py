@@ -266,33 +266,21 @@ def _pick_damping(context: AnalysisContext, params: dict[str, Any], freqs: dict[
 
 def component_curves(c: Any, smooth: int, method: str) -> tuple[Any, Any]:
     """Backbone and damping curve of one displacement component, as the ``backbone`` and
-    ``damping`` plugins compute them (:func:`.backbone.trusted_backbone`,
-    :func:`.damping.curve_for` with their defaults and ``smooth`` / ``method``), from a single
-    zero-crossing analysis: untrusted record ends and the points before the free decay left out.
-    Times are from the channel's first sample."""
-    from fsi_lab.plugins.analysis._chain import trusted_times
-    from fsi_lab.plugins.analysis._signal import fail, moving_average
-    from fsi_lab.plugins.analysis.backbone import Backbone
-    from fsi_lab.plugins.analysis.damping import damping_from_peaks
+    ``damping`` plugins compute them (:func:`.backbone.decay_backbone`,
+    :func:`.damping.decay_peaks` with their defaults and ``smooth`` / ``method``), from a single
+    zero-crossing analysis: untrusted record ends and the points outside the free decays left
+    out. Times are from the channel's first sample."""
+    from fsi_lab.plugins.analysis.backbone import decay_backbone
+    from fsi_lab.plugins.analysis.damping import damping_from_peaks, decay_peaks
     from fsi_lab.plugins.analysis.instantaneous import instantaneous
 
     inst = instantaneous(c.signal, c.sample_rate, offset="cycles", smooth=0,
                          min_amplitude=None, noise_floor=c.noise_floor,
                          frequency_hint=c.frequency)
-    period = 1.0 / float(np.median(inst.frequency))
-    freq, amp = inst.frequency, inst.amplitude
-    if smooth:          # what instantaneous(smooth=...) does for the backbone plugin
-        freq = moving_average(freq, smooth)
-        amp = np.exp(moving_average(np.log(np.maximum(amp, 1e-300)), smooth))
-    keep = trusted_times(inst.frequency_times, c, period, amp, True)
-    if keep.sum() < 2:
-        raise fail("backbone", f"only {int(keep.sum())} period(s) away from the untrusted "
-                               "record ends; need at least 2 - a longer record")
-    bb = Backbone(inst.frequency_times[keep] + c.t0, amp[keep], freq[keep])
-    keep = trusted_times(inst.peak_times, c, period, inst.peak_amplitudes, True)
-    curve = damping_from_peaks(inst.peak_times[keep] + c.t0, inst.peak_amplitudes[keep],
-                               inst.peak_frequency[keep], method=method, span=2, window=6,
-                               smooth=smooth)
+    bb = decay_backbone(inst, c, smooth)
+    t, a, f, decay, _ = decay_peaks(inst, c)
+    curve = damping_from_peaks(t, a, f, method=method, span=2, window=6, smooth=smooth,
+                               decay=decay)
     return bb, curve
 
 
