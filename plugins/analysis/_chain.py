@@ -301,12 +301,14 @@ def decay_labels(times: np.ndarray, comp: Component, period: float,
     # of the frequency-domain integration (2 / corner, the corner about half the component's
     # frequency) on both sides; the smear before it weighs on the small tail of the previous
     # decay, hence twice the settle time there.
-    # (An HVD component - settle > 0 - starts at the first decay's peak: its first build-up is
-    # not in the record.)
+    # An HVD component (settle > 0) starts at the first decay's peak: its first build-up is not
+    # in the record. A whole channel whose first measured cycles come well after its start
+    # was quiet (below the noise floor) before the first excitation.
     later = max(comp.settle, 4.0 / comp.frequency if comp.frequency else 0.0)
+    first = times[ok][0]
+    build_up = False if comp.settle > 0 else (True if first > 4.0 * period else None)
     decays = split_decays(times[ok], amplitude[ok], settle=comp.settle, later_settle=later,
-                          first_build_up=False if comp.settle > 0 else None,
-                          guard=max(2.0 * later, period))
+                          first_build_up=build_up, guard=max(2.0 * later, period))
     labels = np.where(ok, decays.labels(times), -1)
     return labels, decays
 
