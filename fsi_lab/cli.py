@@ -137,8 +137,12 @@ def cmd_analyze(args) -> int:
     if not text.strip():
         chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
         text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
-    profile = parse_profile(text, f"{args.run}:/profile", registry, args.set,
-                            sections=("analysis", "specimen"))
+    # The run's own --set overrides of what analysis reads come first, the new ones after.
+    sections = ("analysis", "specimen")
+    recorded = [item for item in run.attrs.get("overrides", [])
+                if item.partition(".")[0].strip() in sections]
+    profile = parse_profile(text, f"{args.run}:/profile", registry, recorded + list(args.set),
+                            sections=sections)
     if args.mass_per_length is not None and not (args.mass_per_length > 0):
         raise InputFileError(f"--mass-per-length {args.mass_per_length}: expected kg/m > 0")
     bus = EventBus()

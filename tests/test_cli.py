@@ -116,3 +116,26 @@ def test_summary_text_flags_coefficients_whose_interval_contains_zero():
     assert "C_f is not resolved (its interval contains 0)" in unresolved
     assert "C_i is not resolved" not in unresolved
     assert "not resolved" not in format_summary(summary([1.0, 5.0]))
+
+
+def test_analyze_keeps_the_runs_own_overrides(sim_profile, tmp_path):
+    analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
+    data, proc = cli_json("run", str(sim_profile(analysis=analysis)), "--out", str(tmp_path),
+                          "--set", "analysis.spectrum.max_peaks=2", "--set", "run.duration=0.5")
+    assert proc.returncode == 0, proc.stderr
+
+    def stored_max_peaks():
+        with h5py.File(data["run"], "r") as handle:
+            return int(handle["analysis/tip_velocity/spectrum/params"].attrs["max_peaks"])
+
+    assert stored_max_peaks() == 2
+    assert len(data["analysis"]["channels"]["tip_velocity"]["spectrum_peaks_hz"]) <= 2
+    again, proc = cli_json("analyze", data["run"])
+    assert proc.returncode == 0, proc.stderr
+    assert stored_max_peaks() == 2
+    assert again["channels"]["tip_velocity"]["spectrum_peaks_hz"] == \
+        data["analysis"]["channels"]["tip_velocity"]["spectrum_peaks_hz"]
+    # a new --set still wins over the recorded one
+    _, proc = cli_json("analyze", data["run"], "--set", "analysis.spectrum.max_peaks=5")
+    assert proc.returncode == 0, proc.stderr
+    assert stored_max_peaks() == 5
