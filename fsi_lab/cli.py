@@ -302,7 +302,8 @@ def cmd_simulate(args) -> int:
     try:
         simulate_run(profile, waveform, rate, args.duration, args.rate, args.output, args.modes,
                      {"uuid": run_uuid, "start_time": started, "profile": profile.text,
-                      "profile_path": profile.path, "software_version": software_version()},
+                      "profile_path": profile.path, "overrides": list(profile.overrides),
+                      "run_name": profile.run["name"], "software_version": software_version()},
                      progress=lambda f: bus.emit(Progress("simulate", f, "simulating")))
     finally:
         console.close()

@@ -7,6 +7,7 @@ drives ``fsi-lab model``, ``fsi-lab simulate`` and the simulated bench.
 
 from __future__ import annotations
 
+import traceback
 from pathlib import Path
 from typing import Any, Callable
 
@@ -14,7 +15,7 @@ import numpy as np
 
 from fsi_lab.beam import PROJECTIONS, BeamModel, Damping
 from fsi_lab.params import Param
-from fsi_lab.runfile import RunFileWriter, write_attrs
+from fsi_lab.runfile import RunFileWriter, utc_now, write_attrs
 from fsi_lab.shaker import ShakerModel
 
 MODEL_PARAMS: tuple[Param, ...] = (
@@ -122,6 +123,7 @@ def simulate_run(profile: Any, waveform: np.ndarray, waveform_rate: float, durat
     t = np.arange(total) / sample_rate
     drive = np.interp(t, np.arange(waveform.size) / waveform_rate, waveform, right=0.0)
     writer = RunFileWriter(out, {**attrs, "kind": "simulated"})
+    ending = {"exit_status": "failed", "error": "", "traceback": ""}
     try:
         writer.write_excitation(waveform, waveform_rate,
                                 {"plugin": profile.excitation_plugin, "amplifier_gain": gain},
@@ -139,7 +141,12 @@ def simulate_run(profile: Any, waveform: np.ndarray, waveform_rate: float, durat
             writer.append("tip_velocity", motion["tip_velocity"])
             progress(min(1.0, (start + block) / total))
         write_attrs(writer.file.create_group("model"), model_summary(model))
-        writer.set_attrs({"exit_status": "completed"})
+        ending["exit_status"] = "completed"
+    except BaseException as exc:  # recorded in the file, then passed on
+        ending.update(exit_status="aborted" if isinstance(exc, KeyboardInterrupt) else "failed",
+                      error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
+        raise
     finally:
+        writer.set_attrs({**ending, "stop_time": utc_now()})
         writer.close()
     return out

@@ -60,3 +60,39 @@ def test_bad_model_input_is_refused_before_integration(tmp_path, args, fragment)
     assert proc.returncode == 2, proc.stderr
     assert fragment in proc.stderr
     assert not out.exists()
+
+
+def test_simulate_records_its_overrides_and_analyze_uses_them(tmp_path):
+    out = tmp_path / "sim.h5"
+    _, proc = cli_json("simulate", str(WET), "--duration", "4", "--rate", "5000", "-o", str(out),
+                       "--set", "analysis.hvd.components=1", "--set", "model.c_f=20")
+    assert proc.returncode == 0, proc.stderr
+    attrs = read_run(out, load_data=False).attrs
+    assert attrs["overrides"] == ["analysis.hvd.components=1", "model.c_f=20"]
+    assert attrs["stop_time"] > attrs["start_time"] and attrs["error"] == ""
+    data, proc = cli_json("analyze", str(out))
+    assert proc.returncode == 0, proc.stderr
+    # the wet profile asks for 2 HVD components; the simulation's override said 1
+    assert [c["index"] for c in data["channels"]["tip_velocity"]["components"]] == [0]
+
+
+def test_a_failed_simulation_says_so_in_its_file(tmp_path, registry):
+    from fsi_lab.modelling import simulate_run
+    from fsi_lab.profile import load_profile
+    from fsi_lab.runner import prepare_excitation
+
+    profile = load_profile(WET, registry)
+    waveform, rate = prepare_excitation(profile, registry)
+
+    def interrupted(fraction):
+        if fraction > 0.4:
+            raise RuntimeError("disk full")
+
+    with pytest.raises(RuntimeError):
+        simulate_run(profile, waveform, rate, 3.0, 2000.0, tmp_path / "s.h5", 2,
+                     {"uuid": "0" * 32, "start_time": "2026-11-23T00:00:00.000000+00:00"},
+                     progress=interrupted)
+    run = read_run(tmp_path / "s.h5")
+    assert run.attrs["exit_status"] == "failed" and "disk full" in run.attrs["error"]
+    assert "RuntimeError" in run.attrs["traceback"]
+    assert run.channels["tip_velocity"].data.size == 4000  # the seconds written before it failed
