@@ -63,7 +63,7 @@ class Console:
 
 
 def _emit_json(obj: dict[str, Any]) -> None:
-    print(json.dumps(obj, indent=2, default=_json_default, allow_nan=False))
+    print(json.dumps(_clean(obj), indent=2, default=_json_default, allow_nan=False))
 
 
 def _json_default(value):
@@ -117,7 +117,7 @@ def cmd_run(args) -> int:
     finally:
         console.close()
     if args.json:
-        _emit_json(_clean(outcome.as_json()))
+        _emit_json(outcome.as_json())
     else:
         print(f"run file:    {outcome.path}")
         print(f"exit status: {outcome.exit_status}" + (f" ({outcome.error})" if outcome.error else ""))
@@ -155,7 +155,7 @@ def cmd_analyze(args) -> int:
     finally:
         console.close()
     if args.json:
-        _emit_json(_clean(summary))
+        _emit_json(summary)
     else:
         print(format_summary(summary))
     return 0
@@ -191,7 +191,7 @@ def cmd_show(args) -> int:
             or None,
             "analysis": summary}
     if args.json:
-        _emit_json(_clean(info))
+        _emit_json(info)
         return 0
     print(f"run file:    {args.run}")
     for key in ("kind", "uuid", "start_time", "stop_time", "exit_status", "error",
@@ -242,7 +242,7 @@ def cmd_profile_check(args) -> int:
         _, _, report = check_safety(profile, registry)
         result["safety"] = report.as_dict()
     if args.json:
-        _emit_json(_clean(result))
+        _emit_json(result)
     else:
         print(f"{args.profile}: valid")
         if result["safety"]:
@@ -388,8 +388,20 @@ def _add_plugin_commands(sub) -> None:
         parser.set_defaults(func=command.run)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+class _Parser(argparse.ArgumentParser):
+    """Usage errors also give the one JSON object when ``--json`` was asked for."""
+
+    json_requested = False
+
+    def error(self, message: str):
+        if self.json_requested:
+            _emit_json({"error": f"{self.prog}: {message}", "exit_code": 2})
+        super().error(message)
+
+
+def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
+    _Parser.json_requested = json_requested
+    parser = _Parser(
         prog="fsi-lab", description="Run and analyse vibration experiments on beams in fluid.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -471,14 +483,20 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser(json_requested="--json" in argv).parse_args(argv)
     try:
         return args.func(args)
-    except FsiLabError as exc:
+    except (FsiLabError, OSError) as exc:
+        if isinstance(exc, OSError):  # a file or folder the system refused: name it
+            where = f"{exc.filename}: " if exc.filename else ""
+            text, code = f"{where}{exc.strerror or exc}", 1
+        else:
+            text, code = str(exc), exc.exit_code
         if getattr(args, "json", False):
-            _emit_json({"error": str(exc), "exit_code": exc.exit_code})
-        print(f"fsi-lab: error: {exc}", file=sys.stderr)
-        return exc.exit_code
+            _emit_json({"error": text, "exit_code": code})
+        print(f"fsi-lab: error: {text}", file=sys.stderr)
+        return code
     except KeyboardInterrupt:
         print("fsi-lab: interrupted", file=sys.stderr)
         return 130

@@ -139,3 +139,16 @@ def test_analyze_keeps_the_runs_own_overrides(sim_profile, tmp_path):
     _, proc = cli_json("analyze", data["run"], "--set", "analysis.spectrum.max_peaks=5")
     assert proc.returncode == 0, proc.stderr
     assert stored_max_peaks() == 5
+
+
+def test_usage_and_file_system_errors_still_give_one_json_object(tmp_path):
+    data, proc = cli_json("simulate", "profiles/wet-beam-sim.toml", "-o", str(tmp_path / "x.h5"))
+    assert proc.returncode == 2
+    assert data == {"error": "fsi-lab simulate: the following arguments are required: "
+                             "--duration, --rate", "exit_code": 2}
+    csv = tmp_path / "rec.csv"
+    csv.write_text("time [s],tip [m/s]\n0,1\n0.001,2\n0.002,1\n")
+    under_a_file = csv / "rec.h5"  # its folder is a file
+    data, proc = cli_json("import", str(csv), "-o", str(under_a_file))
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    assert data["exit_code"] == 1 and str(csv) in data["error"]
