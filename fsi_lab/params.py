@@ -110,6 +110,7 @@ class Param:
             "default": None if self.required else self.default,
             "required": self.required,
             "minimum": self.minimum,
+            "exclusive_minimum": self.exclusive_minimum,
             "maximum": self.maximum,
             "choices": list(self.choices) if self.choices is not None else None,
             "help": self.help,

@@ -65,9 +65,10 @@ def test_parse_refuses_unreadable_text():
 def test_describe_is_json_friendly():
     info = SCHEMA[0].as_dict()
     assert info == {"name": "amplitude", "type": "float", "unit": "V", "default": 0.5,
-                    "required": False, "minimum": -10.0, "maximum": 10.0, "choices": None,
-                    "help": "Peak."}
+                    "required": False, "minimum": -10.0, "exclusive_minimum": False,
+                    "maximum": 10.0, "choices": None, "help": "Peak."}
     assert SCHEMA[-1].as_dict()["required"] is True
+    assert SCHEMA[4].as_dict()["exclusive_minimum"] is True
 
 
 def test_unknown_type_is_refused():
