@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -193,11 +194,11 @@ def cmd_show(args) -> int:
     if args.json:
         _emit_json(info)
         return 0
-    print(f"run file:    {args.run}")
-    for key in ("kind", "uuid", "start_time", "stop_time", "exit_status", "error",
-                "software_version"):
-        if attrs.get(key) not in (None, ""):
-            print(f"{key + ':':<13}{attrs[key]}")
+    print(f"{'run file:':<18}{args.run}")
+    for key in ("kind", "uuid", "start_time", "stop_time", "exit_status", "stopped_early",
+                "error", "software_version"):
+        if attrs.get(key) not in (None, "", False):
+            print(f"{key + ':':<18}{attrs[key]}")
     for role, inst in run.instruments.items():
         final = inst.get("final_state", {})
         print(f"instrument {role}: {inst.get('identity', '?')}; final state {final}")
@@ -487,6 +488,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser(json_requested="--json" in argv).parse_args(argv)
     try:
         return args.func(args)
+    except BrokenPipeError:  # the reader of stdout went away (`fsi-lab show RUN | head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except (FsiLabError, OSError) as exc:
         if isinstance(exc, OSError):  # a file or folder the system refused: name it
             where = f"{exc.filename}: " if exc.filename else ""
