@@ -96,7 +96,8 @@ def test_linear_backbone_is_flat():
     x, _, freq = decaying_tone(t, 2e-3, 12.0, 0.01, 1.0)
     bb = backbone(x, fs, smooth=5)
     assert np.ptp(bb.frequency) / freq[0] < 1e-3
-    assert bb.amplitude[0] > 10 * bb.amplitude[-1] * 0 + bb.amplitude[-1]
+    # flat over a wide range: the points span more than a decade of amplitude
+    assert bb.amplitude.max() > 10 * bb.amplitude.min()
 
 
 @pytest.mark.parametrize("bad, match", [
