@@ -232,6 +232,37 @@ def cmd_plugins(args) -> int:
     return 0
 
 
+def cmd_bench_access(args) -> int:
+    """``fsi-lab safe`` and ``fsi-lab identify``: every instrument of the profile, outside a run."""
+    from fsi_lab.bench_access import probe_bench, safe_bench
+    from fsi_lab.errors import ProfileError
+    from fsi_lab.profile import load_profile
+
+    registry = _registry()
+    profile = load_profile(args.profile, registry, args.set)
+    if not profile.roles:
+        raise ProfileError(f"{args.profile}: bench: no instruments; expected [bench.<role>] tables")
+    report = (safe_bench if args.command == "safe" else probe_bench)(profile, registry)
+    failed = sorted(role for role, info in report.items()
+                    if "error" in info or "safe_state_error" in info
+                    or "error" in info.get("state", {}))
+    if args.json:
+        _emit_json({"profile": str(args.profile), "instruments": report, "failed": failed})
+    else:
+        for role, info in report.items():
+            verdict = "NOT confirmed safe" if role in failed else "safe"
+            print(f"{role}: {info.get('identity') or verdict}")
+            for key in ("error", "safe_state_error"):
+                if key in info:
+                    print(f"  {key.replace('_', ' ')}: {info[key]}")
+            for key in ("settings", "interlocks", "state"):
+                if info.get(key):
+                    print(f"  {key}: {info[key]}")
+        if failed:
+            print(f"not confirmed safe: {', '.join(failed)}", file=sys.stderr)
+    return 1 if failed else 0
+
+
 def cmd_profile_check(args) -> int:
     from fsi_lab.profile import load_profile
     from fsi_lab.runner import check_safety
@@ -459,6 +490,16 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     common(p)
     p.set_defaults(func=cmd_simulate)
+
+    for name, text in (("safe", "put every instrument of the profile in its safe state "
+                                "(amplifier output off first, source at 0 V) and read it back"),
+                       ("identify", "identify every instrument of the profile, read its "
+                                    "settings and interlocks, and leave it safe")):
+        p = sub.add_parser(name, help=text)
+        p.add_argument("profile", type=Path)
+        p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+        common(p)
+        p.set_defaults(func=cmd_bench_access)
 
     p = sub.add_parser("plugins", help="list the plugins found and their status")
     common(p)

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from fsi_lab.bench_access import OPEN_ORDER, SAFE_ORDER, bench_context, safe_and_close
 from fsi_lab.chain import analyse_and_store
 from fsi_lab.contract import ROLE_INTERFACES, Instrument
 from fsi_lab.errors import FsiLabError, InstrumentError, ProfileError, RunAborted
@@ -31,9 +32,6 @@ from fsi_lab.registry import Registry
 from fsi_lab.runfile import RunFileWriter, new_run_path, read_run, software_version, utc_now
 from fsi_lab.safety import SafetyReport, assess, require_safe
 
-#: Instruments are put in their safe state in this order: the amplifier first.
-SAFE_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
-OPEN_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
 INTERLOCK_POLL_S = 0.2
 
 
@@ -158,10 +156,7 @@ class Runner:
         self.instruments: dict[str, Instrument] = {}
         # Shared by the instruments of this run; simulated ones find the physics here, and
         # register in "cleanup" what must be stopped once every instrument is closed.
-        self.bench_context: dict[str, Any] = {
-            "specimen": profile.specimen, "model": profile.model, "shaker": profile.shaker,
-            "bench": dict(profile.bench), "cleanup": [],
-        }
+        self.bench_context: dict[str, Any] = bench_context(profile)
 
     def abort(self) -> None:
         """Ask the run to stop as soon as possible and go to the safe state (thread-safe)."""
@@ -365,38 +360,10 @@ class Runner:
     def _safe_state_all(self, writer: RunFileWriter | None) -> dict[str, dict[str, Any]]:
         """Safe state for every opened instrument, amplifier first; then read their state back."""
         self.bus.emit(StateChanged("finalizing"))
-        errors: dict[str, str] = {}
-        for role in SAFE_ORDER:
-            instrument = self.instruments.get(role)
-            if instrument is None:
-                continue
-            try:
-                instrument.safe_state()
-            except Exception as exc:  # noqa: BLE001 - keep going: the others must be safed too
-                errors[role] = f"safe state failed: {type(exc).__name__}: {exc}"
-                self.bus.log("ERROR", f"{role}: {errors[role]}")
-        states: dict[str, dict[str, Any]] = {}
-        for role in SAFE_ORDER:
-            instrument = self.instruments.get(role)
-            if instrument is None:
-                continue
-            try:
-                states[role] = dict(instrument.read_state())
-            except Exception as exc:  # noqa: BLE001
-                states[role] = {"error": f"could not read state: {type(exc).__name__}: {exc}"}
-            if role in errors:
-                states[role]["safe_state_error"] = errors[role]
-            try:
-                instrument.close()
-            except Exception as exc:  # noqa: BLE001
-                self.bus.log("WARNING", f"{role}: close failed: {exc}")
-            if writer is not None and not writer.closed:
-                writer.write_final_state(role, states[role])
-        for cleanup in reversed(self.bench_context["cleanup"]):
-            try:
-                cleanup()
-            except Exception as exc:  # noqa: BLE001
-                self.bus.log("WARNING", f"bench cleanup failed: {exc}")
+        states = safe_and_close(self.instruments, self.bench_context["cleanup"], self.bus.log)
+        if writer is not None and not writer.closed:
+            for role, state in states.items():
+                writer.write_final_state(role, state)
         return states
 
     def _finalize(self, writer: RunFileWriter | None, outcome: RunOutcome) -> None:

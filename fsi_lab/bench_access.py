@@ -1,0 +1,133 @@
+"""Opening, safing and closing a profile's instruments, in a run or outside one.
+
+The runner, the ``fsi-lab safe`` and ``fsi-lab identify`` commands and the GUI's bench panel
+share these steps, so the safe state is reached the same way everywhere: every opened
+instrument is put in its safe state in :data:`SAFE_ORDER` (the amplifier first), its state is
+read back, it is closed, and what the simulated bench registered for cleanup is stopped. A
+failure of one instrument is recorded and the others are still made safe.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Mapping
+
+from fsi_lab.contract import Instrument
+from fsi_lab.profile import Profile
+from fsi_lab.registry import Registry
+
+#: Instruments are put in their safe state in this order: the amplifier first.
+SAFE_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
+#: And opened in this order: the amplifier first, so it can be made safe before anything else.
+OPEN_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
+
+Log = Callable[[str, str], None]
+
+
+def bench_context(profile: Profile) -> dict[str, Any]:
+    """The dictionary shared by the instruments of one profile (see ``InstrumentPlugin``):
+    its ``specimen``, ``model``, ``shaker`` and ``bench`` sections and a ``cleanup`` list."""
+    return {"specimen": profile.specimen, "model": profile.model, "shaker": profile.shaker,
+            "bench": dict(profile.bench), "cleanup": []}
+
+
+def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable[[], None]],
+                   log: Log = lambda level, text: None) -> dict[str, dict[str, Any]]:
+    """Safe state for every instrument (amplifier first), then read its state back and close it.
+
+    Parameters
+    ----------
+    instruments
+        Opened instruments by role.
+    cleanup
+        Callables run last, in reverse order (simulated benches stop their servers there).
+    log
+        ``log(level, text)`` for what went wrong.
+
+    Returns
+    -------
+    dict
+        Per role, the state read back; ``error`` when it could not be read and
+        ``safe_state_error`` when the safe state failed.
+    """
+    errors: dict[str, str] = {}
+    for role in SAFE_ORDER:
+        instrument = instruments.get(role)
+        if instrument is None:
+            continue
+        try:
+            instrument.safe_state()
+        except Exception as exc:  # noqa: BLE001 - keep going: the others must be safed too
+            errors[role] = f"safe state failed: {type(exc).__name__}: {exc}"
+            log("ERROR", f"{role}: {errors[role]}")
+    states: dict[str, dict[str, Any]] = {}
+    for role in SAFE_ORDER:
+        instrument = instruments.get(role)
+        if instrument is None:
+            continue
+        try:
+            states[role] = dict(instrument.read_state())
+        except Exception as exc:  # noqa: BLE001
+            states[role] = {"error": f"could not read state: {type(exc).__name__}: {exc}"}
+        if role in errors:
+            states[role]["safe_state_error"] = errors[role]
+        try:
+            instrument.close()
+        except Exception as exc:  # noqa: BLE001
+            log("WARNING", f"{role}: close failed: {exc}")
+    for stop in reversed(cleanup):
+        try:
+            stop()
+        except Exception as exc:  # noqa: BLE001
+            log("WARNING", f"bench cleanup failed: {exc}")
+    return states
+
+
+def each_instrument(profile: Profile, registry: Registry, order: tuple[str, ...],
+                    action: Callable[[str, Instrument], dict[str, Any]]
+                    ) -> dict[str, dict[str, Any]]:
+    """Open every instrument of ``profile`` in ``order`` and apply ``action`` to it; then make
+    all of them safe and close them (:func:`safe_and_close`).
+
+    Returns, per role, what ``action`` returned (or ``error`` if opening or the action failed)
+    with the ``state`` read back after the safe state (and ``safe_state_error`` if it failed).
+    """
+    context = bench_context(profile)
+    opened: dict[str, Instrument] = {}
+    report: dict[str, dict[str, Any]] = {}
+    try:
+        for role in order:
+            config = profile.roles.get(role)
+            if config is None:
+                continue
+            try:
+                descriptor = registry.get("instrument", config.plugin)
+                opened[role] = descriptor.open(config.address, dict(config.settings), context)
+                report[role] = action(role, opened[role])
+            except Exception as exc:  # noqa: BLE001 - reported per instrument
+                report[role] = {"error": f"{type(exc).__name__}: {exc}"}
+    finally:
+        states = safe_and_close(opened, context["cleanup"])
+        for role, state in states.items():
+            safe_error = state.pop("safe_state_error", None)
+            report[role].setdefault("state", state)
+            if safe_error:
+                report[role]["safe_state_error"] = safe_error
+    return report
+
+
+def probe_bench(profile: Profile, registry: Registry) -> dict[str, dict[str, Any]]:
+    """Identity, settings and interlocks of every instrument; each is left safe and closed."""
+
+    def probe(role: str, instrument: Instrument) -> dict[str, Any]:
+        info: dict[str, Any] = {"identity": instrument.identify(),
+                                "settings": dict(instrument.settings())}
+        if hasattr(instrument, "interlocks"):
+            info["interlocks"] = dict(instrument.interlocks())
+        return info
+
+    return each_instrument(profile, registry, OPEN_ORDER, probe)
+
+
+def safe_bench(profile: Profile, registry: Registry) -> dict[str, dict[str, Any]]:
+    """Put every instrument in its safe state (amplifier first) and read the state back."""
+    return each_instrument(profile, registry, SAFE_ORDER, lambda role, instrument: {})
