@@ -197,3 +197,69 @@ def first_decay_peak(x: Any, fs: float, block: float, floor: float = 0.0) -> int
         return int(np.argmax(np.abs(np.asarray(x, dtype=np.float64))))
     decays = split_decays(tb[keep], mb[keep])
     return int(ib[keep][int(np.searchsorted(tb[keep], decays.peaks[0]))])
+
+
+#: A decay train's rises are abrupt: the amplitude a later decay gathers (above the low that
+#: precedes it) between that low and its peak is less than ABRUPT times what it keeps between
+#: its peak and its own low (its decay). Two modes beating swell as they fade (a ratio of
+#: about 1, more when they decay): no train.
+ABRUPT = 0.5
+#: Most blocks :func:`decay_segments` splits a record into (longer blocks than a period of
+#: the dominant frequency on very long records keep the split fast).
+MAX_BLOCKS = 4000
+
+
+def _abrupt_rises(tb: np.ndarray, mb: np.ndarray, decays: FreeDecays) -> bool:
+    """Whether every later decay of ``decays`` rises abruptly (see :data:`ABRUPT`) in the block
+    maxima ``mb`` (unit of the record) at times ``tb`` (s)."""
+    peaks = np.searchsorted(tb, decays.peaks)
+    lows = np.append(np.searchsorted(tb, decays.bounds), tb.size)
+    for k in range(1, decays.count):
+        lo, pk, hi = int(lows[k - 1]), int(peaks[k]), int(lows[k])
+        weight = np.maximum(mb - mb[lo], 0.0)
+        swell = float(np.sum(weight[lo + 1:pk]))
+        fade = float(np.sum(weight[pk + 1:hi]))
+        if not swell < ABRUPT * fade:
+            return False
+    return True
+
+
+def decay_segments(x: Any, fs: float, period: float) -> list[tuple[int, int]]:
+    """Index ranges ``[start, stop)`` of the free decays of a raw record, for estimates (a
+    spectrum) that must not span two excitations.
+
+    The decays are split (:func:`split_decays`) on the maxima of |x| over blocks of about one
+    ``period`` (s, of the dominant oscillation; longer on very long records, at most
+    :data:`MAX_BLOCKS` blocks). Each range runs from a decay's largest sample to the block of
+    its lowest amplitude before the next build-up; the last one to the record's end.
+
+    Parameters
+    ----------
+    x
+        Samples, any unit.
+    fs
+        Sample rate, Hz.
+    period
+        Block length, s: about one period of the record's dominant oscillation.
+
+    Returns
+    -------
+    list of (int, int)
+        ``[(0, len(x))]`` - the whole record - when it holds one decay, or when the later
+        decays do not rise abruptly (:data:`ABRUPT`: an amplitude that swells as it fades is
+        two modes beating, not a new excitation).
+    """
+    x = np.asarray(x, dtype=np.float64)
+    n = x.size
+    block = max(period, n / fs / MAX_BLOCKS)
+    tb, ib, mb = block_maxima(x, fs, block)
+    whole = [(0, n)]
+    if tb.size < 4:
+        return whole
+    mb = np.maximum(mb, 1e-300 * max(float(mb.max()), 1e-300))
+    decays = split_decays(tb, mb)
+    if decays.count < 2 or not _abrupt_rises(tb, mb, decays):
+        return whole
+    starts = ib[np.searchsorted(tb, decays.peaks)]
+    stops = np.append(ib[np.searchsorted(tb, decays.bounds)], n)
+    return [(int(a), int(b)) for a, b in zip(starts, stops) if b > a]

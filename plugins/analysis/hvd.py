@@ -30,7 +30,10 @@ Numerical choices (see the module constants):
 - Automatic cut-off, per component: half the smaller of the component's frequency and its
   distance to the nearest other spectral peak (Feldman's rule: below the difference of the
   component frequencies). Peaks closer than about 5 % are treated as one (a chirping component);
-  give ``cutoff`` explicitly to separate closer components.
+  give ``cutoff`` explicitly to separate closer components. The peaks of a record with several
+  free decays (an impulse train) are those of its decays' averaged spectrum
+  (:func:`.spectrum.free_decay_peaks`): the whole record's spectrum is a comb of lines
+  1 / spacing apart around each mode, which would pass for close peaks and give tiny cut-offs.
 """
 
 from __future__ import annotations
@@ -48,7 +51,7 @@ from fsi_lab.plugins.analysis._signal import (
     FFT_WORKERS, as_record, check_rate, check_samples_per_cycle, fail, lowpass_gain, mirror_pad,
     predict_pad, smooth_step,
 )
-from fsi_lab.plugins.analysis.spectrum import spectral_peaks
+from fsi_lab.plugins.analysis.spectrum import free_decay_peaks
 
 #: Cut-off as a fraction of min(component frequency, distance to the nearest other peak).
 CUTOFF_FRACTION = 0.5
@@ -207,11 +210,13 @@ def _band_frequency(om_f: np.ndarray, bf: np.ndarray, scale: float, out: np.ndar
 
 # ----------------------------------------------------------------------------- helpers
 def _significant_peaks(x: np.ndarray, fs: float, func: str) -> np.ndarray:
-    """Frequencies (Hz) of the record's significant spectral peaks, largest first."""
-    fmin = 2.0 * fs / x.size
-    peaks = spectral_peaks(x, fs, window="decay", min_relative=PEAK_THRESHOLD,
-                           smoothing=PEAK_SMOOTHING, fmin=fmin)
+    """Frequencies (Hz) of the record's significant spectral peaks, largest first; for a
+    record with several free decays, those of its decays' averaged spectrum
+    (:func:`.spectrum.free_decay_peaks`: an impulse train's comb of lines merges into one peak
+    per mode)."""
+    peaks = free_decay_peaks(x, fs, min_relative=PEAK_THRESHOLD, smoothing=PEAK_SMOOTHING)
     if peaks.frequencies.size == 0:
+        fmin = 2.0 * fs / x.size
         raise fail(func, "found no spectral peak to decompose (no oscillation above the lowest "
                          f"resolvable frequency {fmin:.3g} Hz in a record of {x.size / fs:.4g} s)")
     return peaks.frequencies

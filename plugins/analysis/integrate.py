@@ -27,7 +27,7 @@ import scipy.fft as sfft
 from fsi_lab.plugins.analysis._signal import (
     FFT_WORKERS, as_record, check_rate, fail, highpass_gain, predict_pad,
 )
-from fsi_lab.plugins.analysis.spectrum import spectral_peaks
+from fsi_lab.plugins.analysis.spectrum import free_decay_peaks
 
 #: Default high-pass corner as a fraction of the lowest significant spectral peak.
 HIGHPASS_FRACTION = 0.5
@@ -40,9 +40,9 @@ PAD_GROWTH = 100.0
 
 
 def lowest_mode(x: np.ndarray, fs: float, func: str) -> tuple[float, np.ndarray]:
-    """Lowest significant spectral peak (Hz) of a record, and all significant peaks."""
-    peaks = spectral_peaks(x, fs, window="decay", min_relative=0.01, smoothing=0.05,
-                           fmin=2.0 * fs / x.size)
+    """Lowest significant spectral peak (Hz) of a record, and all significant peaks (of its
+    decays' averaged spectrum when it holds several: :func:`.spectrum.free_decay_peaks`)."""
+    peaks = free_decay_peaks(x, fs, min_relative=0.01, smoothing=0.05)
     if peaks.frequencies.size == 0:
         raise fail(func, "found no spectral peak above the lowest resolvable frequency "
                          f"{2.0 * fs / x.size:.3g} Hz, so no high-pass corner can be chosen; "

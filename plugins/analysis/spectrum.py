@@ -10,21 +10,29 @@ find_peaks_interpolated
     through the log-amplitudes of the three bins around each peak.
 spectral_peaks
     Both in one call.
+averaged_spectrum
+    RMS average of the amplitude spectra of segments of a record (Welch-style).
+free_decay_peaks
+    Peaks for automatic choices: those of the whole record for one free decay, of its decays'
+    averaged spectrum for several (an impulse train, whose whole spectrum is a comb).
 """
 
 from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 import scipy.signal as ssig
 from scipy.ndimage import maximum_filter1d
 
+from fsi_lab.plugins.analysis._decays import decay_segments
 from fsi_lab.plugins.analysis._signal import (as_record, check_rate, fail, rfft)
 
 WINDOWS = ("hann", "blackmanharris", "flattop", "boxcar", "decay")
+#: Fewest samples of a free decay for :func:`free_decay_peaks` to average the decays' spectra.
+MIN_SEGMENT = 64
 
 
 @functools.lru_cache(maxsize=8)
@@ -112,6 +120,51 @@ def amplitude_spectrum(x: Any, fs: float, *, window: str = "hann", detrend: bool
         spec[-1] *= 0.5
     freqs = np.arange(spec.size) * (fs / nfft)
     return freqs, spec
+
+
+def averaged_spectrum(x: Any, fs: float, segments: Sequence[tuple[int, int]], *,
+                      window: str = "decay") -> tuple[np.ndarray, np.ndarray]:
+    """RMS average of the amplitude spectra of segments of a record (Welch-style, one segment
+    per free decay of an impulse train).
+
+    Each segment is detrended and windowed over its own length (:func:`amplitude_spectrum`)
+    and zero-padded to the longest, so all share one frequency grid. The average resolves about
+    1 / (segment length): the comb of lines 1 / spacing apart that a periodic train puts on the
+    spectrum of the whole record merges into one peak per mode.
+
+    Parameters
+    ----------
+    x
+        Samples, any unit U (1-D, finite).
+    fs
+        Sample rate, Hz.
+    segments
+        Index ranges ``[start, stop)`` of ``x``, each at least 16 samples long.
+    window
+        As in :func:`amplitude_spectrum` (default ``"decay"``: each segment is a free decay).
+
+    Returns
+    -------
+    freqs : numpy.ndarray
+        Hz, from 0 to fs/2, step fs / (longest segment length).
+    amplitude : numpy.ndarray
+        RMS of the segments' amplitude spectra, U.
+
+    Raises
+    ------
+    AnalysisError
+        No segment, or a segment that :func:`amplitude_spectrum` refuses.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    if len(segments) == 0:
+        raise fail("averaged_spectrum", "no segment given; expected at least one index range")
+    nfft = max(stop - start for start, stop in segments)
+    power = None
+    for start, stop in segments:
+        freqs, a = amplitude_spectrum(x[start:stop], fs, window=window, nfft=nfft,
+                                      _func="averaged_spectrum")
+        power = a * a if power is None else power + a * a
+    return freqs, np.sqrt(power / len(segments))
 
 
 def _running_max(a: np.ndarray, width: float) -> np.ndarray:
@@ -257,6 +310,50 @@ def spectral_peaks(x: Any, fs: float, *, window: str = "hann", min_relative: flo
         k = np.clip(np.rint(peaks.frequencies / df).astype(np.int64), 0, a.size - 1)
         peaks = SpectralPeaks(peaks.frequencies, a[k])
     return peaks
+
+
+def free_decay_peaks(x: Any, fs: float, *, min_relative: float = 0.01,
+                     smoothing: float = 0.05) -> SpectralPeaks:
+    """Peaks of the spectrum of a record's free decays, for automatic choices (HVD's
+    frequencies and cut-offs, the integration's high-pass).
+
+    A record with several free decays (an impulse train) is not read whole: its spectrum is a
+    comb of lines 1 / spacing apart around each mode, which would pass for separate peaks. Its
+    peaks are those of the RMS average of its decays' spectra (:func:`averaged_spectrum` over
+    :func:`._decays.decay_segments`), which resolves about 1 / spacing, so each mode's comb
+    merges into one peak. A record with one decay gets the peaks of its whole spectrum. Both
+    use the ``"decay"`` window and ignore peaks below two frequency steps.
+
+    Parameters
+    ----------
+    x
+        Samples, any unit U (1-D, finite, not constant).
+    fs
+        Sample rate, Hz.
+    min_relative, smoothing
+        As in :func:`find_peaks_interpolated`.
+
+    Returns
+    -------
+    SpectralPeaks
+        Frequencies (Hz) and amplitudes (U, of the averaged spectrum for several decays), by
+        decreasing amplitude; empty when the record shows no peak.
+    """
+    x = as_record(x, "free_decay_peaks", min_samples=16, check_clipping=False)
+    fmin = 2.0 * fs / x.size
+    peaks = spectral_peaks(x, fs, window="decay", min_relative=min_relative,
+                           smoothing=smoothing, fmin=fmin)
+    if peaks.frequencies.size == 0:
+        return peaks
+    segments = decay_segments(x, fs, 1.0 / float(peaks.frequencies[0]))
+    shortest = min(stop - start for start, stop in segments)
+    if len(segments) < 2 or shortest < MIN_SEGMENT:
+        return peaks
+    f, a = averaged_spectrum(x, fs, segments, window="decay")
+    merged = find_peaks_interpolated(f, a, min_relative=min_relative, smoothing=smoothing,
+                                     fmin=max(fmin, 2.0 * fs / shortest),
+                                     _func="free_decay_peaks")
+    return merged if merged.frequencies.size else peaks
 
 
 # ----------------------------------------------------------------------------- plugin

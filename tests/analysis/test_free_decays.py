@@ -18,7 +18,10 @@ from _analysis_sims import (decaying_tone, duffing_hb_backbone, duffing_record,
 from test_analysis_plugins import run
 from fsi_lab.contract import ChannelData
 from fsi_lab.errors import AnalysisError
-from fsi_lab.plugins.analysis._decays import first_decay_peak, split_decays
+from fsi_lab.plugins.analysis._decays import decay_segments, first_decay_peak, split_decays
+from fsi_lab.plugins.analysis.hvd import hvd
+from fsi_lab.plugins.analysis.integrate import lowest_mode
+from fsi_lab.plugins.analysis.spectrum import free_decay_peaks, spectral_peaks
 from fsi_lab.plugins.excitation.impulse_train import impulse_amplitudes, impulse_train
 
 COUNT, SPACING, WIDTH, DELAY = 4, 8.0, 0.02, 0.5
@@ -244,3 +247,59 @@ def test_single_decay_gives_one_segment_in_the_results():
     attrs = groups["tip/damping"]["attrs"]
     assert attrs["component_0_decays"] == 1
     assert attrs["component_0_decay_starts_s"] == pytest.approx(c0["damping"]["decay_starts_s"])
+
+
+# ----------------------------------------------------------------------------- automatic choices
+#: Spacing of :func:`two_mode_train`, s: its comb lines (1 / TRAIN_SPACING apart) are 7 % of
+#: the 10 Hz mode apart, too far for HVD's 5 % peak smoothing to merge them.
+TRAIN_SPACING = 1.5
+
+
+def two_mode_train(fs: float = 2000.0) -> tuple[np.ndarray, float, np.ndarray]:
+    """Velocity-like record: COUNT decays, TRAIN_SPACING s apart, of a 10 Hz and a 31 Hz mode
+    (2 % damping, descending impulse pattern, 1e-4 noise); returns the record, its rate (Hz)
+    and the decay starts, s."""
+    t = time_axis(DELAY + COUNT * TRAIN_SPACING, fs)
+    x = np.zeros_like(t)
+    starts = DELAY + TRAIN_SPACING * np.arange(COUNT)
+    for amp, s in zip(impulse_amplitudes(1.0, 0.3, COUNT, "descending"), starts):
+        after = t >= s
+        x[after] += decaying_tone(t[after] - s, amp, 10.0, 0.02, 0.0)[0]
+        x[after] += decaying_tone(t[after] - s, 0.4 * amp, 31.0, 0.02, 0.0)[0]
+    return noisy(x, 1e-4, seed=4), fs, starts
+
+
+def test_decay_segments_split_a_train_but_not_two_beating_modes():
+    x, fs, starts = two_mode_train()
+    segments = decay_segments(x, fs, 1 / 10.0)
+    assert len(segments) == COUNT
+    for (lo, hi), s in zip(segments, starts):
+        assert s <= lo / fs < s + 0.1 and s + 0.5 * TRAIN_SPACING < hi / fs <= s + TRAIN_SPACING
+    # Two modes 8 % apart of equal amplitude: the envelope swells and fades every 1.25 s,
+    # symmetrically - no excitation, one segment.
+    t = time_axis(10.0, fs)
+    beat = decaying_tone(t, 1.0, 12.5, 0.002, 0.0)[0] + decaying_tone(t, 1.0, 13.5, 0.002, 1.0)[0]
+    assert decay_segments(beat, fs, 1 / 13.0) == [(0, t.size)]
+
+
+def test_a_train_shows_one_spectral_peak_per_mode_and_hvd_cutoffs_of_one_decay():
+    """The whole record's spectrum is a comb (lines 1 / TRAIN_SPACING apart); the peaks used for
+    HVD's automatic choices are the two modes, and the cut-offs those of a single decay: half
+    of min(frequency, distance to the other mode)."""
+    x, fs, starts = two_mode_train()
+    comb = spectral_peaks(x, fs, window="decay", min_relative=0.01, smoothing=0.05,
+                          fmin=2 * fs / x.size).frequencies
+    assert comb.size > 2
+    peaks = free_decay_peaks(x, fs, min_relative=0.01, smoothing=0.05).frequencies
+    np.testing.assert_allclose(np.sort(peaks), [10.0, 31.0], rtol=0.01)
+    res = hvd(x[int(starts[0] * fs):], fs, 2)
+    np.testing.assert_allclose(res.cutoffs, [5.0, 10.5], rtol=0.02)
+    # (Medians: near each impulse's onset, smeared by the filters, a component wanders.)
+    median = [np.median(res.frequencies[k][~res.edge_mask[k]]) for k in range(2)]
+    assert median == pytest.approx([10.0, 31.0], rel=0.01)
+
+
+def test_integration_high_pass_of_a_train_is_set_by_its_lowest_mode():
+    x, fs, _ = two_mode_train()
+    f_lo, _ = lowest_mode(x, fs, "test")
+    assert f_lo == pytest.approx(10.0, rel=0.01)
