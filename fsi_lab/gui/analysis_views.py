@@ -17,18 +17,31 @@ The parameter panel edits the chain's parameters with forms from the plugins' sc
 re-runs the analysis as ``fsi-lab analyze RUN.h5 --set ...`` in a child process (see
 :mod:`fsi_lab.gui.analysis_job`; the chain runs in order because later plugins use earlier
 results), then the views reload.
+
+Drawing keeps the window responsive: the run file is read on a worker thread
+(:func:`fsi_lab.gui.results.load_results`); a view is drawn only when its tab is shown, a step
+(a plot, a curve) at a time, by a :class:`Stepper` that gives the event loop back every few
+milliseconds and lets each figure be painted once, when it is complete; the parameter forms of
+a new run are built after its figures, a form at a time. Curves are decimated for display to
+two points (the min and max of a bin) per pixel of the figure's width
+(:func:`fsi_lab.gui.decimate.min_max_decimate`); the run file keeps every sample. A figure
+takes the space the layout gives it, so that drawing one never resizes (and repaints) the
+others.
 """
 
 from __future__ import annotations
 
+import inspect
+import time
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtCore import QObject, Qt, QTimer, Signal
 from PySide6.QtWidgets import (
-    QComboBox, QGridLayout, QGroupBox, QHBoxLayout, QHeaderView, QLabel, QPushButton, QSplitter, QTabWidget,
+    QComboBox, QGridLayout, QGroupBox, QHBoxLayout, QHeaderView, QLabel, QPushButton, QScrollArea,
+    QSizePolicy, QSplitter, QTabWidget,
     QTableWidget, QTableWidgetItem, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget,
 )
 
@@ -205,7 +218,13 @@ class View(QWidget):
         self.note = QLabel()
         self.note.setWordWrap(True)
         self.note.setObjectName("view-note")
+        # Two lines are reserved whatever the note says, so that a new note does not resize
+        # the figures below it (which would repaint every figure of the Overview).
+        self.note.setMinimumHeight(2 * self.note.fontMetrics().lineSpacing() + 2)
         self.graphics = pg.GraphicsLayoutWidget()
+        # The figure takes the space it is given, whatever its plots hint: a drawing never
+        # changes the layout around it (a new layout would repaint every figure around).
+        self.graphics.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Ignored)
         # Plot items are costly to build: they are kept between drawings and emptied.
         self._plots: dict[tuple[int, int], pg.PlotItem] = {}
         self._labels: dict[tuple[int, int], pg.LabelItem] = {}
@@ -243,21 +262,35 @@ class View(QWidget):
                 item.setVisible(key in self._used)
 
     def show_results(self, results: RunResults, channel: str) -> None:
+        """Draw the view at once."""
+        for _ in self.drawing(results, channel):
+            pass
+
+    def drawing(self, results: RunResults, channel: str) -> Iterator[None]:
+        """Draw the view step by step: each ``next()`` does a little of the work (a curve, a
+        plot), so that a :class:`Stepper` can spread the drawing over turns of the event loop.
+        The figure is painted once, when the drawing is complete; ``filled`` is set then."""
         self.clear()
+        self.graphics.setUpdatesEnabled(False)
         try:
-            self.filled = bool(self.draw(results, channel))
-        except Exception as exc:  # noqa: BLE001 - an odd dataset must not take the window down
-            self.clear()
+            try:
+                outcome = self.draw(results, channel)
+                if inspect.isgenerator(outcome):
+                    outcome = yield from outcome
+                self.filled = bool(outcome)
+            except Exception as exc:  # noqa: BLE001 - an odd dataset must not take the window down
+                self.clear()
+                self._prune()
+                self._set_note(f"cannot draw this view: {type(exc).__name__}: {exc}",
+                               "color: #b00020;")
+                return
+            if not self.filled:
+                self.clear()
             self._prune()
-            self.note.setText(f"cannot draw this view: {type(exc).__name__}: {exc}")
-            self.note.setStyleSheet("color: #b00020;")
-            return
-        if not self.filled:
-            self.clear()
-        self._prune()
-        if not self.filled:
-            self.note.setText(self.missing(results, channel))
-            self.note.setStyleSheet("color: #666;")
+            if not self.filled:
+                self._set_note(self.missing(results, channel), "color: #666;")
+        finally:
+            self.graphics.setUpdatesEnabled(True)
 
     def missing(self, results: RunResults, channel: str) -> str:
         """Why nothing is drawn: failed with its message, or not computed."""
@@ -268,7 +301,9 @@ class View(QWidget):
         names = " / ".join(self.plugins)
         return f"not computed: this run has no {names} results for channel {channel}"
 
-    def draw(self, results: RunResults, channel: str) -> bool:  # pragma: no cover - abstract
+    def draw(self, results: RunResults, channel: str) -> bool | Iterator[None]:  # pragma: no cover
+        """Draw the view; True if it shows data. A generator (``yield`` between steps,
+        ``return`` the verdict) can be drawn a step at a time."""
         raise NotImplementedError
 
     def add_plot(self, row: int, col: int, left: str, bottom: str, left_units: str | None = None,
@@ -296,21 +331,38 @@ class View(QWidget):
         return label
 
     def set_note(self, text: str) -> None:
-        self.note.setText(text)
-        self.note.setStyleSheet("")
+        self._set_note(text, "")
+
+    def _set_note(self, text: str, style: str) -> None:
+        # unchanged text and style are not set again: each would ask for a new layout
+        if self.note.text() != text:
+            self.note.setText(text)
+        if self.note.styleSheet() != style:
+            self.note.setStyleSheet(style)
 
 
-#: Curves longer than this are drawn decimated (min and max per bin: no peak is lost).
-DRAW_POINTS = 6000
+#: Curves are drawn decimated to two points (the min and max of a bin: no peak is lost) per
+#: pixel of the figure's width, within these bounds. The run file keeps every sample.
+DRAW_POINTS = 4000
+MIN_DRAW_POINTS = 1200
+
+
+def display_points(plot: pg.PlotItem) -> int:
+    """How many points a curve of ``plot`` needs: two per pixel of the widest view showing it."""
+    scene = plot.scene()
+    views = scene.views() if scene is not None else []
+    width = max([v.width() for v in views] + [plot.width()])
+    return int(min(DRAW_POINTS, max(MIN_DRAW_POINTS, 2 * width)))
 
 
 def _line(plot: pg.PlotItem, x, y, colour: str, name: str | None = None, width: float = 1.2,
           style=Qt.PenStyle.SolidLine) -> pg.PlotDataItem:
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    if y.size > DRAW_POINTS and np.all(np.isfinite(y)):
-        x, y = min_max_decimate(x, y, DRAW_POINTS)
-    elif y.size > DRAW_POINTS:
-        step = int(np.ceil(y.size / DRAW_POINTS))
+    points = display_points(plot)
+    if y.size > points and np.all(np.isfinite(y)):
+        x, y = min_max_decimate(x, y, points)
+    elif y.size > points:
+        step = int(np.ceil(y.size / points))
         x, y = x[::step], y[::step]
     return plot.plot(x, y, pen=pg.mkPen(colour, width=width, style=style), name=name,
                      connect="finite", skipFiniteCheck=False)
@@ -365,7 +417,7 @@ class HVDView(View):
         super().__init__(parent)
         self.max_components = max_components
 
-    def draw(self, results: RunResults, channel: str) -> bool:
+    def draw(self, results: RunResults, channel: str) -> Iterator[None]:
         hvd = results.result(channel, "hvd")
         if hvd is None or not hvd.ok:
             return False
@@ -377,6 +429,7 @@ class HVDView(View):
         t = time_axis(results, channel, hvd, n)
         unit = results.channels[channel].unit if channel in results.channels else ""
         top = self.add_plot(0, 0, channel, "time", unit or None, "s")
+        yield
         residual = hvd.get("residual")
         if components and residual is not None and np.asarray(residual).size == n:
             record = np.sum(components, axis=0) + np.asarray(residual, dtype=float)
@@ -384,23 +437,30 @@ class HVDView(View):
             _line(top, t, record, "#9e9e9e",
                   f"decomposed record (relative to {relative})" if isinstance(relative, str)
                   and not relative.startswith("none") else "decomposed record", 1.0)
+            yield
         else:
             measured = results.channels.get(channel)
             if measured is not None and measured.data.size == n:
                 _line(top, t, measured.data, "#9e9e9e", "measured", 1.0)
+                yield
         if components:
             _line(top, t, np.sum(components, axis=0), "#000000", "sum of components", 1.0,
                   Qt.PenStyle.DashLine)
+            yield
         count = min(max(len(components), len(envelopes)), self.max_components)
         for k in range(count):
             colour = COLOURS[k % len(COLOURS)]
             plot = self.add_plot(k + 1, 0, f"component {k}", "time", unit or None, "s")
+            yield
             plot.setXLink(top)
             if k < len(components):
                 _line(plot, t, components[k], colour, f"component {k}", 1.0)
+                yield
             if k < len(envelopes):
                 _line(plot, t, envelopes[k], "#000000", "envelope", 1.4)
+                yield
                 _line(plot, t, -envelopes[k], "#000000", None, 1.4)
+                yield
         if envelopes:
             span = active_span(t, envelopes[0])
             if span is not None:
@@ -417,8 +477,9 @@ class FrequencyView(View):
     title = "Instantaneous frequency"
     plugins = ("hvd", "instantaneous")
 
-    def draw(self, results: RunResults, channel: str) -> bool:
+    def draw(self, results: RunResults, channel: str) -> Iterator[None]:
         plot = self.add_plot(0, 0, "frequency", "time", "Hz", "s")
+        yield
         drawn = False
         hvd = results.result(channel, "hvd")
         shown: list[np.ndarray] = []
@@ -435,6 +496,7 @@ class FrequencyView(View):
                     weak = envelopes[k] < 0.01 * np.nanmax(envelopes[k])
                     f[weak] = np.nan  # no frequency where the component has died out
                 _line(plot, t, f, COLOURS[k % len(COLOURS)], f"HVD component {k}", 1.4)
+                yield
                 shown.append(f)
                 if k == 0 and k < len(envelopes) and envelopes[0].size == t.size:
                     span = active_span(t, envelopes[0])
@@ -449,6 +511,7 @@ class FrequencyView(View):
             for k, (t, f) in enumerate(finite_pairs(zip(times, freqs))):
                 _points(plot, t + shift, f, COLOURS[k % len(COLOURS)],
                         f"zero crossings, component {k}", 4)
+                yield
                 shown.append(f)
                 drawn = True
         if drawn:
@@ -474,7 +537,7 @@ class _AmplitudeView(View):
     summary_section = ""
     summary_y = ""
 
-    def draw(self, results: RunResults, channel: str) -> bool:
+    def draw(self, results: RunResults, channel: str) -> Iterator[None]:
         result = results.result(channel, self.plugins[0])
         ok = result is not None and result.ok
         y = per_component(result, self.y_names) if ok else []
@@ -492,18 +555,22 @@ class _AmplitudeView(View):
         if not pairs_d and not pairs_v:
             return False
         left = self.add_plot(0, 0, self.y_label, "displacement amplitude", self.y_units, "m")
+        yield
         for k, (a, b) in enumerate(pairs_d[:MAX_COMPONENTS_DRAWN]):
             self._series(left, a, b, k)
+            yield
         robust_range(left, [b for _, b in pairs_d])
         right = None
         if not self.compact:
             right = self.add_plot(0, 1, self.y_label, "velocity amplitude", self.y_units, "m/s")
+            yield
             for k, (a, b) in enumerate(pairs_v[:MAX_COMPONENTS_DRAWN]):
                 self._series(right, a, b, k)
+                yield
             robust_range(right, [b for _, b in pairs_v])
             if not pairs_v:
                 right.setTitle("velocity amplitude: not computed")
-        self.overlay_model(results, channel, left, right)
+        yield from self.overlay_model(results, channel, left, right)
         self.set_note(f"{self.title} of {channel}, {len(pairs_d or pairs_v)} component(s)")
         return True
 
@@ -514,7 +581,7 @@ class _AmplitudeView(View):
         else:
             _points(plot, a, b, colour, f"component {k}", 5)
 
-    def overlay_model(self, results, channel, left, right) -> None:
+    def overlay_model(self, results, channel, left, right) -> Iterator[None]:
         model = results.result(channel, "modal-model")
         if model is None or not model.ok:
             return
@@ -526,6 +593,7 @@ class _AmplitudeView(View):
                 order = np.argsort(a)
                 _line(plot, a[order], b[order], "#000000", "modal model" if k == 0 else None,
                       1.6, Qt.PenStyle.DashLine)
+                yield
 
 
 class BackboneView(_AmplitudeView):
@@ -553,7 +621,7 @@ class EquivalentDampingView(View):
     title = "Cq fit"
     plugins = ("equivalent-damping",)
 
-    def draw(self, results: RunResults, channel: str) -> bool:
+    def draw(self, results: RunResults, channel: str) -> Iterator[None]:
         result = results.result(channel, "equivalent-damping")
         if result is None or not result.ok:
             return False
@@ -569,6 +637,7 @@ class EquivalentDampingView(View):
         if not rows_cq:
             return False
         plot = self.add_plot(0, 0, "C_q", "displacement amplitude W", "kg/(m s)", "m")
+        yield
         lines = []
         for k, (w_row, cq_row) in enumerate(zip(rows_w, rows_cq)):
             pairs = finite_pairs([(w_row, cq_row)])
@@ -577,6 +646,7 @@ class EquivalentDampingView(View):
             w, cq = pairs[0]
             colour = COLOURS[k % len(COLOURS)]
             _points(plot, w, cq, colour, f"C_q, component {k}", 5)
+            yield
             order = np.argsort(w)
             fit = fits[k] if k < len(fits) and fits[k].size == w_row.size else None
             summary = summaries.get(k) or {}
@@ -585,6 +655,7 @@ class EquivalentDampingView(View):
                 o = np.argsort(w_row[keep])
                 _line(plot, w_row[keep][o], fit[keep][o], "#000000",
                       "first-order fit" if k == 0 else None, 1.8)
+                yield
             elif summary.get("c_i") is not None and summary.get("c_f") is not None \
                     and frequencies.get(k):
                 # Eq. 24 with the identified coefficients at the component's mean frequency
@@ -593,12 +664,14 @@ class EquivalentDampingView(View):
                 line = summary["c_i"] + 8 * summary["c_f"] * omega * span / (3 * np.pi)
                 _line(plot, span, line, colour, f"fit: C_i + 8 C_f ω W / 3π (component {k})",
                       1.8, Qt.PenStyle.DashLine)
+                yield
             if k < len(lows) and k < len(highs) and lows[k].size == w_row.size == highs[k].size:
                 low = plot.plot(w[order], lows[k][np.isfinite(w_row)][order],
                                 pen=pg.mkPen("#00000040"))
                 high = plot.plot(w[order], highs[k][np.isfinite(w_row)][order],
                                  pen=pg.mkPen("#00000040"))
                 plot.addItem(pg.FillBetweenItem(low, high, brush=pg.mkBrush(0, 0, 0, 30)))
+                yield
             values = self._values(result, summary, k)
             if values:
                 lines.append(f"component {k} (95 % intervals):<br>&nbsp;&nbsp;{values}")
@@ -640,7 +713,7 @@ class ModalModelView(View):
     plugins = ("modal-model",)
     cells = ((0, 0), (1, 0), (2, 0), (2, 1))
 
-    def draw(self, results: RunResults, channel: str) -> bool:
+    def draw(self, results: RunResults, channel: str) -> Iterator[None]:
         model = results.result(channel, "modal-model")
         if model is None or not model.ok or not model.datasets:
             return False
@@ -654,14 +727,18 @@ class ModalModelView(View):
         top = None
         if measured is not None and simulated is not None:
             top = self.add_plot(0, 0, channel, "time", unit, "s", colspan=2)
+            yield
             _line(top, t0 + np.arange(np.size(measured)) / rate, measured, "#9e9e9e",
                   "measured (decomposed record)", 1.0)
+            yield
             _line(top, t0 + np.arange(np.size(simulated)) / rate, simulated, "#000000",
                   "modal model", 1.2, Qt.PenStyle.DashLine)
+            yield
             drawn = True
         times = model.get("envelope_time")
         if times is not None:
             env = self.add_plot(1, 0, "envelope", "time", unit, "s", colspan=2)
+            yield
             if top is not None:
                 env.setXLink(top)
             t_env = (float(data.t0) if data is not None else 0.0) + np.asarray(times, float)
@@ -670,8 +747,10 @@ class ModalModelView(View):
                 colour = COLOURS[k % len(COLOURS)]
                 if m.size == t_env.size:
                     _line(env, t_env, m, colour, f"measured {k}", 1.4)
+                    yield
                 if s_.size == t_env.size:
                     _line(env, t_env, s_, colour, f"model {k}", 1.4, Qt.PenStyle.DashLine)
+                    yield
                 if k == 0 and m.size == t_env.size:
                     span = active_span(t_env, m)
                     if span is not None:
@@ -687,12 +766,15 @@ class ModalModelView(View):
             if not meas and not sim:
                 continue
             plot = self.add_plot(2, col, label, "displacement amplitude", units, "m")
+            yield
             for k, (a, b) in enumerate(meas):
                 _points(plot, a, b, COLOURS[k % len(COLOURS)], f"measured {k}", 4)
+                yield
             for k, (a, b) in enumerate(sim):
                 order = np.argsort(a)
                 _line(plot, a[order], b[order], COLOURS[k % len(COLOURS)], f"model {k}", 1.6,
                       Qt.PenStyle.DashLine)
+                yield
             robust_range(plot, [b for _, b in meas + sim])
             drawn = True
         if drawn:
@@ -712,7 +794,7 @@ class SpectrumView(View):
     plugins = ("spectrum", "frf")
     cells = ((0, 0), (1, 0), (2, 0))
 
-    def draw(self, results: RunResults, channel: str) -> bool:
+    def draw(self, results: RunResults, channel: str) -> Iterator[None]:
         drawn = False
         spectrum = results.result(channel, "spectrum")
         if spectrum is not None and spectrum.ok:
@@ -720,11 +802,13 @@ class SpectrumView(View):
             amps = spectrum.get(*SPECTRUM_AMPLITUDE)
             if freqs is not None and amps is not None:
                 plot = self.add_plot(0, 0, f"|{channel}|", "frequency", None, "Hz")
+                yield
                 plot.setLogMode(y=True)
                 for k, a in enumerate(rows(amps)):
                     if a.size == np.asarray(freqs).size:
                         _line(plot, freqs, np.maximum(np.abs(a), 1e-300), COLOURS[k % len(COLOURS)],
                               "amplitude spectrum" if k == 0 else None, 1.2)
+                        yield
                 peaks = spectrum.get(*SPECTRUM_PEAKS)
                 if peaks is None and results.summary:
                     peaks = results.summary.get("channels", {}).get(channel, {}).get(
@@ -736,26 +820,100 @@ class SpectrumView(View):
                     plot.addItem(pg.InfiniteLine(float(f), pen=pg.mkPen("#9e9e9e", style=Qt.PenStyle.DotLine),
                                                  label=f"{float(f):.2f} Hz",
                                                  labelOpts={"position": 0.9, "color": "#555"}))
+                    yield
                 drawn = True
         frf = results.result(channel, "frf")
         if frf is not None and frf.ok:
             freqs = frf.get(*SPECTRUM_FREQUENCY)
             if freqs is not None:
                 plot = self.add_plot(1 if drawn else 0, 0, "|H|", "frequency", None, "Hz")
+                yield
                 plot.setLogMode(y=True)
                 for k, name in enumerate(("h1", "h2")):
                     h = frf.get(name, f"{name}_magnitude", name.upper())
                     if h is not None and np.asarray(h).size == np.asarray(freqs).size:
                         _line(plot, freqs, np.maximum(np.abs(h), 1e-300), COLOURS[k], name.upper())
+                        yield
                 coherence = frf.get("coherence")
                 if coherence is not None and np.asarray(coherence).size == np.asarray(freqs).size:
                     coh = self.add_plot(2 if drawn else 1, 0, "coherence", "frequency", None, "Hz")
+                    yield
                     coh.setXLink(plot)
                     _line(coh, freqs, coherence, "#2ca02c", "coherence")
+                    yield
                 drawn = True
         if drawn:
             self.set_note(f"spectra of {channel}")
         return drawn
+
+
+#: Pause (ms) between two slices of a drawing spread over turns of the event loop, and the
+#: longest a slice may go on before it hands the event loop back.
+PAUSE_MS = 8
+SLICE_S = 0.008
+
+
+class Stepper(QObject):
+    """Runs drawings (generators from :meth:`View.drawing`) a slice at a time, one slice per
+    turn of the event loop, so that the window keeps answering while figures are built. A
+    drawing that completes ends its slice: its figure is painted before the next one starts."""
+
+    def __init__(self, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._queue: list[tuple[Iterator[Any], Any]] = []
+        self._timer = QTimer(self)
+        self._timer.setSingleShot(True)
+        self._timer.setInterval(PAUSE_MS)
+        self._timer.timeout.connect(self.step)
+
+    @property
+    def pending(self) -> bool:
+        return bool(self._queue)
+
+    def add(self, drawing: Iterator[Any], owner: Any = None) -> None:
+        """Queue ``drawing``; ``owner`` names who may :meth:`cancel` it."""
+        self._queue.append((drawing, owner))
+        if not self._timer.isActive():
+            self._timer.start()
+
+    def pending_for(self, owner: Any) -> bool:
+        return any(o is owner for _, o in self._queue)
+
+    def cancel(self, owner: Any = None) -> None:
+        """Drop the queued drawings of ``owner`` (all with None)."""
+        dropped = [d for d, o in self._queue if owner is None or o is owner]
+        self._queue = [(d, o) for d, o in self._queue if not (owner is None or o is owner)]
+        if not self._queue:
+            self._timer.stop()
+        for drawing in dropped:
+            drawing.close()  # its figure is painted again (as far as it got)
+
+    def step(self, deadline: float | None = None) -> None:
+        """One slice: steps of the first drawing until ``SLICE_S`` is used or it completes."""
+        if deadline is None:
+            deadline = time.perf_counter() + SLICE_S
+        try:
+            while self._queue:
+                try:
+                    next(self._queue[0][0])
+                except StopIteration:
+                    self._queue.pop(0)
+                    break
+                except Exception:
+                    self._queue.pop(0)  # reported by Qt's handler; the others go on
+                    raise
+                if time.perf_counter() >= deadline:
+                    break
+        finally:
+            if self._queue and deadline != float("inf"):
+                self._timer.start()
+
+    def finish(self) -> None:
+        """Complete every drawing at once (tests, screenshots, exports)."""
+        self._timer.stop()
+        while self._queue:
+            self.step(deadline=float("inf"))
+        self._timer.stop()
 
 
 class OverviewView(QWidget):
@@ -772,27 +930,31 @@ class OverviewView(QWidget):
         grid.setContentsMargins(0, 0, 0, 0)
         for i, part in enumerate(self.parts):
             grid.addWidget(part, i // 2, i % 2)
+        for k in range(2):  # four equal quarters, whatever each figure holds
+            grid.setRowStretch(k, 1)
+            grid.setColumnStretch(k, 1)
         self.filled = False
-        self._pending: list[tuple] = []
-        self._next = QTimer(self)  # owned by the view: it dies with it
-        self._next.setSingleShot(True)
-        self._next.setInterval(0)
-        self._next.timeout.connect(self._draw_next)
+        #: Draws the parts; the analysis panel gives its own, shared with its other work.
+        self.stepper = Stepper(self)  # owned by the view: it dies with it
 
     def show_results(self, results: RunResults, channel: str) -> None:
-        """Draw the first part now and the others in the next turns of the event loop, so
-        that the window keeps answering while the four figures are built."""
-        self._pending = [(part, results, channel) for part in self.parts]
-        self._draw_next()
+        """Draw the four parts a slice per turn of the event loop, from the next one on, so
+        that the window keeps answering (and paints each figure) while they are built."""
+        self.stepper.cancel(self)
+        self.filled = False
+        for part in self.parts:
+            self.stepper.add(self._part(part, results, channel), self)
 
-    def _draw_next(self) -> None:
-        if not self._pending:
-            return
-        part, results, channel = self._pending.pop(0)
-        part.show_results(results, channel)
+    def _part(self, part: View, results: RunResults, channel: str) -> Iterator[None]:
+        yield from part.drawing(results, channel)
         self.filled = any(p.filled for p in self.parts)
-        if self._pending:
-            self._next.start()
+
+    @property
+    def pending(self) -> bool:
+        return self.stepper.pending_for(self)
+
+    def cancel(self) -> None:
+        self.stepper.cancel(self)
 
     def prebuild(self) -> None:
         for part in self.parts:
@@ -800,8 +962,7 @@ class OverviewView(QWidget):
 
     def finish(self) -> None:
         """Draw what is still pending at once (tests, screenshots, exports)."""
-        while self._pending:
-            self._draw_next()
+        self.stepper.finish()
 
 
 class SummaryView(QWidget):
@@ -975,16 +1136,34 @@ class AnalysisParameters(QGroupBox):
         self.setEnabled(False)
 
     def load(self, analysis: dict[str, Any], params: dict[str, dict]) -> None:
+        """Forms for a run's chain and the parameters its plugins last ran with."""
+        for _ in self.loading(analysis, params):
+            pass
+
+    def loading(self, analysis: dict[str, Any], params: dict[str, dict]) -> Iterator[None]:
+        """:meth:`load` a form at a time (see :class:`Stepper`); the panel is disabled until
+        every form is there."""
+        self.setEnabled(False)
+        # the forms of the run shown before go, their values with them
+        for form in self.forms.values():
+            form.deleteLater()
+        self.forms.clear()
         if self.chain_form is not None:
             self.chain_form.deleteLater()
         self.chain_form = ParamForm(ANALYSIS_PARAMS, analysis, "analysis")
         self.chain_form.changed.connect(self._chain_changed)
         self.chain_holder.addWidget(self.chain_form)
         self.params = {k: dict(v) for k, v in params.items()}
-        self._build_forms(list(analysis.get("chain") or []))
+        yield
+        yield from self._forms(list(analysis.get("chain") or []))
         self.setEnabled(True)
 
     def _build_forms(self, chain: list[str]) -> None:
+        for _ in self._forms(chain):
+            pass
+
+    def _forms(self, chain: list[str]) -> Iterator[None]:
+        """A form per plugin of ``chain`` (one per step), keeping the values edited so far."""
         current = self.plugin.currentData()
         for name, form in self.forms.items():
             self.params[name] = form.values()
@@ -992,6 +1171,7 @@ class AnalysisParameters(QGroupBox):
         self.forms.clear()
         self.plugin.blockSignals(True)
         self.plugin.clear()
+        self.plugin.blockSignals(False)
         unknown = []
         for name in chain:
             if name not in self.registry.descriptors["analysis"]:
@@ -1004,7 +1184,11 @@ class AnalysisParameters(QGroupBox):
             form.changed.connect(self._changed)
             self.holder.addWidget(form)
             self.forms[name] = form
+            self.plugin.blockSignals(True)
             self.plugin.addItem(name, name)
+            self.plugin.blockSignals(False)
+            yield
+        self.plugin.blockSignals(True)
         if current in self.forms:
             self.plugin.setCurrentIndex(list(self.forms).index(current))
         self.plugin.blockSignals(False)
@@ -1082,6 +1266,10 @@ class AnalysisViews(QWidget):
         for view in self.views:
             self.tabs.addTab(view, view.title)
         self._drawn: set[int] = set()  # views drawn for the run and channel shown
+        # Draws the figures of the tab shown, then builds the parameter forms of a new run, a
+        # slice per turn of the event loop, in that order.
+        self.stepper = Stepper(self)
+        self.view(OverviewView).stepper = self.stepper
         self.tabs.currentChanged.connect(self._draw_current)
         # build the figures' plot items in idle time, one view per turn of the event loop
         self._prebuild = [v for v in self.views if hasattr(v, "prebuild")]
@@ -1095,9 +1283,16 @@ class AnalysisViews(QWidget):
         bar.addWidget(self.title, 1)
         bar.addWidget(QLabel("Channel"))
         bar.addWidget(self.channel)
+        # in a scroll area: building the forms of a run does not resize the figures beside them
+        parameters = QScrollArea()
+        parameters.setWidgetResizable(True)
+        parameters.setFrameShape(QScrollArea.Shape.NoFrame)
+        parameters.setWidget(self.parameters)
+        parameters.setMinimumWidth(300)
+        parameters.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         splitter = QSplitter(Qt.Orientation.Horizontal)
         splitter.addWidget(self.tabs)
-        splitter.addWidget(self.parameters)
+        splitter.addWidget(parameters)
         splitter.setStretchFactor(0, 4)
         splitter.setStretchFactor(1, 1)
         self.parameters.setMinimumWidth(280)
@@ -1110,9 +1305,7 @@ class AnalysisViews(QWidget):
         """Cancel drawings scheduled for later turns of the event loop (closing)."""
         self._prebuild.clear()
         self._prebuild_timer.stop()
-        overview = self.view(OverviewView)
-        overview._pending.clear()
-        overview._next.stop()
+        self.stepper.cancel()
 
     def _prebuild_next(self) -> None:
         if self._prebuild and self.results is None:
@@ -1123,7 +1316,11 @@ class AnalysisViews(QWidget):
         return next(v for v in self.views if isinstance(v, cls))
 
     def show_results(self, results: RunResults) -> None:
-        """Show a run (already read off the UI thread)."""
+        """Show a run (already read off the UI thread).
+
+        Only the title, channel and state are set now; the figures of the Overview are drawn
+        one per turn of the event loop, then the parameter forms are built (see
+        :attr:`pending` and :meth:`finish`)."""
         self.results = results
         status = results.exit_status
         started = results.attrs.get("start_time", "")
@@ -1149,29 +1346,49 @@ class AnalysisViews(QWidget):
             self.state.setText("failed: " + "; ".join(errors) if errors else "")
         self.state.setStyleSheet("color: #b00020;" if results.analysis and
                                  self.state.text().startswith("failed") else "color: #555;")
-        analysis, params = chain_of(results, self.registry)
-        self.parameters.load(analysis, params)
         self._redraw()
+        # the forms after the figures: the figures are what is looked at first
+        self.stepper.cancel(self.parameters)
+        self.stepper.add(self.parameters.loading(*chain_of(results, self.registry)),
+                         self.parameters)
+
+    @property
+    def pending(self) -> bool:
+        """Whether figures or the parameter forms of the run shown are still to be built."""
+        return self.stepper.pending
+
+    def finish(self) -> None:
+        """Build at once what is still pending (tests, screenshots, exports)."""
+        self.stepper.finish()
 
     def _redraw(self) -> None:
-        """Views are drawn when shown: the current one now, the others on their turn."""
+        """Views are drawn when shown: the current one now (its figures a slice per turn of
+        the event loop), the others on their turn."""
         self._drawn.clear()
+        for view in self.views:
+            self.stepper.cancel(view)
         self._draw_current()
 
     def _draw_current(self, *args) -> None:
         self._draw(self.tabs.currentIndex())
 
-    def _draw(self, index: int) -> None:
+    def _draw(self, index: int, now: bool = False) -> None:
         if self.results is None or index < 0 or index in self._drawn:
             return
         self._drawn.add(index)
-        self.views[index].show_results(self.results, self.channel.currentData() or "")
+        view, channel = self.views[index], self.channel.currentData() or ""
+        if isinstance(view, OverviewView) and not now:
+            view.show_results(self.results, channel)  # queues its parts on the stepper
+        elif isinstance(view, View) and not now:
+            self.stepper.add(view.drawing(self.results, channel), view)
+        else:
+            view.show_results(self.results, channel)
 
     def filled(self) -> dict[str, bool]:
         """Whether each view shows data (draws the views not drawn yet)."""
         for index in range(len(self.views)):
-            self._draw(index)
-        self.view(OverviewView).finish()
+            self._draw(index, now=True)
+        self.finish()
         return {view.title: view.filled for view in self.views}
 
     # ------------------------------------------------------------------ re-analysis

@@ -13,6 +13,8 @@ def _open(qtbot, window, path):
     window.open_runs([path])
     qtbot.waitUntil(lambda: window.analysis.results is not None
                     and window.analysis.results.path == path.resolve(), timeout=10000)
+    # the figures are drawn a slice per turn of the event loop, then the parameter forms built
+    qtbot.waitUntil(lambda: not window.analysis.pending, timeout=10000)
     return window.analysis
 
 
@@ -107,6 +109,7 @@ def test_changing_an_analysis_parameter_reruns_it_off_the_ui_thread(
     assert "rms" in views.parameters.forms
     qtbot.waitUntil(lambda: "rms" in views.results.analysis.get("tip_velocity", {}),
                     timeout=20000)
+    qtbot.waitUntil(lambda: not views.pending, timeout=10000)  # the forms of the new results
     first = views.results.result("tip_velocity", "rms").attrs["rms"]
     scale = views.parameters.forms["rms"].fields["scale"]
     scale.editor.setValue(2.0)
@@ -126,3 +129,68 @@ def test_views_draw_the_plugin_layout_directly(qtbot, tmp_path):
         assert view.filled, cls.__name__
         view.show_results(results, "base_acceleration")
         assert not view.filled and "not computed" in view.note.text()
+
+
+def test_a_run_is_drawn_over_turns_of_the_event_loop(qtbot, make_window, registry, tmp_path):
+    from fsi_lab.gui.analysis_views import MIN_DRAW_POINTS, OverviewView
+
+    def measured_size(views):
+        return views.results.result("tip_velocity", "hvd").datasets["components"].shape[1]
+
+    window = make_window(registry)
+    path = write_run(tmp_path / "turns.h5", rate=10000.0, seconds=10.0)
+    window.open_runs([path])
+    qtbot.waitUntil(lambda: window.analysis.results is not None, timeout=10000)
+    views = window.analysis
+    overview = views.view(OverviewView)
+    # nothing is drawn in the slot that received the file: the figures and then the forms
+    # come in later turns of the event loop
+    if views.pending:
+        assert not all(part.filled for part in overview.parts)
+    qtbot.waitUntil(lambda: not views.pending, timeout=10000)
+    assert overview.filled and all(part.filled for part in overview.parts)
+    assert views.parameters.isEnabled() and views.parameters.chain_form is not None
+    # the record is drawn decimated (two points per pixel at most), its peaks kept
+    hvd = overview.parts[0]
+    curve = hvd._plots[(0, 0)].listDataItems()[0]
+    x, y = curve.getData()
+    width = max(v.width() for v in hvd.graphics.scene().views())
+    assert len(x) <= max(MIN_DRAW_POINTS, 2 * width) + 2 < measured_size(views)
+    measured = views.results.result("tip_velocity", "hvd").datasets["components"].sum(axis=0)
+    assert np.max(y) >= 0.999 * np.max(measured)   # what was drawn includes the peak
+
+
+def test_stepper_gives_the_event_loop_back_between_slices(qtbot):
+    import time
+
+    from fsi_lab.gui.analysis_views import SLICE_S, Stepper
+
+    stepper = Stepper()
+    slices, steps = [], []
+
+    def drawing(name, n):
+        for k in range(n):
+            time.sleep(0.004)
+            steps.append((name, k))
+            yield
+
+    original = stepper.step
+
+    def counted(deadline=None):
+        before = len(steps)
+        original(deadline)
+        slices.append(len(steps) - before)
+
+    stepper._timer.timeout.disconnect()
+    stepper._timer.timeout.connect(counted)
+    stepper.add(drawing("a", 6), owner="a")
+    stepper.add(drawing("b", 3), owner="b")
+    stepper.add(drawing("c", 3), owner="c")
+    stepper.cancel("c")
+    assert stepper.pending_for("a") and not stepper.pending_for("c")
+    qtbot.waitUntil(lambda: not stepper.pending, timeout=5000)
+    assert [s for s in steps if s[0] == "a"] == [("a", k) for k in range(6)]
+    assert len([s for s in steps if s[0] == "b"]) == 3 and not any(s[0] == "c" for s in steps)
+    # a slice ends once it has used SLICE_S (a few ms) or completed a drawing
+    assert SLICE_S <= 0.01
+    assert max(slices) <= 3 and len(slices) >= 4, slices
