@@ -196,9 +196,8 @@ class Runner:
                 "peak_drive_v": report.peak_drive_v,
                 "predicted_stroke_mm": report.predicted_stroke_mm,
             }, self.profile.excitation)
-            self._acquire(writer, waveform, rate)
+            outcome.stopped_early = self._acquire(writer, waveform, rate)
             outcome.exit_status = "completed"
-            outcome.stopped_early = self._stop.is_set()
         except (KeyboardInterrupt, RunAborted) as exc:
             outcome.exit_status = "aborted"
             outcome.error = str(exc) or "interrupted (Ctrl+C)"
@@ -273,7 +272,8 @@ class Runner:
             settings = {**self.profile.roles[role].settings, **instrument.settings()}
             writer.write_instrument(role, {}, settings)
 
-    def _acquire(self, writer: RunFileWriter, waveform: np.ndarray, rate: float) -> None:
+    def _acquire(self, writer: RunFileWriter, waveform: np.ndarray, rate: float) -> bool:
+        """Record the run; True if the operator stopped it before the record was complete."""
         profile = self.profile
         self.bus.emit(StateChanged("configuring"))
         self._open_instruments(writer)
@@ -313,6 +313,7 @@ class Runner:
         timeout = max(2.0, 4 * profile.run["block_duration"])
         samples = 0
         last_poll = 0.0
+        stopped = False
         while True:
             self._check_abort()
             block = acquisition.read_block(timeout)
@@ -336,13 +337,15 @@ class Runner:
             if now - last_poll >= INTERLOCK_POLL_S:
                 last_poll = now
                 self._check_interlocks(amplifier)
-            if self._stop.is_set():
+            if self._stop.is_set() and samples < round(duration * sample_rate):
                 self.bus.log("INFO", f"stopped by the operator after {samples / sample_rate:.3g} s "
                                      f"of {duration:g} s")
+                stopped = True
                 break
         # A fast bench can finish between two polls: a trip must never pass as completed.
         self._check_interlocks(amplifier)
         writer.flush()
+        return stopped
 
     @staticmethod
     def _check_interlocks(amplifier) -> None:

@@ -192,3 +192,19 @@ def test_killed_run_leaves_a_readable_file(sim_profile, tmp_path):
     dump = subprocess.run([h5dump, "-A", str(path)], capture_output=True, text=True, timeout=60)
     assert dump.returncode == 0, dump.stderr
     assert "tip_velocity" in dump.stdout and '"running"' in dump.stdout
+
+
+def test_stop_with_the_last_block_is_a_plain_completed_run(sim_profile, registry, tmp_path):
+    runner, run, _ = _run(sim_profile(duration=0.5), registry, tmp_path)
+
+    def stop_on_the_last_block(event):
+        if isinstance(event, DataBlock):
+            end = event.t0 + len(event.data["tip_velocity"]) / event.sample_rate
+            if end >= 0.5 - 1e-9:
+                runner.stop()
+
+    runner.bus.subscribe(stop_on_the_last_block)
+    outcome = run()
+    assert runner._stop.is_set()  # the stop did arrive, with the record already complete
+    assert outcome.exit_status == "completed" and not outcome.stopped_early
+    assert read_run(outcome.path).channels["tip_velocity"].data.size == 1000
