@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.bench_access import OPEN_ORDER, SAFE_ORDER, bench_context, safe_and_close
+from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close
 from fsi_lab.chain import analyse_and_store
 from fsi_lab.contract import ROLE_INTERFACES, Instrument
 from fsi_lab.errors import FsiLabError, InstrumentError, ProfileError, RunAborted

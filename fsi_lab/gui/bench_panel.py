@@ -19,6 +19,7 @@ from PySide6.QtWidgets import (
     QFormLayout, QGroupBox, QHBoxLayout, QLabel, QPushButton, QScrollArea, QVBoxLayout, QWidget,
 )
 
+from fsi_lab.bench_access import OPEN_ORDER, probe_bench, safe_bench
 from fsi_lab.events import StateChanged
 from fsi_lab.gui.excitation_designer import changed_overrides
 from fsi_lab.gui.forms import ParamForm
@@ -26,7 +27,6 @@ from fsi_lab.gui.session import ProfileSession
 from fsi_lab.gui.worker import TaskPool
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
-from fsi_lab.runner import OPEN_ORDER, SAFE_ORDER, Runner
 
 LED_CLEAR = "background: #c8e6c9; color: #1b5e20; border-radius: 3px; padding: 1px 4px;"
 LED_TRIPPED = "background: #d32f2f; color: white; border-radius: 3px; padding: 1px 4px;"
@@ -38,73 +38,6 @@ RUN_STATES = {
     "running": "in use by the run (output enabled)",
     "finalizing": "safe state requested by the run",
 }
-
-
-def _bench_context(profile: Profile, registry: Registry) -> dict[str, Any]:
-    """The shared context the runner gives its instruments (simulated benches need it)."""
-    return Runner(profile, registry, ".").bench_context  # creates nothing on disk
-
-
-def _each_instrument(profile: Profile, registry: Registry, order: tuple[str, ...],
-                     action: Callable[[str, Any], dict[str, Any]]) -> dict[str, dict[str, Any]]:
-    """Open every instrument of the profile in ``order``, apply ``action``, safe and close it."""
-    context = _bench_context(profile, registry)
-    opened: dict[str, Any] = {}
-    report: dict[str, dict[str, Any]] = {}
-    try:
-        for role in order:
-            config = profile.roles.get(role)
-            if config is None:
-                continue
-            try:
-                descriptor = registry.get("instrument", config.plugin)
-                opened[role] = descriptor.open(config.address, dict(config.settings), context)
-                report[role] = action(role, opened[role])
-            except Exception as exc:  # noqa: BLE001 - reported per instrument
-                report[role] = {"error": f"{type(exc).__name__}: {exc}"}
-    finally:
-        for role in SAFE_ORDER:
-            instrument = opened.get(role)
-            if instrument is None:
-                continue
-            try:
-                instrument.safe_state()
-                report[role].setdefault("state", instrument.read_state())
-            except Exception as exc:  # noqa: BLE001
-                report[role]["safe_state_error"] = f"{type(exc).__name__}: {exc}"
-            try:
-                instrument.close()
-            except Exception:  # noqa: BLE001
-                pass
-        for cleanup in reversed(context.get("cleanup", [])):
-            try:
-                cleanup()
-            except Exception:  # noqa: BLE001
-                pass
-    return report
-
-
-def probe_bench(profile: Profile, registry: Registry) -> dict[str, dict[str, Any]]:
-    """Identity, settings and interlocks of every instrument; each is left safe and closed."""
-
-    def probe(role: str, instrument: Any) -> dict[str, Any]:
-        info: dict[str, Any] = {"identity": instrument.identify(),
-                                "settings": dict(instrument.settings())}
-        if hasattr(instrument, "interlocks"):
-            info["interlocks"] = dict(instrument.interlocks())
-        return info
-
-    return _each_instrument(profile, registry, OPEN_ORDER, probe)
-
-
-def safe_bench(profile: Profile, registry: Registry) -> dict[str, dict[str, Any]]:
-    """Put every instrument in its safe state (amplifier first) and read the state back."""
-
-    def safe(role: str, instrument: Any) -> dict[str, Any]:
-        instrument.safe_state()
-        return {"state": instrument.read_state()}
-
-    return _each_instrument(profile, registry, SAFE_ORDER, safe)
 
 
 class InstrumentBox(QGroupBox):

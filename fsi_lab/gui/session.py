@@ -10,7 +10,6 @@ with ``fsi-lab run PROFILE --set ...``.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,31 +26,6 @@ from fsi_lab.gui.decimate import min_max_decimate
 from fsi_lab.gui.worker import TaskPool
 
 PREVIEW_POINTS = 4000
-_HEADER = re.compile(r"^\s*\[\s*([A-Za-z0-9_.\-\"' ]+?)\s*\]\s*(#.*)?$")
-
-
-def with_excitation_plugin(text: str, plugin: str) -> str:
-    """Profile ``text`` whose ``[excitation]`` table names only ``plugin``.
-
-    The other keys of the old plugin are dropped; the form's values follow as overrides.
-    """
-    lines = text.splitlines(keepends=True)
-    start = end = None
-    for i, line in enumerate(lines):
-        match = _HEADER.match(line)
-        if match is None or line.lstrip().startswith("[["):
-            continue
-        if start is not None:
-            end = i
-            break
-        if match.group(1).strip() == "excitation":
-            start = i
-    body = f'[excitation]\nplugin = "{plugin}"\n'
-    if start is None:
-        return text.rstrip("\n") + "\n\n" + body
-    if end is None:
-        end = len(lines)
-    return "".join(lines[:start]) + body + "\n" + "".join(lines[end:])
 
 
 @dataclass
@@ -155,11 +129,9 @@ class ProfileSession(QObject):
     def set_excitation_plugin(self, name: str) -> None:
         if self.base is None:
             return
-        if name == self.base.excitation_plugin:
-            self.text = self.base_text
-        else:
-            self.text = with_excitation_plugin(self.base_text, name)
-        self.request_check()
+        # The profile text stays verbatim; the switch is an override like the forms' values.
+        self.set_overrides("excitation-plugin", [] if name == self.base.excitation_plugin
+                           else [f"excitation.plugin={name}"])
 
     def set_overrides(self, section: str, overrides: list[str]) -> None:
         """Replace the overrides of one form (``section`` is a free label, e.g. ``run``)."""

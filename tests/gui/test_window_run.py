@@ -251,7 +251,10 @@ def test_third_party_excitation_plugin_in_the_designer(qtbot, make_window, sim_p
     assert wait_finished(qtbot, window).exit_status == "completed"
     run = read_run(window.run_control.outcome.path, load_data=False)
     assert run.excitation["plugin"] == "chirp"
-    assert 'plugin = "chirp"' in run.attrs["profile"]
+    # the profile is kept verbatim; the switch is recorded like `fsi-lab run --set` would be
+    assert 'plugin = "step"' in run.attrs["profile"]
+    assert "excitation.plugin=chirp" in run.attrs["overrides"]
+    assert "excitation.f_stop=20.0" in run.attrs["overrides"]
 
 
 def test_safe_state_button_without_a_run(qtbot, make_window, sim_profile, registry):
