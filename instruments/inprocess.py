@@ -215,6 +215,7 @@ class InProcessAcquisition(_Base, Acquisition):
         """Stops nothing physical; a digitiser cannot drive the shaker."""
 
     def read_state(self) -> dict[str, Any]:
+        self._alive()  # a digitiser that stopped answering cannot report its state either
         return {"samples_sent": int(getattr(self, "_sent", 0))}
 
 

@@ -77,6 +77,8 @@ def test_dead_instrument_ends_failed_in_safe_state_with_data_kept(sim_profile, r
     record = _assert_safe(outcome.path)
     assert record.attrs["exit_status"] == "failed"
     assert "InstrumentError" in record.attrs["traceback"]
+    # the dead digitiser's state could not be read back, and the file says so
+    assert "no answer" in record.instruments["acquisition"]["final_state"]["error"]
     kept = read_run(outcome.path).channels["tip_velocity"].data
     assert 0 < kept.size < 10000
 

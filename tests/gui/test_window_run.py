@@ -172,6 +172,10 @@ def test_instrument_lost_mid_run_shows_message_and_app_keeps_running(qtbot, make
     assert run.attrs["exit_status"] == "failed"
     assert run.instruments["amplifier"]["final_state"]["output_enabled"] is False
     assert run.channels["tip_velocity"].data.size > 0
+    # the bench panel marks the digitiser that stopped answering, and not the safe amplifier
+    lost = window.bench.boxes["acquisition"].state
+    assert "no answer" in lost.text() and "#b00020" in lost.styleSheet()
+    assert "#b00020" not in window.bench.boxes["amplifier"].state.styleSheet()
     # still alive and usable
     assert window.isVisible()
     qtbot.waitUntil(window.run_control.start_button.isEnabled, timeout=5000)
