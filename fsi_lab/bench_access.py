@@ -83,13 +83,14 @@ def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable
 
 
 def each_instrument(profile: Profile, registry: Registry, order: tuple[str, ...],
-                    action: Callable[[str, Instrument], dict[str, Any]]
-                    ) -> dict[str, dict[str, Any]]:
+                    action: Callable[[str, Instrument], dict[str, Any]],
+                    log: Log = lambda level, text: None) -> dict[str, dict[str, Any]]:
     """Open every instrument of ``profile`` in ``order`` and apply ``action`` to it; then make
     all of them safe and close them (:func:`safe_and_close`).
 
     Returns, per role, what ``action`` returned (or ``error`` if opening or the action failed)
-    with the ``state`` read back after the safe state (and ``safe_state_error`` if it failed).
+    with the ``state`` read back after the safe state (and ``safe_state_error`` if it failed);
+    ``log(level, text)`` hears of failed closes and cleanups.
     """
     context = bench_context(profile)
     opened: dict[str, Instrument] = {}
@@ -105,17 +106,32 @@ def each_instrument(profile: Profile, registry: Registry, order: tuple[str, ...]
                 report[role] = action(role, opened[role])
             except Exception as exc:  # noqa: BLE001 - reported per instrument
                 report[role] = {"error": f"{type(exc).__name__}: {exc}"}
-    finally:
-        states = safe_and_close(opened, context["cleanup"])
+    finally:  # also on Ctrl+C: everything opened is made safe
+        states = safe_and_close(opened, context["cleanup"], log)
         for role, state in states.items():
             safe_error = state.pop("safe_state_error", None)
-            report[role].setdefault("state", state)
+            report.setdefault(role, {}).setdefault("state", state)
             if safe_error:
                 report[role]["safe_state_error"] = safe_error
     return report
 
 
-def probe_bench(profile: Profile, registry: Registry) -> dict[str, dict[str, Any]]:
+def problems(report: Mapping[str, Mapping[str, Any]]) -> dict[str, str]:
+    """Per role, what went wrong in a report of :func:`each_instrument` (opening or querying
+    it, its safe state, reading its state back); roles without a problem are left out."""
+    found: dict[str, str] = {}
+    for role, info in report.items():
+        texts = [str(info[key]) for key in ("error", "safe_state_error") if key in info]
+        state = info.get("state")
+        if isinstance(state, Mapping) and "error" in state:
+            texts.append(str(state["error"]))
+        if texts:
+            found[role] = "; ".join(texts)
+    return found
+
+
+def probe_bench(profile: Profile, registry: Registry,
+                log: Log = lambda level, text: None) -> dict[str, dict[str, Any]]:
     """Identity, settings and interlocks of every instrument; each is left safe and closed."""
 
     def probe(role: str, instrument: Instrument) -> dict[str, Any]:
@@ -125,9 +141,10 @@ def probe_bench(profile: Profile, registry: Registry) -> dict[str, dict[str, Any
             info["interlocks"] = dict(instrument.interlocks())
         return info
 
-    return each_instrument(profile, registry, OPEN_ORDER, probe)
+    return each_instrument(profile, registry, OPEN_ORDER, probe, log)
 
 
-def safe_bench(profile: Profile, registry: Registry) -> dict[str, dict[str, Any]]:
+def safe_bench(profile: Profile, registry: Registry,
+               log: Log = lambda level, text: None) -> dict[str, dict[str, Any]]:
     """Put every instrument in its safe state (amplifier first) and read the state back."""
-    return each_instrument(profile, registry, SAFE_ORDER, lambda role, instrument: {})
+    return each_instrument(profile, registry, SAFE_ORDER, lambda role, instrument: {}, log)

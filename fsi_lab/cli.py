@@ -234,18 +234,25 @@ def cmd_plugins(args) -> int:
 
 def cmd_bench_access(args) -> int:
     """``fsi-lab safe`` and ``fsi-lab identify``: every instrument of the profile, outside a run."""
-    from fsi_lab.bench_access import probe_bench, safe_bench
+    from fsi_lab.bench_access import probe_bench, problems, safe_bench
     from fsi_lab.errors import ProfileError
-    from fsi_lab.profile import load_profile
+    from fsi_lab.profile import parse_profile
 
     registry = _registry()
-    profile = load_profile(args.profile, registry, args.set)
+    try:
+        text = args.profile.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ProfileError(f"{args.profile}: cannot read the profile ({exc.strerror})") from None
+    # Only what opening the instruments needs: a mistake elsewhere must not stop a safe state.
+    profile = parse_profile(text, str(args.profile), registry, args.set,
+                            sections=("bench", "specimen", "model", "shaker"))
     if not profile.roles:
         raise ProfileError(f"{args.profile}: bench: no instruments; expected [bench.<role>] tables")
-    report = (safe_bench if args.command == "safe" else probe_bench)(profile, registry)
-    failed = sorted(role for role, info in report.items()
-                    if "error" in info or "safe_state_error" in info
-                    or "error" in info.get("state", {}))
+    def log(level: str, text: str) -> None:
+        print(f"[{level.lower()}] {text}", file=sys.stderr)
+
+    report = (safe_bench if args.command == "safe" else probe_bench)(profile, registry, log)
+    failed = sorted(problems(report))
     if args.json:
         _emit_json({"profile": str(args.profile), "instruments": report, "failed": failed})
     else:

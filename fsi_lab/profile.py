@@ -289,12 +289,15 @@ def parse_profile(text: str, path: str, registry: Registry, overrides: list[str]
                 )
     try:
         raw = apply_overrides(raw, list(overrides), registry)
-        return _validate(raw, path, text, registry, tuple(overrides))
+        return _validate(raw, path, text, registry, tuple(overrides),
+                         complete=sections is None)
     except ParameterError as exc:
         raise ProfileError(f"{path}: {exc}") from None
 
 
-def _validate(raw, path, text, registry, overrides) -> Profile:
+def _validate(raw, path, text, registry, overrides, complete=True) -> Profile:
+    """The checked profile; ``complete`` False when only some sections were kept, so a bench
+    need not come with its excitation and channels."""
     unknown = sorted(set(raw) - set(SECTIONS))
     if unknown:
         raise ParameterError(
@@ -356,7 +359,10 @@ def _validate(raw, path, text, registry, overrides) -> Profile:
         descriptor = _plugin(registry, "analysis", name, f"analysis.{name}")
         analysis_params[name] = validate(descriptor.params, plugin_tables.pop(name, {}),
                                          f"analysis.{name}")
-    if plugin_tables:
+    # A chain shortened with --set leaves the other plugins' tables unused, not wrong.
+    chain_overridden = any(item.partition("=")[0].strip() == "analysis.chain"
+                           for item in overrides)
+    if plugin_tables and not chain_overridden:
         extra = sorted(plugin_tables)[0]
         raise ParameterError(
             f"analysis.{extra}: parameters for a plugin that is not in analysis.chain "
@@ -369,7 +375,7 @@ def _validate(raw, path, text, registry, overrides) -> Profile:
             )
 
     safety = None
-    if roles or excitation_plugin:
+    if complete and (roles or excitation_plugin):
         if "safety" not in raw:
             raise ParameterError(
                 "safety: missing; a profile that drives a bench needs [safety] with "

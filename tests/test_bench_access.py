@@ -38,3 +38,26 @@ def test_a_profile_without_instruments_is_refused(tmp_path):
     path.write_text('[analysis]\nchain = ["spectrum"]\n')
     proc = cli("safe", str(path))
     assert proc.returncode == 2 and "no instruments" in proc.stderr
+
+
+def test_safe_works_when_the_rest_of_the_profile_is_wrong(sim_profile):
+    # an analysis plugin and an excitation that are not installed: the bench is still reachable
+    text = sim_profile().read_text().replace('plugin = "step"', 'plugin = "no-such-pulse"')
+    broken = sim_profile(name="broken.toml")
+    broken.write_text(text + '\n[analysis]\nchain = ["no-such-analysis"]\n')
+    assert cli("run", str(broken)).returncode == 2
+    data, proc = cli_json("safe", str(broken))
+    assert proc.returncode == 0, proc.stderr
+    assert data["instruments"]["amplifier"]["state"]["output_enabled"] is False
+
+
+def test_problems_include_a_state_that_could_not_be_read():
+    from fsi_lab.bench_access import problems
+
+    report = {"amplifier": {"state": {"output_enabled": False}},
+              "source": {"error": "InstrumentError: no answer"},
+              "acquisition": {"state": {"error": "could not read state: no answer"}},
+              "vibrometer": {"safe_state_error": "safe state failed", "state": {}}}
+    assert problems(report) == {"source": "InstrumentError: no answer",
+                                "acquisition": "could not read state: no answer",
+                                "vibrometer": "safe state failed"}

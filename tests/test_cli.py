@@ -152,3 +152,16 @@ def test_usage_and_file_system_errors_still_give_one_json_object(tmp_path):
     data, proc = cli_json("import", str(csv), "-o", str(under_a_file))
     assert proc.returncode == 1 and "Traceback" not in proc.stderr
     assert data["exit_code"] == 1 and str(csv) in data["error"]
+
+
+def test_analyze_with_a_shorter_chain_leaves_recorded_plugin_settings_aside(sim_profile,
+                                                                           tmp_path):
+    analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
+    data, proc = cli_json("run", str(sim_profile(analysis=analysis)), "--out", str(tmp_path),
+                          "--set", "analysis.spectrum.max_peaks=2")
+    assert proc.returncode == 0, proc.stderr
+    # the recorded spectrum setting must not block a chain without spectrum
+    again, proc = cli_json("analyze", data["run"], "--set", "analysis.chain=hvd")
+    assert proc.returncode == 0, proc.stderr
+    assert "spectrum_peaks_hz" not in again["channels"]["tip_velocity"]
+    assert again["channels"]["tip_velocity"]["components"]

@@ -19,7 +19,7 @@ from PySide6.QtWidgets import (
     QFormLayout, QGroupBox, QHBoxLayout, QLabel, QPushButton, QScrollArea, QVBoxLayout, QWidget,
 )
 
-from fsi_lab.bench_access import OPEN_ORDER, probe_bench, safe_bench
+from fsi_lab.bench_access import OPEN_ORDER, probe_bench, problems, safe_bench
 from fsi_lab.events import StateChanged
 from fsi_lab.gui.excitation_designer import changed_overrides
 from fsi_lab.gui.forms import ParamForm
@@ -216,7 +216,7 @@ class BenchPanel(QWidget):
 
     def _show_report(self, report: dict[str, dict[str, Any]], what: str) -> None:
         self.last_report = report
-        errors = []
+        errors = [f"{role}: {text}" for role, text in problems(report).items()]
         for role, info in report.items():
             box = self.boxes.get(role)
             if box is None:
@@ -229,7 +229,6 @@ class BenchPanel(QWidget):
             for key in ("error", "safe_state_error"):
                 if key in info:
                     state[key] = info[key]
-                    errors.append(f"{role}: {info[key]}")
             box.show_state(state)
         self.check_button.setEnabled(bool(self.boxes))
         self.status.setText(f"{what}: " + ("; ".join(errors) if errors else "all instruments answered"))
