@@ -61,6 +61,7 @@ class Console:
     def close(self) -> None:
         if self.bar is not None:
             self.bar.stop()
+            self.bar = None
 
 
 def _emit_json(obj: dict[str, Any]) -> None:
@@ -320,10 +321,10 @@ def cmd_model(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    from fsi_lab.errors import ProfileError
+    from fsi_lab.errors import ProfileError, RunAborted
     from fsi_lab.modelling import simulate_run
-    from fsi_lab.runfile import new_run_path, software_version
-    from fsi_lab.runner import prepare_excitation
+    from fsi_lab.runfile import INTERRUPTED, new_run_path, software_version
+    from fsi_lab.runner import RunSignals, prepare_excitation
 
     registry, profile = _model_profile(args)
     if profile.excitation_plugin is None:
@@ -338,16 +339,27 @@ def cmd_simulate(args) -> int:
     bus = EventBus()
     console = Console(args.quiet or args.json, args.verbose)
     bus.subscribe(console)
+    signals = RunSignals()  # SIGTERM ends the simulation as Ctrl+C does: recorded as aborted
+    signals.install()
     try:
         simulate_run(profile, waveform, rate, args.duration, args.rate, args.output, args.modes,
                      {"uuid": run_uuid, "start_time": started, "profile": profile.text,
                       "profile_path": profile.path, "overrides": list(profile.overrides),
                       "run_name": profile.run["name"], "software_version": software_version()},
                      progress=lambda f: bus.emit(Progress("simulate", f, "simulating")))
+    except (KeyboardInterrupt, RunAborted) as exc:
+        console.close()
+        reason = str(exc) or INTERRUPTED
+        if args.json:
+            _emit_json({"run": str(args.output), "exit_status": "aborted", "error": reason})
+        print(f"fsi-lab: simulation aborted ({reason}); {args.output} holds the part simulated",
+              file=sys.stderr)
+        return EXIT_FOR_STATUS["aborted"]
     finally:
+        signals.restore()
         console.close()
     if args.json:
-        _emit_json({"run": str(args.output)})
+        _emit_json({"run": str(args.output), "exit_status": "completed"})
     else:
         print(f"wrote {args.output}")
     return 0

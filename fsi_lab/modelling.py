@@ -14,8 +14,9 @@ from typing import Any, Callable
 import numpy as np
 
 from fsi_lab.beam import PROJECTIONS, BeamModel, Damping
+from fsi_lab.errors import RunAborted
 from fsi_lab.params import Param
-from fsi_lab.runfile import RunFileWriter, utc_now, write_attrs
+from fsi_lab.runfile import INTERRUPTED, RunFileWriter, utc_now, write_attrs
 from fsi_lab.shaker import ShakerModel
 
 MODEL_PARAMS: tuple[Param, ...] = (
@@ -142,9 +143,11 @@ def simulate_run(profile: Any, waveform: np.ndarray, waveform_rate: float, durat
             progress(min(1.0, (start + block) / total))
         write_attrs(writer.file.create_group("model"), model_summary(model))
         ending["exit_status"] = "completed"
-    except BaseException as exc:  # recorded in the file, then passed on
-        ending.update(exit_status="aborted" if isinstance(exc, KeyboardInterrupt) else "failed",
-                      error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
+    except (KeyboardInterrupt, RunAborted) as exc:  # recorded as the runner records an abort
+        ending.update(exit_status="aborted", error=str(exc) or INTERRUPTED)
+        raise
+    except BaseException as exc:
+        ending.update(error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
         raise
     finally:
         writer.set_attrs({**ending, "stop_time": utc_now()})

@@ -20,6 +20,7 @@ from fsi_lab.errors import InputFileError
 FORMAT = "fsi-lab run"
 FORMAT_VERSION = 1
 EXIT_STATUSES = ("running", "completed", "aborted", "failed")
+INTERRUPTED = "interrupted (Ctrl+C)"  # the error recorded for a run ended by Ctrl+C
 FLUSH_INTERVAL_S = 0.5  # at most this long between flushes while data arrives
 CHUNK_SAMPLES = 16384
 

@@ -29,7 +29,9 @@ from fsi_lab.errors import FsiLabError, InstrumentError, ProfileError, RunAborte
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
-from fsi_lab.runfile import RunFileWriter, new_run_path, read_run, software_version, utc_now
+from fsi_lab.runfile import (
+    INTERRUPTED, RunFileWriter, new_run_path, read_run, software_version, utc_now,
+)
 from fsi_lab.safety import SafetyReport, assess, require_safe
 
 INTERLOCK_POLL_S = 0.2
@@ -86,7 +88,7 @@ def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, floa
     return waveform, rate, report
 
 
-class _Signals:
+class RunSignals:
     """Turns SIGTERM into RunAborted and can hold signals back while finalizing."""
 
     def __init__(self) -> None:
@@ -180,7 +182,7 @@ class Runner:
         self.bus.log("INFO", f"safety check passed: peak drive {report.peak_drive_v:.3g} V, "
                              f"gain {report.gain:g}, predicted stroke "
                              f"{report.predicted_stroke_mm:.3g} mm")
-        signals = _Signals()
+        signals = RunSignals()
         signals.install()
         outcome = RunOutcome(path=None, exit_status="failed", safety=report)
         writer: RunFileWriter | None = None
@@ -200,7 +202,7 @@ class Runner:
             outcome.exit_status = "completed"
         except (KeyboardInterrupt, RunAborted) as exc:
             outcome.exit_status = "aborted"
-            outcome.error = str(exc) or "interrupted (Ctrl+C)"
+            outcome.error = str(exc) or INTERRUPTED
         except Exception as exc:  # noqa: BLE001 - any failure ends in the safe state
             outcome.exit_status = "failed"
             outcome.error = str(exc) if isinstance(exc, FsiLabError) else (

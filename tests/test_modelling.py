@@ -1,8 +1,12 @@
 """`fsi-lab model` and `fsi-lab simulate`: the beam model as the profile describes it."""
 
+import json
+import signal
+import time
+
 import numpy as np
 import pytest
-from support import PROFILES, cli, cli_json
+from support import PROFILES, cli, cli_json, start_cli
 
 from fsi_lab.runfile import read_run
 
@@ -27,7 +31,7 @@ def test_simulate_writes_a_run_like_a_measured_one(tmp_path):
     data, proc = cli_json("simulate", str(WET), "--duration", "3", "--rate", "5000", "-o",
                           str(out))
     assert proc.returncode == 0, proc.stderr
-    assert data == {"run": str(out)}
+    assert data == {"run": str(out), "exit_status": "completed"}
     run = read_run(out)
     assert run.attrs["kind"] == "simulated" and run.attrs["exit_status"] == "completed"
     assert set(run.channels) == {"drive", "base_acceleration", "tip_velocity"}
@@ -96,3 +100,49 @@ def test_a_failed_simulation_says_so_in_its_file(tmp_path, registry):
     assert run.attrs["exit_status"] == "failed" and "disk full" in run.attrs["error"]
     assert "RuntimeError" in run.attrs["traceback"]
     assert run.channels["tip_velocity"].data.size == 4000  # the seconds written before it failed
+
+
+def test_an_interrupted_simulation_is_aborted_without_a_traceback(tmp_path, registry):
+    from fsi_lab.modelling import simulate_run
+    from fsi_lab.profile import load_profile
+    from fsi_lab.runner import prepare_excitation
+
+    profile = load_profile(WET, registry)
+    waveform, rate = prepare_excitation(profile, registry)
+
+    def ctrl_c(fraction):
+        if fraction > 0.4:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        simulate_run(profile, waveform, rate, 3.0, 2000.0, tmp_path / "s.h5", 2,
+                     {"uuid": "0" * 32, "start_time": "2026-11-23T00:00:00.000000+00:00"},
+                     progress=ctrl_c)
+    run = read_run(tmp_path / "s.h5")
+    assert run.attrs["exit_status"] == "aborted"
+    assert run.attrs["error"] == "interrupted (Ctrl+C)" and run.attrs["traceback"] == ""
+    assert run.channels["tip_velocity"].data.size == 4000
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_ends_simulate_as_an_aborted_run(tmp_path, signum):
+    out = tmp_path / "long.h5"
+    # a day of simulated time: far longer than the test waits
+    proc = start_cli("simulate", str(WET), "--duration", "86400", "--rate", "1000",
+                     "--modes", "1", "-o", str(out), "--json")
+    try:
+        deadline = time.monotonic() + 60
+        while not out.exists() and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        time.sleep(0.5)  # some seconds simulated and written
+        proc.send_signal(signum)
+        stdout, stderr = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+        proc.wait(timeout=10)
+    assert proc.returncode == 130, stderr
+    assert json.loads(stdout)["exit_status"] == "aborted" and "Traceback" not in stderr
+    run = read_run(out, load_data=False)
+    assert run.attrs["exit_status"] == "aborted" and run.attrs["traceback"] == ""
+    expected = "received SIGTERM" if signum == signal.SIGTERM else "interrupted (Ctrl+C)"
+    assert run.attrs["error"] == expected

@@ -139,6 +139,20 @@ def test_stop_keeps_a_shortened_completed_run_and_analyses_it(sim_profile, regis
     assert states[-2:] == ["completed", "analyzing"]
 
 
+def test_stop_before_the_excitation_starts_aborts_the_run(sim_profile, registry, tmp_path):
+    runner, run, events = _run(sim_profile(duration=5.0), registry, tmp_path)
+    runner.bus.subscribe(lambda e: isinstance(e, StateChanged) and e.state == "armed"
+                         and runner.stop())
+    outcome = run()
+    assert outcome.exit_status == "aborted" and not outcome.stopped_early
+    assert outcome.error == "stopped by the operator before the excitation started"
+    record = _assert_safe(outcome.path)
+    assert record.attrs["exit_status"] == "aborted" and record.attrs["stopped_early"] is False
+    # nothing was excited, so nothing was acquired
+    assert not any(isinstance(e, DataBlock) for e in events)
+    assert "running" not in [e.state for e in events if isinstance(e, StateChanged)]
+
+
 def test_completed_run_is_not_marked_stopped(sim_profile, registry, tmp_path):
     _, run, _ = _run(sim_profile(duration=0.5), registry, tmp_path)
     outcome = run()

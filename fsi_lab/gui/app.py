@@ -80,7 +80,6 @@ class MainWindow(QMainWindow):
         self.forwarder = EventForwarder(self)
         self.session = ProfileSession(self.registry, self.pool, self)
         self._closing = False
-        self._run_overrides: list[str] = []
         self._run_profile: Any = None
         self._show_when_loaded: set[Path] = set()
         self.last_run: Path | None = None
@@ -245,7 +244,6 @@ class MainWindow(QMainWindow):
     # ------------------------------------------------------------------ runs
     def _run_started(self, profile: Any) -> None:
         self._run_profile = profile
-        self._run_overrides = [o for o in profile.overrides if o.startswith("analysis.")]
         self.live.configure({name: c.unit for name, c in profile.channels.items()},
                             profile.run["sample_rate"])
         self.messages.hide()
@@ -272,7 +270,7 @@ class MainWindow(QMainWindow):
             self.last_run = Path(outcome.path).resolve()
             chain = self._run_profile.analysis["chain"] if self._run_profile else []
             if outcome.exit_status == "completed" and chain and not self._closing \
-                    and self.analysis.analyse(outcome.path, list(self._run_overrides)):
+                    and self.analysis.analyse(outcome.path):  # it applies the run's overrides
                 # the file is read once the analysis has written to it (HDF5 files are locked
                 # while a process writes them)
                 self.run_control.state_label.setText(
