@@ -219,14 +219,22 @@ def cmd_plugins(args) -> int:
         descriptor = registry.descriptors.get(record["kind"] or "", {}).get(record["name"])
         record["params"] = [p.as_dict() for p in descriptor.params] if descriptor else []
         record["help"] = getattr(descriptor, "help", "") if descriptor else ""
+    records.sort(key=lambda r: (r["kind"] or "", r["name"]))
+    commands = [{"name": ep.name, "distribution": ep.dist.name if ep.dist else "",
+                 "version": ep.dist.version if ep.dist else "", "entry_point": ep.value,
+                 "status": "loaded" if command else "failed", "error": error,
+                 "help": command.help if command else ""}
+                for ep, command, error in plugin_commands()]
     if args.json:
-        _emit_json({"plugins": records})
+        _emit_json({"plugins": records, "commands": commands})
         return 0
-    for record in records:
+    for record in records + [{**c, "kind": "command", "params": []} for c in commands]:
         line = f"{record['kind'] or '-':<11} {record['name']:<24} {record['status']:<8} " \
                f"{record['distribution']} {record['version']}"
         print(line + (f"  ({record['error']})" if record["error"] else ""))
         if args.verbose:
+            if record["kind"] == "command":
+                print(f"    fsi-lab {record['name']}: {record['help']}")
             for p in record["params"]:
                 unit = f" [{p['unit']}]" if p["unit"] else ""
                 print(f"    {p['name']}{unit} = {p['default']!r}: {p['help']}")
@@ -419,20 +427,30 @@ def format_summary(summary: dict[str, Any]) -> str:
 COMMANDS_GROUP = "fsi_lab.commands"
 
 
-def _add_plugin_commands(sub) -> None:
-    """Subcommands provided by plugins through the ``fsi_lab.commands`` entry-point group."""
+def plugin_commands() -> list[tuple[Any, Any, str | None]]:
+    """The ``fsi_lab.commands`` entry points as (entry point, CliCommand or None, error)."""
     from importlib import metadata
 
     from fsi_lab.contract import CliCommand
 
+    found = []
     for ep in sorted(metadata.entry_points(group=COMMANDS_GROUP), key=lambda e: e.name):
         try:
             command = ep.load()
             if not isinstance(command, CliCommand):
                 raise TypeError(f"{ep.value} is a {type(command).__name__}, not a CliCommand")
         except Exception as exc:  # noqa: BLE001 - a broken command must not break the others
-            print(f"[warning] command {ep.name} skipped: {type(exc).__name__}: {exc}",
-                  file=sys.stderr)
+            found.append((ep, None, f"{type(exc).__name__}: {exc}"))
+        else:
+            found.append((ep, command, None))
+    return found
+
+
+def _add_plugin_commands(sub) -> None:
+    """Subcommands provided by plugins through the ``fsi_lab.commands`` entry-point group."""
+    for ep, command, error in plugin_commands():
+        if command is None:
+            print(f"[warning] command {ep.name} skipped: {error}", file=sys.stderr)
             continue
         parser = sub.add_parser(command.name, help=command.help)
         command.configure(parser)

@@ -1,7 +1,7 @@
 """Plugin discovery through the fsi_lab entry-point group, with a real installed distribution."""
 
 import pytest
-from support import cli_json
+from support import cli, cli_json
 
 from fsi_lab.errors import PluginError
 from fsi_lab.registry import load_registry
@@ -44,6 +44,23 @@ def test_external_distribution_is_discovered_and_broken_ones_isolated(example_pl
     # the rest keep working
     assert BUILT_IN_INSTRUMENTS <= {n for n, p in plugins.items() if p["status"] == "loaded"}
     assert "skipped" in proc.stderr and "example-broken" in proc.stderr
+
+
+def test_external_commands_are_listed_and_run(example_plugin_dir, tmp_path):
+    env = {"PYTHONPATH": str(example_plugin_dir)}
+    data, proc = cli_json("plugins", env=env)
+    commands = _by_name(data["commands"])
+    assert commands["bench"]["distribution"] == "fsi-lab"
+    count = commands["example-count"]
+    assert (count["status"], count["distribution"], count["version"]) == \
+        ("loaded", "fsi-lab-example-plugin", "1.2.3")
+    broken = commands["example-not-a-command"]
+    assert broken["status"] == "failed" and "not a CliCommand" in broken["error"]
+    three_lines = tmp_path / "three.txt"
+    three_lines.write_text("a\nb\nc\n")
+    proc = cli("example-count", str(three_lines), env=env)
+    assert proc.returncode == 0 and proc.stdout.strip() == "3", proc.stderr
+    assert "example-not-a-command skipped" in proc.stderr
 
 
 def test_every_record_has_the_documented_keys(example_plugin_dir):
