@@ -121,9 +121,23 @@ def guarded(plugin: str, context: AnalysisContext) -> Iterator[None]:
 _NOISE_CACHE: dict[int, tuple[Any, tuple[float, float]]] = {}
 
 
-def _channel_noise(context: AnalysisContext) -> tuple[float, float]:
-    """White-noise RMS of the raw channel (unit of the channel) and its dominant frequency;
-    computed once per channel data array (every plugin of the chain asks)."""
+def channel_noise(context: AnalysisContext) -> tuple[float, float]:
+    """White-noise RMS of the raw channel and its dominant frequency.
+
+    Computed once per channel data array (every plugin of the chain asks).
+
+    Parameters
+    ----------
+    context
+        The analysis context; its channel's samples are used.
+
+    Returns
+    -------
+    tuple of float
+        The RMS (unit of the channel) of the white noise, from the channel's spectrum above
+        3 x the dominant frequency (:func:`.instantaneous.noise_rms`), and that dominant
+        frequency, Hz; ``(0.0, 0.0)`` when the spectrum shows no peak.
+    """
     data = context.channel.data
     hit = _NOISE_CACHE.get(id(data))
     if hit is not None and hit[0] is data:
@@ -167,7 +181,7 @@ def components(context: AnalysisContext, order: int = 0) -> list[Component]:
     """
     ch = context.channel
     fs = float(ch.sample_rate)
-    sigma, f_dom = _channel_noise(context)
+    sigma, f_dom = channel_noise(context)
     hvd = context.results.get("hvd")
     if hvd is not None and hvd.values is not None:
         res = hvd.values
@@ -290,8 +304,9 @@ def decay_labels(times: np.ndarray, comp: Component, period: float,
     ``decay_only`` the record is split into its free decays (:func:`._decays.split_decays` on
     the trusted points: the component's ``settle`` after the first peak, the larger of it and
     the integration's smear after the later ones, twice that before each next build-up) and
-    only their free parts are kept; otherwise every trusted point is decay 0 and no split is
-    returned.
+    only their free parts are kept - a decay too short for those margins is no decay, and the
+    decays are numbered 0..count-1 in time order; otherwise every trusted point is decay 0 and
+    no split is returned.
     """
     ok = trusted_span(times, comp, period)
     labels = np.where(ok, 0, -1)

@@ -9,12 +9,17 @@ record), with no knowledge of the excitation, so it works as well on imported da
 - the rises are looked for on the geometric mean of consecutive amplitudes, which cancels the
   alternation of positive and negative extrema about an offset (or a slower mode leaking into
   an HVD component);
-- a new decay starts when that mean, having fallen by at least ``rise`` (default 2) below its
-  peak, rises again more than ``rise`` times above its lowest value since the peak, and stays
-  there for ``confirm`` consecutive points (3: a noise spike or the ripple of an HVD envelope is
-  no excitation); the previous decay ends at that lowest value;
+- a new decay may start when that mean, having fallen by at least ``rise`` (default 2) below
+  its peak, rises again more than ``rise`` times above its lowest value since the peak, and
+  stays there for ``confirm`` consecutive points (3: a noise spike or the ripple of an HVD
+  envelope is no excitation);
+- it does start only when that rise is abrupt (:data:`ABRUPT`): an excitation (an impulse)
+  lifts the amplitude far faster than the decay after it lets it down, whereas two modes
+  beating, or a resonance passed during a sweep, swell about as slowly as they fade;
+- the previous decay ends at its lowest amplitude before the rise (that point included);
 - a decay's peak is its largest amplitude, and its free part runs from the peak plus
-  ``settle`` to the end of the decay minus ``guard``.
+  ``settle`` to the end of the decay minus ``guard``. A decay too short for both (its free part
+  would hold no point) is left out; its points belong to no decay.
 
 A record with one decay (a step, a ramp derivative) gives one decay whose free part starts at
 its largest amplitude plus ``settle`` and runs to the last point.
@@ -36,27 +41,44 @@ RISE_FACTOR = 2.0
 #: Consecutive points that must stay above the rise threshold.
 CONFIRM = 3
 
+#: A decay's rise is abrupt when the area its amplitude gathers above the preceding low between
+#: that low and its peak (the swell) is less than ABRUPT times the area above the same low
+#: between its peak and its own low (the fade). An impulse swells in a cycle or so (a few
+#: cycles through the HVD filters) and fades over many; two modes beating, or a resonance
+#: passed during a sweep, swell about as slowly as they fade (a ratio of about 1 or more).
+ABRUPT = 0.5
+#: Most blocks :func:`decay_segments` splits a record into (longer blocks than a period of
+#: the dominant frequency on very long records keep the split fast).
+MAX_BLOCKS = 4000
+
 
 @dataclass(frozen=True)
 class FreeDecays:
     """The free decays of a record.
+
+    The record is cut into regions, each an excitation's build-up and the decay after it; a
+    region whose free part would hold no point is no decay (:func:`split_decays`).
 
     Attributes
     ----------
     peaks
         Time of each decay's largest amplitude, s.
     starts, ends
-        The free part of each decay, s: from ``peaks + settle`` to the decay's lowest
-        amplitude before the next build-up minus ``guard`` (the last decay: to the last point).
+        The free part of each decay (``starts < ends``), s: from ``peaks + settle`` to the
+        region's last point (its lowest amplitude before the next build-up) minus ``guard``
+        (the last region: to the last point).
     bounds
-        Time of the lowest amplitude of each decay but the last, s: points after ``bounds[k]``
-        belong to the build-up of decay k + 1 (see :meth:`regions`).
+        Time of the last point of each region but the last, s: points after ``bounds[j]``
+        belong to region j + 1 (see :meth:`regions`).
+    region
+        Index of the region of each decay.
     """
 
     peaks: np.ndarray
     starts: np.ndarray
     ends: np.ndarray
     bounds: np.ndarray
+    region: np.ndarray
 
     @property
     def count(self) -> int:
@@ -64,24 +86,27 @@ class FreeDecays:
         return int(self.peaks.size)
 
     def regions(self, times: Any) -> np.ndarray:
-        """Index of the decay (with its build-up) each time (s) belongs to, 0..count-1."""
+        """Index of the region (a build-up and its decay) each time (s) belongs to,
+        0..bounds.size."""
         return np.searchsorted(self.bounds, np.asarray(times, dtype=np.float64), side="left")
 
     def labels(self, times: Any) -> np.ndarray:
         """Index of the decay whose free part holds each time (s), -1 outside every free part."""
         t = np.asarray(times, dtype=np.float64)
-        out = np.full(t.shape, -1, dtype=np.int64)
         if self.count == 0:
-            return out
-        k = np.clip(self.regions(t), 0, self.count - 1)
-        inside = (t >= self.starts[k]) & (t <= self.ends[k])
-        out[inside] = k[inside]
-        return out
+            return np.full(t.shape, -1, dtype=np.int64)
+        decay_of = np.full(self.bounds.size + 1, -1, dtype=np.int64)
+        decay_of[self.region] = np.arange(self.count)
+        k = decay_of[self.regions(t)]
+        j = np.maximum(k, 0)
+        inside = (k >= 0) & (t >= self.starts[j]) & (t <= self.ends[j])
+        return np.where(inside, k, -1)
 
 
 def split_decays(times: Any, amplitude: Any, *, settle: float = 0.0, guard: float = 0.0,
                  later_settle: float | None = None, first_build_up: bool | None = None,
-                 rise: float = RISE_FACTOR, confirm: int = CONFIRM) -> FreeDecays:
+                 rise: float = RISE_FACTOR, confirm: int = CONFIRM,
+                 abrupt: float = ABRUPT) -> FreeDecays:
     """Find the free decays in a sequence of amplitudes (see the module notes).
 
     Parameters
@@ -106,12 +131,43 @@ def split_decays(times: Any, amplitude: Any, *, settle: float = 0.0, guard: floa
         Fall and rise factor that separates two decays (> 1).
     confirm
         Consecutive points (>= 1) that must stay above the rise threshold.
+    abrupt
+        Largest ratio of a rise's swell to its decay's fade (> 0, see :data:`ABRUPT`) for the
+        rise to start a new decay.
 
     Returns
     -------
     FreeDecays
-        No decay when ``times`` is empty.
+        No decay when ``times`` is empty; decays whose free part holds none of ``times`` are
+        left out.
     """
+    t, a = _check_split(times, amplitude, rise, confirm, abrupt)
+    if t.size == 0:
+        empty = np.empty(0)
+        return FreeDecays(empty, empty, empty, empty, np.empty(0, dtype=np.int64))
+    # mean[i] pairs a[i] and a[i + 1]; at a low m, mean[m] < mean[m - 1] gives
+    # a[m + 1] <= a[m - 1]: a[m + 1] is still the decay, its last point.
+    mean = np.sqrt(a[:-1] * a[1:]) if a.size > 1 else a.copy()
+    lows = _abrupt_lows(mean, _rise_lows(mean, rise, confirm), abrupt)
+    last = [m + 1 for m in lows]
+    edges = [0, *(i + 1 for i in last), a.size]
+    peaks = [lo + int(np.argmax(a[lo:hi])) for lo, hi in zip(edges[:-1], edges[1:])]
+    tp = t[peaks]
+    bounds = t[last]
+    ends = np.append(bounds - guard, t[-1])
+    inside = np.arange(tp.size) > 0
+    inside[0] = a[0] * rise < a[peaks[0]] if first_build_up is None else first_build_up
+    starts = tp + np.where(inside, settle if later_settle is None else later_settle, settle)
+    # A free part holds a point when a time lies in [start, end]; start < end as well.
+    holds = (np.searchsorted(t, ends, side="right") > np.searchsorted(t, starts, side="left")) \
+        & (starts < ends)
+    return FreeDecays(peaks=tp[holds], starts=starts[holds], ends=ends[holds], bounds=bounds,
+                      region=np.flatnonzero(holds))
+
+
+def _check_split(times: Any, amplitude: Any, rise: float, confirm: Any, abrupt: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The times and amplitudes of :func:`split_decays` as float arrays, after its checks."""
     func = "split_decays"
     t = np.asarray(times, dtype=np.float64)
     a = np.asarray(amplitude, dtype=np.float64)
@@ -122,11 +178,13 @@ def split_decays(times: Any, amplitude: Any, *, settle: float = 0.0, guard: floa
         raise fail(func, f"rise = {rise!r}; expected a factor > 1")
     if isinstance(confirm, bool) or not isinstance(confirm, (int, np.integer)) or confirm < 1:
         raise fail(func, f"confirm = {confirm!r}; expected an integer >= 1")
-    if t.size == 0:
-        empty = np.empty(0)
-        return FreeDecays(empty, empty, empty, empty)
-    # The lows are found on the mean of consecutive amplitudes: mean[i] pairs a[i] and a[i + 1].
-    mean = np.sqrt(a[:-1] * a[1:]) if a.size > 1 else a.copy()
+    if not abrupt > 0.0:
+        raise fail(func, f"abrupt = {abrupt!r}; expected a ratio > 0")
+    return t, a
+
+
+def _rise_lows(mean: np.ndarray, rise: float, confirm: int) -> list[int]:
+    """Indices of the lows of ``mean`` followed by a confirmed rise (see the module notes)."""
     av = mean.tolist()
     n = len(av)
     lows: list[int] = []
@@ -142,27 +200,53 @@ def split_decays(times: Any, amplitude: Any, *, settle: float = 0.0, guard: floa
             pk = mn = i
         elif v < av[mn]:
             mn = i
-    edges = [0, *(m + 1 for m in lows), a.size]
-    peaks = [lo + int(np.argmax(a[lo:hi])) for lo, hi in zip(edges[:-1], edges[1:])]
-    tp = t[peaks]
-    bounds = t[lows]
-    ends = np.append(bounds - guard, t[-1])
-    inside = np.arange(tp.size) > 0
-    inside[0] = a[0] * rise < a[peaks[0]] if first_build_up is None else first_build_up
-    starts = tp + np.where(inside, settle if later_settle is None else later_settle, settle)
-    return FreeDecays(peaks=tp, starts=starts, ends=ends, bounds=bounds)
+    return lows
+
+
+def _abrupt_lows(mean: np.ndarray, lows: list[int], abrupt: float) -> list[int]:
+    """The ``lows`` (indices of ``mean``) whose rise is abrupt: the swell from each low to the
+    largest value before the next low (or the end) is less than ``abrupt`` times the fade after
+    that largest value (see :data:`ABRUPT`).
+
+    The areas are sums over the points, not integrals in time: the sequence has holes where
+    points were left out (cycles below the noise floor, at the lows), which an integral would
+    count as a slow rise.
+    """
+    keep = []
+    for lo, hi in zip(lows, [*lows[1:], mean.size - 1]):
+        excess = np.maximum(mean[lo:hi + 1] - mean[lo], 0.0)
+        pk = int(np.argmax(excess))
+        if float(np.sum(excess[1:pk])) < abrupt * float(np.sum(excess[pk + 1:])):
+            keep.append(lo)
+    return keep
+
+
+def decay_runs(labels: Any, size: int, func: str = "decay_runs") -> list[slice]:
+    """Slices of the runs of consecutive equal ``labels`` (the decay or region of each of
+    ``size`` points, in time order); one slice of every point when ``labels`` is None.
+
+    Raises AnalysisError (naming ``func``) when ``labels`` does not hold ``size`` values.
+    """
+    if labels is None:
+        return [slice(0, size)]
+    d = np.asarray(labels)
+    if d.shape != (size,):
+        raise fail(func, f"decay labels have shape {d.shape}; expected one per point ({size})")
+    cuts = np.flatnonzero(d[1:] != d[:-1]) + 1
+    edges = np.concatenate(([0], cuts, [size]))
+    return [slice(int(lo), int(hi)) for lo, hi in zip(edges[:-1], edges[1:])]
 
 
 def smooth_per_decay(y: Any, regions: np.ndarray, half_width: int) -> np.ndarray:
     """Centred moving average (:func:`._signal.moving_average`, ``half_width`` points each
-    side) within each decay's region, so that no average mixes two decays."""
+    side) within each run of equal ``regions`` (:func:`decay_runs`), so that no average mixes
+    two decays."""
     y = np.asarray(y, dtype=np.float64)
     if half_width <= 0 or y.size == 0:
         return y.copy()
     out = np.empty_like(y)
-    cuts = np.flatnonzero(np.diff(regions)) + 1
-    for lo, hi in zip(np.concatenate(([0], cuts)), np.concatenate((cuts, [y.size]))):
-        out[lo:hi] = moving_average(y[lo:hi], half_width)
+    for run in decay_runs(regions, y.size, "smooth_per_decay"):
+        out[run] = moving_average(y[run], half_width)
     return out
 
 
@@ -187,41 +271,16 @@ def first_decay_peak(x: Any, fs: float, block: float, floor: float = 0.0) -> int
     """Index of the largest sample of the record's first free decay: the largest sample of the
     record when it holds one decay, the peak of the first response of an impulse train.
 
-    The decays are split (:func:`split_decays`) on the maxima of |x| over blocks of ``block`` s
-    (about a period of the oscillation), leaving out the blocks below ``floor`` (unit of x: the
-    noise before the excitation is no decay).
+    The decays are split (:func:`split_decays`, so only abrupt rises start a decay) on the
+    maxima of |x| over blocks of ``block`` s (about a period of the oscillation), leaving out
+    the blocks below ``floor`` (unit of x: the noise before the excitation is no decay).
     """
     tb, ib, mb = block_maxima(x, fs, block)
     keep = mb >= floor
-    if keep.sum() < 2:
+    decays = split_decays(tb[keep], mb[keep]) if keep.sum() >= 2 else None
+    if decays is None or decays.count == 0:
         return int(np.argmax(np.abs(np.asarray(x, dtype=np.float64))))
-    decays = split_decays(tb[keep], mb[keep])
     return int(ib[keep][int(np.searchsorted(tb[keep], decays.peaks[0]))])
-
-
-#: A decay train's rises are abrupt: the amplitude a later decay gathers (above the low that
-#: precedes it) between that low and its peak is less than ABRUPT times what it keeps between
-#: its peak and its own low (its decay). Two modes beating swell as they fade (a ratio of
-#: about 1, more when they decay): no train.
-ABRUPT = 0.5
-#: Most blocks :func:`decay_segments` splits a record into (longer blocks than a period of
-#: the dominant frequency on very long records keep the split fast).
-MAX_BLOCKS = 4000
-
-
-def _abrupt_rises(tb: np.ndarray, mb: np.ndarray, decays: FreeDecays) -> bool:
-    """Whether every later decay of ``decays`` rises abruptly (see :data:`ABRUPT`) in the block
-    maxima ``mb`` (unit of the record) at times ``tb`` (s)."""
-    peaks = np.searchsorted(tb, decays.peaks)
-    lows = np.append(np.searchsorted(tb, decays.bounds), tb.size)
-    for k in range(1, decays.count):
-        lo, pk, hi = int(lows[k - 1]), int(peaks[k]), int(lows[k])
-        weight = np.maximum(mb - mb[lo], 0.0)
-        swell = float(np.sum(weight[lo + 1:pk]))
-        fade = float(np.sum(weight[pk + 1:hi]))
-        if not swell < ABRUPT * fade:
-            return False
-    return True
 
 
 def decay_segments(x: Any, fs: float, period: float) -> list[tuple[int, int]]:
@@ -245,9 +304,9 @@ def decay_segments(x: Any, fs: float, period: float) -> list[tuple[int, int]]:
     Returns
     -------
     list of (int, int)
-        ``[(0, len(x))]`` - the whole record - when it holds one decay, or when the later
-        decays do not rise abruptly (:data:`ABRUPT`: an amplitude that swells as it fades is
-        two modes beating, not a new excitation).
+        ``[(0, len(x))]`` - the whole record - when it holds one decay (an amplitude that
+        swells about as slowly as it fades, two modes beating, is no new excitation:
+        :data:`ABRUPT`).
     """
     x = np.asarray(x, dtype=np.float64)
     n = x.size
@@ -258,8 +317,9 @@ def decay_segments(x: Any, fs: float, period: float) -> list[tuple[int, int]]:
         return whole
     mb = np.maximum(mb, 1e-300 * max(float(mb.max()), 1e-300))
     decays = split_decays(tb, mb)
-    if decays.count < 2 or not _abrupt_rises(tb, mb, decays):
+    if decays.count < 2:
         return whole
     starts = ib[np.searchsorted(tb, decays.peaks)]
-    stops = np.append(ib[np.searchsorted(tb, decays.bounds)], n)
+    region_ends = np.append(ib[np.searchsorted(tb, decays.bounds)], n)
+    stops = region_ends[decays.region]
     return [(int(a), int(b)) for a, b in zip(starts, stops) if b > a]

@@ -27,7 +27,8 @@ All take the extrema (times, amplitudes) and the frequency at those times, as pr
 :func:`damping_from_peaks` also takes the free decay of each peak (a record split by
 :func:`._decays.split_decays`, e.g. an impulse train): no decrement, window, cubic or moving
 average then spans two decays, and the envelope law is fitted to all decays at once with one
-``a`` and ``b`` and a starting amplitude per decay.
+``a`` and ``b`` and a starting amplitude per decay (decays of fewer than ``MIN_FIT_PEAKS`` (3)
+peaks left out of the fit: their start amplitude would absorb them).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ import scipy.optimize as sopt
 
 from fsi_lab.errors import AnalysisError
 
-from fsi_lab.plugins.analysis._decays import FreeDecays, smooth_per_decay
+from fsi_lab.plugins.analysis._decays import FreeDecays, decay_runs, smooth_per_decay
 from fsi_lab.plugins.analysis._signal import fail
 from fsi_lab.plugins.analysis.instantaneous import Instantaneous, instantaneous
 
@@ -160,16 +161,10 @@ def envelope_law(t: np.ndarray, a: float, b: float, a0: float) -> np.ndarray:
     return a * a0 * e / (a + b * a0 * (1.0 - e))
 
 
-def _decay_runs(decay: Any, size: int) -> list[slice]:
-    """Slices of consecutive points of the same decay (one slice when ``decay`` is None)."""
-    if decay is None:
-        return [slice(0, size)]
-    d = np.asarray(decay)
-    if d.shape != (size,):
-        raise fail("damping", f"decay has shape {d.shape}; expected one index per peak ({size})")
-    cuts = np.flatnonzero(np.diff(d)) + 1
-    edges = np.concatenate(([0], cuts, [size]))
-    return [slice(int(lo), int(hi)) for lo, hi in zip(edges[:-1], edges[1:])]
+#: Fewest peaks of a free decay for the envelope-law fit to use it: each decay brings its own
+#: start amplitude, so a decay of one peak says nothing of the decay rate and one of two peaks
+#: (often the smear of the excitation) little.
+MIN_FIT_PEAKS = 3
 
 
 def damping_envelope_fit(t: Any, amp: Any, freq: Any, *, decay: Any = None) -> DampingCurve:
@@ -177,54 +172,101 @@ def damping_envelope_fit(t: Any, amp: Any, freq: Any, *, decay: Any = None) -> D
 
     ``A(t)`` is fitted to the peak amplitudes by least squares with ``a >= 0``, ``b >= 0``; the
     curve is then ``zeta = (a + b A) / (2 pi f)`` at every peak (A the fitted envelope).
-    ``params`` holds ``a`` (1/s), ``b`` (1/(U s)), ``A0`` (U), their standard errors ``a_se``,
-    ``b_se`` and the degrees of freedom ``dof``.
 
-    ``decay`` (optional, one index per peak, constant over each free decay): the law is fitted
-    to every decay at once, with common ``a`` and ``b`` and a starting amplitude per decay
-    (time counted from each decay's first peak); ``A0`` is then the first decay's.
+    Parameters
+    ----------
+    t
+        Extremum times, s, increasing.
+    amp
+        Extremum amplitudes (> 0), unit U.
+    freq
+        Instantaneous frequency at those times, Hz (array or one value).
+    decay
+        Optional free decay of each peak (an index constant over each decay): the law is fitted
+        to every decay of at least :data:`MIN_FIT_PEAKS` peaks at once, with common ``a`` and
+        ``b`` and a start amplitude per decay (time counted from each decay's first peak). The
+        shorter decays are left out of the fit; their peaks get the law with ``a`` and ``b``
+        fitted and their own start amplitude.
+
+    Returns
+    -------
+    DampingCurve
+        One estimate per peak. ``params`` holds ``a`` (1/s), ``b`` (1/(U s)), ``A0`` (U, of the
+        first decay fitted), their standard errors ``a_se``, ``b_se`` and the degrees of
+        freedom ``dof`` (peaks fitted minus parameters).
+
+    Raises
+    ------
+    AnalysisError
+        Bad peaks (shapes, NaN or inf, amplitudes or frequencies <= 0, times not increasing,
+        fewer than 4 peaks), or no more peaks in the decays fitted than parameters (a, b and a
+        start amplitude per decay).
     """
     func = "damping (envelope-fit)"
     t, amp_, f = _check(t, amp, freq, func, 4)
-    runs = _decay_runs(decay, t.size)
-    starts = np.concatenate([np.full(r.stop - r.start, r.start) for r in runs])
-    tt = t - t[starts]
-    la = np.log(amp_)
+    runs = decay_runs(decay, t.size, func)
+    fitted = [r for r in runs if r.stop - r.start >= MIN_FIT_PEAKS]
+    points = sum(r.stop - r.start for r in fitted)
+    if 2 + len(fitted) >= points:
+        raise fail(func, f"{len(fitted)} of {len(runs)} free decays have {MIN_FIT_PEAKS} peaks or "
+                         f"more ({points} peaks) for {2 + len(fitted)} parameters (a, b and a "
+                         "start amplitude per decay); the fit needs more peaks than parameters "
+                         "- longer decays, a lower min_amplitude or the decrement method")
+    tt = t - t[np.concatenate([np.full(r.stop - r.start, r.start) for r in runs])]
+    a, b, la0, se, dof = _fit_law(tt, amp_, fitted)
+    env = np.empty_like(amp_)
+    for r, la0_r in zip(fitted, la0):
+        env[r] = envelope_law(tt[r], a, b, math.exp(la0_r))
+    for r in runs:
+        if r.stop - r.start < MIN_FIT_PEAKS:
+            env[r] = envelope_law(tt[r], a, b, _start_amplitude(tt[r], amp_[r], a, b))
+    return _curve(t, env, a + b * env, f, "envelope-fit",
+                  {"a": float(a), "b": float(b), "A0": float(math.exp(la0[0])),
+                   "a_se": float(se[0]), "b_se": float(se[1]), "dof": float(dof)})
+
+
+def _fit_law(tt: np.ndarray, amp: np.ndarray, runs: list[slice]
+             ) -> tuple[float, float, np.ndarray, np.ndarray, int]:
+    """Least-squares fit of :func:`envelope_law` to the peaks ``amp`` (U) at times ``tt`` (s
+    from each decay's first peak) of the decays ``runs``, common ``a`` and ``b``: returns
+    a (1/s), b (1/(U s)), ln A0 of each run, the standard errors of a and b, and the degrees
+    of freedom."""
+    k = len(runs)
+    tt = np.concatenate([tt[r] for r in runs])
+    amp = np.concatenate([amp[r] for r in runs])
+    which = np.repeat(np.arange(k), [r.stop - r.start for r in runs])
+    first = np.concatenate(([0], np.cumsum([r.stop - r.start for r in runs])[:-1]))
+    la = np.log(amp)
     # Start: straight line in ln A (b = 0), one intercept per decay. Residuals in amplitude (not
     # ln A): additive noise on the record gives peaks with equal absolute scatter, so this is
     # the efficient fit.
-    if len(runs) == 1:
-        slope = -np.polyfit(tt, la, 1)[0]
-    else:
-        dt = np.concatenate([tt[r] - tt[r].mean() for r in runs])
-        dl = np.concatenate([la[r] - la[r].mean() for r in runs])
-        slope = -float(dt @ dl) / max(float(dt @ dt), 1e-300)
-    x0 = np.array([max(slope, 1e-6), 1e-6 / max(amp_[0], 1e-300),
-                   *(la[r.start] for r in runs)])
-    scale = float(amp_.max())
-    which = np.concatenate([np.full(r.stop - r.start, i) for i, r in enumerate(runs)])
+    dt = tt - (np.bincount(which, tt) / np.bincount(which))[which]
+    dl = la - (np.bincount(which, la) / np.bincount(which))[which]
+    slope = -float(dt @ dl) / max(float(dt @ dt), 1e-300)
+    x0 = np.array([max(slope, 1e-6), 1e-6 / max(amp[0], 1e-300), *la[first]])
+    scale = float(amp.max())
 
     def resid(p):
-        a, b = p[:2]
-        a0 = math.exp(p[2]) if len(runs) == 1 else np.exp(p[2:][which])
-        return (envelope_law(tt, a, b, a0) - amp_) / scale
+        return (envelope_law(tt, p[0], p[1], np.exp(p[2:][which])) - amp) / scale
 
-    k = len(runs)
     res = sopt.least_squares(resid, x0, bounds=([0.0, 0.0] + [-np.inf] * k, [np.inf] * (2 + k)),
                              x_scale="jac", xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=2000)
-    a, b, la0 = res.x[:3]
-    dof = max(1, t.size - 2 - k)
+    dof = tt.size - 2 - k
     s2 = float(res.fun @ res.fun) / dof
     try:
-        cov = np.linalg.inv(res.jac.T @ res.jac) * s2
-        se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        se = np.sqrt(np.maximum(np.diag(np.linalg.inv(res.jac.T @ res.jac) * s2), 0.0))
     except np.linalg.LinAlgError:
         se = np.full(2 + k, np.nan)
-    a_fit = envelope_law(tt, a, b, math.exp(la0) if len(runs) == 1 else np.exp(res.x[2:][which]))
-    rate = a + b * a_fit
-    return _curve(t, a_fit, rate, f, "envelope-fit",
-                  {"a": float(a), "b": float(b), "A0": float(math.exp(la0)),
-                   "a_se": float(se[0]), "b_se": float(se[1]), "dof": float(dof)})
+    return float(res.x[0]), float(res.x[1]), res.x[2:], se, dof
+
+
+def _start_amplitude(tt: np.ndarray, amp: np.ndarray, a: float, b: float) -> float:
+    """Start amplitude (U) of :func:`envelope_law` with ``a`` (1/s) and ``b`` (1/(U s)) given
+    that fits the peaks ``amp`` (U) at ``tt`` (s) by least squares."""
+    scale = float(amp.max())
+    res = sopt.least_squares(lambda p: (envelope_law(tt, a, b, math.exp(p[0])) - amp) / scale,
+                             [math.log(amp[0])], xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    return math.exp(float(res.x[0]))
 
 
 def damping_eq5(t: Any, amp: Any, freq: Any, *, window: int = 6) -> DampingCurve:
@@ -302,15 +344,16 @@ def damping_from_peaks(t: Any, amp: Any, freq: Any, *, method: str = "decrement"
     zeta and ln(amplitude) of the resulting curve.
 
     ``decay`` (optional): the free decay of each peak, an index constant over each decay (from
-    :meth:`._decays.FreeDecays.labels`). Each decay is then analysed on its own (the envelope
-    law is fitted to all of them with common ``a`` and ``b``), a decay with too few peaks for
-    the method is left out, the moving average stays within each decay, and the curves are
-    concatenated in time order with ``decay`` set. Raises AnalysisError when no decay has
-    enough peaks.
+    :meth:`._decays.FreeDecays.labels`). Each decay is then analysed on its own, a decay with
+    too few peaks for the method is left out, the moving average stays within each decay, and
+    the curves are concatenated in time order with ``decay`` set. The envelope law is fitted to
+    all decays of at least :data:`MIN_FIT_PEAKS` peaks with common ``a`` and ``b`` and
+    evaluated at every peak (:func:`damping_envelope_fit`). Raises AnalysisError when no decay
+    has enough peaks (for the envelope law: fewer peaks than parameters).
     """
     if method not in METHODS:
         raise fail("damping", f"method = {method!r}; expected one of {', '.join(METHODS)}")
-    runs = _decay_runs(decay, np.size(t))
+    runs = decay_runs(decay, np.size(t), "damping")
     if len(runs) == 1:
         curve = _one_decay(t, amp, freq, method, span, window)
         ids = np.asarray(decay)[:1] if decay is not None and np.size(decay) else np.zeros(1)

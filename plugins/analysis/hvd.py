@@ -494,9 +494,9 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
         # Automatic: the free decay starts where the excitation leaves the structure, at the
         # largest sample (0 for a record that starts with the decay); for several decays (an
         # impulse train) at the largest sample of the first one.
-        from fsi_lab.plugins.analysis._chain import _channel_noise
+        from fsi_lab.plugins.analysis._chain import channel_noise
         from fsi_lab.plugins.analysis._decays import first_decay_peak
-        sigma, f_dom = _channel_noise(context)
+        sigma, f_dom = channel_noise(context)
         fs = float(ch.sample_rate)
         i0 = first_decay_peak(data, fs, 1.0 / f_dom, 10.0 * sigma) if f_dom > 0 \
             else int(np.argmax(np.abs(data)))

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.signal import lsim
 from scipy.special import ellipk
 
 
@@ -148,3 +149,18 @@ def impulse_train_response(t: np.ndarray, accel, forces: np.ndarray, starts: np.
         y = sol.y[:, -1]
     x[-1], v[-1] = y
     return x, v
+
+
+def modal_chirp_response(t: np.ndarray, f_start: float, f_stop: float,
+                         modes: tuple[tuple[float, float, float], ...]) -> np.ndarray:
+    """Displacement of uncoupled modes x_j'' + 2 zeta_j w_j x_j' + w_j^2 x_j = g_j u(t), summed,
+    from rest, under the linear sweep u = sin(2 pi (f_start t + (f_stop - f_start) t^2 / 2T))
+    over the record's duration T; ``modes`` holds (frequency Hz, zeta, gain g_j). Exact for the
+    sweep interpolated linearly between samples (scipy.signal.lsim's matrix exponential)."""
+    duration = float(t[-1])
+    u = np.sin(2 * math.pi * (f_start * t + (f_stop - f_start) * t ** 2 / (2 * duration)))
+    x = np.zeros_like(t)
+    for f, zeta, gain in modes:
+        w = 2 * math.pi * f
+        x += lsim(([gain], [1.0, 2 * zeta * w, w * w]), u, t)[1]
+    return x

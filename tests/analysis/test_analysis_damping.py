@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 import pytest
 
-from _analysis_sims import decaying_tone, envelope_law, noisy, quadratic_record, time_axis
+from _analysis_sims import (decaying_tone, envelope_law, noisy, quadratic_damping_decay,
+                            quadratic_record, time_axis)
 from fsi_lab.errors import AnalysisError
-from fsi_lab.plugins.analysis.damping import (damping, damping_decrement, damping_eq5,
-                                              damping_eq7, damping_envelope_fit)
+from fsi_lab.plugins.analysis.damping import (MIN_FIT_PEAKS, damping, damping_decrement,
+                                              damping_eq5, damping_eq7, damping_envelope_fit,
+                                              damping_from_peaks)
 from fsi_lab.plugins.analysis.equivalent_damping import (equivalent_damping,
                                                          equivalent_damping_from_envelope)
 from fsi_lab.plugins.analysis.hvd import hvd
@@ -121,6 +124,53 @@ def test_eq5_window_regression_on_quadratic_damping():
     w = 2 * math.pi * curve.frequency
     truth = (q["c1"] / 2 + 4 * q["c2"] * w * curve.amplitude / (3 * math.pi)) / w
     np.testing.assert_allclose(curve.zeta, truth, rtol=0.03)
+
+
+@functools.lru_cache(maxsize=None)
+def decay_train_peaks(x0s: tuple, counts: tuple) -> tuple:
+    """Extrema of free decays of the system of ``quadratic_record`` from rest at each of ``x0s``
+    (m), one after the other, the first ``counts[k]`` of decay k kept (a decay cut short by
+    the next excitation): times (s), amplitudes (m), frequencies (Hz), the decay of each."""
+    q = quadratic_record()
+    t = time_axis(3.0, q["fs"])
+    parts = []
+    for k, (x0, n) in enumerate(zip(x0s, counts)):
+        x, _ = quadratic_damping_decay(t, q["m"], q["c1"], q["c2"], q["m"] * q["w0"] ** 2, x0)
+        inst = instantaneous(x, q["fs"])
+        parts.append((inst.peak_times[:n] + 4.0 * k, inst.peak_amplitudes[:n],
+                      inst.peak_frequency[:n], np.full(n, k)))
+    return tuple(np.concatenate(column) for column in zip(*parts))
+
+
+def test_envelope_fit_leaves_out_decays_of_too_few_peaks():
+    """Three full decays and four cut after one or two extrema: the short ones bring a start
+    amplitude each and (next to) nothing on the decay rate, so they are left out of the fit -
+    ``dof`` counts the full decays' peaks only - yet the law is evaluated at their peaks too.
+    a and b within 0.5 % of the simulated system's."""
+    counts = (28, 2, 1, 28, 2, 2, 28)
+    t, amp, freq, decay = decay_train_peaks((0.01, 0.008, 0.007, 0.006, 0.005, 0.004, 0.003),
+                                            counts)
+    curve = damping_from_peaks(t, amp, freq, method="envelope-fit", decay=decay)
+    q = quadratic_record()
+    w = 2 * math.pi * float(np.mean(freq))
+    assert curve.params["a"] == pytest.approx(q["c1"] / (2 * q["m"]), rel=5e-3)
+    assert curve.params["b"] == pytest.approx(4 * q["c2"] * w / (3 * math.pi * q["m"]),
+                                              rel=5e-3)
+    full = [n for n in counts if n >= MIN_FIT_PEAKS]
+    assert curve.params["dof"] == sum(full) - 2 - len(full)
+    assert np.array_equal(curve.decay, decay)
+    np.testing.assert_allclose(curve.amplitude, amp, rtol=2e-3)
+
+
+@pytest.mark.parametrize("counts", [(2, 2, 2, 2, 2, 2), (3, 2, 2, 1, 2)])
+def test_envelope_fit_with_nothing_left_to_fit_is_refused(counts):
+    """Decays of one or two extrema only (or one of three: as many peaks as its three
+    parameters): a clear error, not the fit's start values."""
+    x0s = tuple(0.01 * 0.8 ** k for k in range(len(counts)))
+    t, amp, freq, decay = decay_train_peaks(x0s, counts)
+    with pytest.raises(AnalysisError, match=r"damping \(envelope-fit\): .*free decays have 3 "
+                                            r"peaks or more.*more peaks than parameters"):
+        damping_from_peaks(t, amp, freq, method="envelope-fit", decay=decay)
 
 
 @pytest.mark.parametrize("func, n, match", [

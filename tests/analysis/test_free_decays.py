@@ -14,12 +14,16 @@ import numpy as np
 import pytest
 
 from _analysis_sims import (decaying_tone, duffing_hb_backbone, duffing_record,
-                            impulse_train_response, noisy, quadratic_record, time_axis)
+                            impulse_train_response, modal_chirp_response, noisy,
+                            quadratic_record, time_axis)
 from test_analysis_plugins import run
 from fsi_lab.contract import ChannelData
 from fsi_lab.errors import AnalysisError
-from fsi_lab.plugins.analysis._decays import decay_segments, first_decay_peak, split_decays
+from fsi_lab.plugins.analysis._chain import Component, decay_labels
+from fsi_lab.plugins.analysis._decays import (block_maxima, decay_segments, first_decay_peak,
+                                              split_decays)
 from fsi_lab.plugins.analysis.hvd import hvd
+from fsi_lab.plugins.analysis.instantaneous import instantaneous
 from fsi_lab.plugins.analysis.integrate import lowest_mode
 from fsi_lab.plugins.analysis.spectrum import free_decay_peaks, spectral_peaks
 from fsi_lab.plugins.excitation.impulse_train import impulse_amplitudes, impulse_train
@@ -159,6 +163,84 @@ def test_first_decay_peak_of_a_raw_record():
     # One decay: the largest sample, as before the split existed.
     one = x[int(17.0 * fs):]
     assert first_decay_peak(one, fs, 1 / 20.0, floor=1e-3) == int(np.argmax(np.abs(one)))
+
+
+def test_boundary_sample_belongs_to_the_earlier_decay():
+    """A clean train of decays (extrema alternating about an offset): every sample before an
+    impulse - the lowest of its decay included - belongs to the earlier decay, every sample
+    from the impulse on to the next."""
+    t = np.arange(0.0, 24.0, 0.05)
+    starts = np.array([0.52, 8.52, 16.52])                 # between two samples
+    a = np.full(t.size, 1e-3)
+    for p, s in zip((1.0, 0.6, 0.8), starts):
+        after = t >= s
+        a[after] = p * np.exp(-0.5 * (t[after] - s)) + 1e-3
+    a = a * (1 + 0.1 * (-1) ** np.arange(t.size))
+    d = split_decays(t, a)
+    assert d.count == 3
+    expected = np.searchsorted(starts, t, side="right") - 1     # the last impulse before t
+    later = t >= starts[0]
+    assert np.array_equal(d.regions(t)[later], expected[later])
+    for k, s in enumerate(starts[1:]):
+        before = np.flatnonzero(t < s)[-1]
+        assert d.bounds[k] == t[before] and d.ends[k] == t[before]
+        assert d.labels(t[before]) == k and d.labels(t[before + 1]) != k
+    # The boundary sample is the lowest envelope between the two impulses.
+    env = np.sqrt(a[:-1] * a[1:])
+    for k, (s0, s1) in enumerate(zip(starts[:-1], starts[1:])):
+        between = np.flatnonzero((t[1:] > s0) & (t[1:] < s1))
+        assert d.regions(t[between[np.argmin(env[between])] + 1]) == k
+
+
+def impulse_tones(times: tuple, fs: float = 1000.0, duration: float = 10.0,
+                  freq: float = 10.0, zeta: float = 0.02) -> np.ndarray:
+    """A linear mode (``freq`` Hz, ``zeta``) struck at rest by unit impulses at ``times`` (s):
+    the sum of the impulse responses, exact."""
+    t = time_axis(duration, fs)
+    x = np.zeros_like(t)
+    for s in times:
+        after = t >= s
+        x[after] += decaying_tone(t[after] - s, 1.0, freq, zeta, -math.pi / 2)[0]
+    return x
+
+
+def test_a_decay_too_short_for_its_margins_is_no_decay():
+    """Impulses 1 s apart on a 10 Hz mode leave the first decay no free part once the
+    integration's smear (0.4 s) after its peak and twice that before the next impulse are
+    taken off: it is not counted, its points belong to no decay, and the decays left are
+    numbered from 0 in time order."""
+    fs, strikes = 1000.0, (0.5, 1.5, 5.0)
+    x = impulse_tones(strikes, fs)
+    inst = instantaneous(x, fs)
+    comp = Component(0, x, "displacement", "m", fs, frequency=10.0)
+    labels, decays = decay_labels(inst.peak_times, comp, 0.1, inst.peak_amplitudes)
+    assert decays.count == 2
+    assert np.all(decays.starts < decays.ends)
+    assert set(np.unique(labels)) == {-1, 0, 1}
+    for k, (lo, hi) in enumerate(((strikes[1], strikes[2]), (strikes[2], np.inf))):
+        mine = inst.peak_times[labels == k]
+        assert mine.size > 0 and np.all((mine > lo) & (mine < hi))
+        assert np.all((mine >= decays.starts[k]) & (mine <= decays.ends[k]))
+    assert not np.any((labels >= 0) & (inst.peak_times < strikes[1]))
+    # The split itself: every region still separates the excitations (no averaging across).
+    assert decays.bounds.size == 2 and list(decays.region) == [1, 2]
+
+
+@pytest.mark.parametrize("duration, zeta", [(20.0, 0.02), (40.0, 0.01)])
+def test_a_sweep_through_two_resonances_is_one_decay(duration, zeta):
+    """A linear sweep 3 -> 45 Hz through a 10 Hz and a (larger) 31 Hz mode: each resonance
+    passage swells about as slowly as it fades, and no impulse starts a decay - one decay,
+    from the record's largest sample."""
+    fs = 1000.0
+    t = time_axis(duration, fs)
+    x = noisy(modal_chirp_response(t, 3.0, 45.0, ((10.0, zeta, 1.0), (31.0, zeta, 20.0))),
+              1e-4, seed=3)
+    tb, _, mb = block_maxima(x, fs, 0.1)
+    assert split_decays(tb, mb).count == 1
+    assert decay_segments(x, fs, 0.1) == [(0, x.size)]
+    largest = int(np.argmax(np.abs(x)))
+    assert abs(largest / fs - duration * (31.0 - 3.0) / 42.0) < 0.1 * duration   # the 31 Hz mode
+    assert first_decay_peak(x, fs, 0.1, floor=1e-3 * np.abs(x).max()) == largest
 
 
 # ----------------------------------------------------------------------------- the chain
