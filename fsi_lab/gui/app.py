@@ -24,7 +24,7 @@ from PySide6.QtWidgets import (
 )
 
 from fsi_lab.events import LogRecord
-from fsi_lab.gui.analysis_views import AnalysisViews
+from fsi_lab.gui.analysis.tab import AnalysisViews
 from fsi_lab.gui.bench_panel import BenchPanel
 from fsi_lab.gui.excitation_designer import ExcitationDesigner
 from fsi_lab.gui.live_plots import LivePlots

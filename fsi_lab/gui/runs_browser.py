@@ -2,8 +2,8 @@
 
 Files are read off the UI thread; a file that is not a readable fsi-lab run file is reported
 (``failed``) and the others stay open. The comparison overlays the backbones, damping curves and
-equivalent-damping fits of the ticked runs and lists their identified values; figures export as
-PNG or SVG, the values and the curves as CSV.
+equivalent damping C_q of the ticked runs and lists their identified values (C_i, C_f, R^2);
+figures export as PNG or SVG, the values and the curves as CSV.
 """
 
 from __future__ import annotations
@@ -20,10 +20,9 @@ from PySide6.QtWidgets import (
 )
 
 from fsi_lab.errors import FsiLabError
-from fsi_lab.gui.analysis_views import (
-    COLOURS, CQ, CQ_AMPLITUDE, CQ_FIT, DISPLACEMENT_AMPLITUDE, FREQUENCY, ZETA, finite_pairs,
-    per_component, summary_series, table_rows,
-)
+from fsi_lab.gui.analysis.datasets import finite_pairs, per_component, summary_series, table_rows
+from fsi_lab.gui.analysis.names import CQ, CQ_AMPLITUDE, DISPLACEMENT_AMPLITUDE, FREQUENCY, ZETA
+from fsi_lab.gui.analysis.plotting import COLOURS
 from fsi_lab.gui.export import export_figure, write_csv
 from fsi_lab.gui.results import RunResults, load_results
 from fsi_lab.gui.worker import TaskPool
@@ -34,7 +33,7 @@ SUMMARY_COLUMNS = ("run", "file", "exit_status", "start_time", "channel", "compo
                    "frequency_hz", "c_i", "c_i_ci95_low", "c_i_ci95_high", "c_f", "c_f_ci95_low",
                    "c_f_ci95_high", "r2", "errors")
 CURVE_COLUMNS = ("run", "file", "channel", "component", "curve", "x_name", "x", "y_name", "y")
-#: (curve name, plugin, x names, y names, summary section, summary y, x label, y label)
+#: (curve name, plugin, x dataset, y dataset, summary section, summary y, x label, y label)
 CURVES = (
     ("backbone", "backbone", DISPLACEMENT_AMPLITUDE, FREQUENCY, "backbone", "frequency_hz",
      "displacement_amplitude_m", "frequency_hz"),
@@ -48,12 +47,12 @@ CURVES = (
 def curves_of(results: RunResults, channel: str) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
     """Backbone, damping and C_q points per component, from the datasets or the summary."""
     out: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
-    for name, plugin, x_names, y_names, section, summary_y, _, _ in CURVES:
+    for name, plugin, x_name, y_name, section, summary_y, _, _ in CURVES:
         result = results.result(channel, plugin)
         pairs = []
         if result is not None and result.ok:
-            pairs = finite_pairs(zip(per_component(result, x_names),
-                                     per_component(result, y_names)))
+            pairs = finite_pairs(zip(per_component(result, x_name),
+                                     per_component(result, y_name)))
         if not pairs and section:
             pairs = summary_series(results, channel, section, "amplitude", summary_y)
         out[name] = pairs
@@ -303,13 +302,6 @@ class RunsBrowser(QWidget):
                                      symbol=None if x.size > 400 else SYMBOLS[k],
                                      symbolSize=5, symbolBrush=colour, symbolPen=None, name=label)
                     drawn += 1
-            eq = results.result(channel, "equivalent-damping")
-            if eq is not None and eq.ok:
-                for x, fit in finite_pairs(zip(per_component(eq, CQ_AMPLITUDE),
-                                               per_component(eq, CQ_FIT))):
-                    order = np.argsort(x)
-                    plots["equivalent_damping"].plot(x[order], fit[order],
-                                                     pen=pg.mkPen(colour, width=2))
         self._fill_table(runs)
         if not runs:
             self.note.setText("Open run files and tick them to compare them.")

@@ -3,9 +3,10 @@
 import numpy as np
 from conftest import write_corrupt, write_foreign, write_run
 
-from fsi_lab.gui.analysis_views import (
-    BackboneView, DampingView, EquivalentDampingView, FrequencyView, HVDView, SpectrumView,
-)
+from fsi_lab.gui.analysis.amplitude_views import BackboneView, DampingView
+from fsi_lab.gui.analysis.equivalent_damping_view import EquivalentDampingView
+from fsi_lab.gui.analysis.spectrum_view import SpectrumView
+from fsi_lab.gui.analysis.time_views import FrequencyView, HVDView
 from fsi_lab.gui.results import load_results
 
 
@@ -133,7 +134,8 @@ def test_views_draw_the_plugin_layout_directly(qtbot, tmp_path):
 
 def test_a_run_is_drawn_over_turns_of_the_event_loop(qtbot, make_window, registry, tmp_path,
                                                      monkeypatch):
-    from fsi_lab.gui.analysis_views import MIN_DRAW_POINTS, OverviewView
+    from fsi_lab.gui.analysis.overview import OverviewView
+    from fsi_lab.gui.analysis.plotting import MIN_DRAW_POINTS
 
     def measured_size(views):
         return views.results.result("tip_velocity", "hvd").datasets["components"].shape[1]
@@ -173,7 +175,7 @@ def test_stepper_gives_the_event_loop_back_between_slices(qtbot):
     import math
     import time
 
-    from fsi_lab.gui.analysis_views import SLICE_S, Stepper
+    from fsi_lab.gui.analysis.stepper import SLICE_S, Stepper
 
     stepper = Stepper()
     slices, steps = [], []

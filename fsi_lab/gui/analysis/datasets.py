@@ -1,0 +1,131 @@
+"""Datasets picked out of a run's results: per-component rows, summary series, time axes, chain."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from fsi_lab.chain import DEFAULT_CHAIN
+from fsi_lab.errors import FsiLabError
+from fsi_lab.gui.results import PluginResult, RunResults
+from fsi_lab.profile import parse_profile
+from fsi_lab.registry import Registry
+
+
+def rows(array: np.ndarray | None) -> list[np.ndarray]:
+    """A 2-D dataset as its rows (components), a 1-D one as a single row."""
+    if array is None:
+        return []
+    array = np.asarray(array)
+    if array.ndim == 1:
+        return [array]
+    if array.ndim == 2:
+        if array.shape[0] > array.shape[1]:
+            array = array.T
+        return list(array)
+    return []
+
+
+def per_component(result: PluginResult | None, name: str) -> list[np.ndarray]:
+    """Per-component arrays of the dataset ``name``: the rows of a 2-D dataset (the plugins
+    store one row per component), a 1-D one as a single row; none when it is missing."""
+    if result is None:
+        return []
+    return [np.asarray(r, dtype=float) for r in rows(result.get(name))]
+
+
+def finite_pairs(pairs) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Matching ``(x, y)`` rows without their NaN padding; empty rows are dropped."""
+    out = []
+    for x, y in pairs:
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        if x.size != y.size:
+            continue
+        keep = np.isfinite(x) & np.isfinite(y)
+        if keep.any():
+            out.append((x[keep], y[keep]))
+    return out
+
+
+def summary_series(results: RunResults, channel: str, section: str, x: str, y: str
+                   ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(x, y)`` pairs per component from the summary's ``components[i][section]``."""
+    series = []
+    for component in results.components(channel):
+        block = component.get(section)
+        if not isinstance(block, dict):
+            continue
+        xs, ys = block.get(x), block.get(y)
+        if isinstance(xs, list) and isinstance(ys, list) and xs and len(xs) == len(ys):
+            series.append((np.asarray([np.nan if v is None else v for v in xs], dtype=float),
+                           np.asarray([np.nan if v is None else v for v in ys], dtype=float)))
+    return finite_pairs(series)
+
+
+def time_axis(results: RunResults, channel: str, result: PluginResult | None, n: int
+              ) -> np.ndarray:
+    """Sample times of a dataset of ``n`` samples (hvd stores none of its own): the channel's
+    sample times from where the decomposition started (``start_s`` of hvd)."""
+    data = results.channels.get(channel)
+    if data is not None and data.sample_rate > 0:
+        return origin(results, channel, result) + np.arange(n) / data.sample_rate
+    return np.arange(n, dtype=float)
+
+
+def origin(results: RunResults, channel: str, result: PluginResult | None = None) -> float:
+    """Time (s, on the run's clock) of sample 0 of the analysed components: the channel's t0
+    plus the start the decomposition chose (``start_s``), when there is one."""
+    data = results.channels.get(channel)
+    t0 = float(data.t0) if data is not None else 0.0
+    for candidate in (result, results.result(channel, "hvd")):
+        if candidate is not None:
+            start = candidate.scalar("start_s")
+            if isinstance(start, (int, float)):
+                return t0 + float(start)
+    return t0
+
+
+def format_ci(value: Any) -> str:
+    """A 95 % interval ``[low, high]`` as text; anything else as it is (None as nothing)."""
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        return f"[{value[0]:.4g}, {value[1]:.4g}]"
+    return "" if value is None else str(value)
+
+
+def chain_of(results: RunResults, registry: Registry) -> tuple[dict[str, Any], dict[str, dict]]:
+    """The run's ``[analysis]`` values (chain, channels, reference) and the parameters its
+    plugins last ran with."""
+    params: dict[str, dict] = {}
+    analysis: dict[str, Any] = {"chain": [], "channels": [], "reference": None}
+    try:
+        profile = parse_profile(results.profile_text, f"{results.path}:/profile", registry,
+                                sections=("analysis", "specimen"))
+        analysis = dict(profile.analysis)
+        params = {k: dict(v) for k, v in profile.analysis_params.items()}
+    except FsiLabError:
+        pass
+    chain = list(analysis["chain"])
+    if not results.profile_text.strip() and not chain:
+        chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
+    for groups in results.analysis.values():
+        for plugin, result in groups.items():
+            if plugin not in chain and plugin in registry.descriptors["analysis"]:
+                chain.append(plugin)
+            if result.params:
+                params.setdefault(plugin, {}).update(result.params)
+    analysis["chain"] = chain
+    return analysis, params
+
+
+def table_rows(results: RunResults, channel: str) -> list[dict[str, Any]]:
+    """One flat dictionary per component: index, frequency and the equivalent damping."""
+    out = []
+    for component in results.components(channel):
+        row = {"index": component.get("index"), "frequency_hz": component.get("frequency_hz")}
+        eq = component.get("equivalent_damping")
+        if isinstance(eq, dict):
+            for key in ("c_i", "c_i_ci95", "c_f", "c_f_ci95", "r2"):
+                row[key] = eq.get(key)
+        out.append(row)
+    return out

@@ -1,0 +1,85 @@
+"""Plotting primitives of the analysis figures: colours, decimated curves, points, ranges."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6.QtCore import Qt
+
+from fsi_lab.gui.decimate import min_max_decimate
+
+#: Colours of the components (component k in ``COLOURS[k % len(COLOURS)]``).
+COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2",
+           "#17becf")
+#: Components drawn at most in one figure.
+MAX_COMPONENTS_DRAWN = 6
+
+#: Curves are drawn decimated to two points (the min and max of a bin: no peak is lost) per
+#: pixel of the figure's width, within these bounds. The run file keeps every sample.
+DRAW_POINTS = 4000
+MIN_DRAW_POINTS = 1200
+
+
+def display_points(plot: pg.PlotItem) -> int:
+    """How many points a curve of ``plot`` needs: two per pixel of the widest view showing it."""
+    scene = plot.scene()
+    views = scene.views() if scene is not None else []
+    width = max([v.width() for v in views] + [plot.width()])
+    return int(min(DRAW_POINTS, max(MIN_DRAW_POINTS, 2 * width)))
+
+
+def draw_line(plot: pg.PlotItem, x, y, colour: str, name: str | None = None,
+              width: float = 1.2, style=Qt.PenStyle.SolidLine) -> pg.PlotDataItem:
+    """A curve of ``y`` against ``x`` in ``plot``, decimated to :func:`display_points` (NaN
+    gaps are kept as gaps)."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    points = display_points(plot)
+    if y.size > points and np.all(np.isfinite(y)):
+        x, y = min_max_decimate(x, y, points)
+    elif y.size > points:
+        step = int(np.ceil(y.size / points))
+        x, y = x[::step], y[::step]
+    return plot.plot(x, y, pen=pg.mkPen(colour, width=width, style=style), name=name,
+                     connect="finite", skipFiniteCheck=False)
+
+
+def draw_points(plot: pg.PlotItem, x, y, colour: str, name: str | None = None, size: int = 5
+                ) -> pg.PlotDataItem:
+    """Round markers of ``y`` against ``x`` in ``plot``, every point drawn."""
+    return plot.plot(np.asarray(x, dtype=float), np.asarray(y, dtype=float), pen=None,
+                     symbol="o", symbolSize=size, symbolBrush=colour, symbolPen=None, name=name)
+
+
+def robust_range(plot: pg.PlotItem, values: Sequence[np.ndarray], axis: str = "y",
+                 low: float = 2.0, high: float = 98.0) -> None:
+    """Scale one axis to the bulk of the data (outliers of noisy record ends stay reachable by
+    zooming out: the view's "View all")."""
+    data = np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in values] or [[]])
+    data = data[np.isfinite(data)]
+    if data.size < 5:
+        return
+    lo, hi = np.percentile(data, [low, high])
+    if hi <= lo:
+        return
+    margin = 0.15 * (hi - lo)
+    if axis == "y":
+        plot.setYRange(lo - margin, hi + margin, padding=0)
+    else:
+        plot.setXRange(max(lo - margin, 0.0) if lo >= 0 else lo - margin, hi + margin, padding=0)
+
+
+def active_span(t: np.ndarray, envelope: np.ndarray, fraction: float = 0.01
+                ) -> tuple[float, float] | None:
+    """The time span where ``envelope`` exceeds ``fraction`` of its peak."""
+    env = np.asarray(envelope, dtype=float)
+    good = np.isfinite(env)
+    if not good.any():
+        return None
+    above = np.flatnonzero(good & (env > fraction * np.nanmax(env)))
+    if above.size < 2:
+        return None
+    t0, t1 = float(t[above[0]]), float(t[above[-1]])
+    pad = 0.05 * (t1 - t0)
+    return t0 - pad, t1 + pad

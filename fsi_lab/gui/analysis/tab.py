@@ -1,0 +1,230 @@
+"""AnalysisViews: the Analysis tab (views, channel selector, parameter panel, re-analysis)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtWidgets import (
+    QComboBox, QHBoxLayout, QLabel, QScrollArea, QSplitter, QTabWidget, QVBoxLayout, QWidget,
+)
+
+from fsi_lab.gui.analysis.amplitude_views import BackboneView, DampingView
+from fsi_lab.gui.analysis.dataset_browser import DatasetBrowser
+from fsi_lab.gui.analysis.datasets import chain_of
+from fsi_lab.gui.analysis.equivalent_damping_view import EquivalentDampingView
+from fsi_lab.gui.analysis.modal_model_view import ModalModelView
+from fsi_lab.gui.analysis.overview import OverviewView
+from fsi_lab.gui.analysis.parameters import AnalysisParameters
+from fsi_lab.gui.analysis.spectrum_view import SpectrumView
+from fsi_lab.gui.analysis.stepper import Stepper
+from fsi_lab.gui.analysis.summary import SummaryView
+from fsi_lab.gui.analysis.time_views import FrequencyView, HVDView
+from fsi_lab.gui.analysis.view import View
+from fsi_lab.gui.analysis_job import AnalysisJob
+from fsi_lab.gui.results import RunResults
+from fsi_lab.gui.worker import TaskPool
+from fsi_lab.registry import Registry
+
+
+class AnalysisViews(QWidget):
+    """The views of one run, a channel selector and the parameter panel.
+
+    Signals: ``reanalysed(path)`` after an analysis was stored, ``analysis_failed(path)``,
+    ``message(level, text)``.
+    """
+
+    reanalysed = Signal(object)
+    analysis_failed = Signal(object)
+    message = Signal(str, str)
+
+    def __init__(self, registry: Registry, pool: TaskPool, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.registry = registry
+        self.pool = pool
+        self.results: RunResults | None = None
+        self.job: AnalysisJob | None = None
+        self.title = QLabel("No run open: runs appear here when they finish or when you open "
+                            "a run file.")
+        self.title.setObjectName("analysis-title")
+        self.title.setWordWrap(True)
+        self.channel = QComboBox()
+        self.channel.setObjectName("analysis-channel")
+        self.channel.currentIndexChanged.connect(self._redraw)
+        self.state = QLabel("")
+        self.views: list[Any] = [OverviewView(), HVDView(), FrequencyView(), BackboneView(), DampingView(),
+                                 EquivalentDampingView(), ModalModelView(), SpectrumView(),
+                                 SummaryView(), DatasetBrowser()]
+        self.tabs = QTabWidget()
+        self.tabs.setObjectName("analysis-tabs")
+        for view in self.views:
+            self.tabs.addTab(view, view.title)
+        self._drawn: set[int] = set()  # views drawn for the run and channel shown
+        # Draws the figures of the tab shown, then builds the parameter forms of a new run, a
+        # slice per turn of the event loop, in that order.
+        self.stepper = Stepper(self)
+        self.view(OverviewView).stepper = self.stepper
+        self.tabs.currentChanged.connect(self._draw_current)
+        # build the figures' plot items in idle time, one view per turn of the event loop
+        self._prebuild = [v for v in self.views if hasattr(v, "prebuild")]
+        self._prebuild_timer = QTimer(self)
+        self._prebuild_timer.setSingleShot(True)
+        self._prebuild_timer.timeout.connect(self._prebuild_next)
+        self._prebuild_timer.start(200)
+        self.parameters = AnalysisParameters(registry)
+        self.parameters.rerun.connect(self.rerun)
+        bar = QHBoxLayout()
+        bar.addWidget(self.title, 1)
+        bar.addWidget(QLabel("Channel"))
+        bar.addWidget(self.channel)
+        # in a scroll area: building the forms of a run does not resize the figures beside them
+        parameters = QScrollArea()
+        parameters.setWidgetResizable(True)
+        parameters.setFrameShape(QScrollArea.Shape.NoFrame)
+        parameters.setWidget(self.parameters)
+        parameters.setMinimumWidth(300)
+        parameters.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        splitter = QSplitter(Qt.Orientation.Horizontal)
+        splitter.addWidget(self.tabs)
+        splitter.addWidget(parameters)
+        splitter.setStretchFactor(0, 4)
+        splitter.setStretchFactor(1, 1)
+        self.parameters.setMinimumWidth(280)
+        layout = QVBoxLayout(self)
+        layout.addLayout(bar)
+        layout.addWidget(self.state)
+        layout.addWidget(splitter, 1)
+
+    def stop_drawing(self) -> None:
+        """Cancel drawings scheduled for later turns of the event loop (closing)."""
+        self._prebuild.clear()
+        self._prebuild_timer.stop()
+        self.stepper.cancel()
+
+    def _prebuild_next(self) -> None:
+        if self._prebuild and self.results is None:
+            self._prebuild.pop(0).prebuild()
+            self._prebuild_timer.start(0)
+
+    def view(self, cls: type) -> Any:
+        return next(v for v in self.views if isinstance(v, cls))
+
+    def show_results(self, results: RunResults) -> None:
+        """Show a run (already read off the UI thread).
+
+        Only the title, channel and state are set now; the figures of the Overview are drawn
+        one per turn of the event loop, then the parameter forms are built (see
+        :attr:`pending` and :meth:`finish`)."""
+        self.results = results
+        status = results.exit_status
+        started = results.attrs.get("start_time", "")
+        self.title.setText(f"<b>{results.name}</b> — {results.path.name} — {status}"
+                           + (f" — {started[:19]}" if started else ""))
+        channels = results.analysed_channels() or [
+            n for n, c in results.channels.items() if c.quantity in ("velocity", "displacement")
+        ] or list(results.channels)
+        current = self.channel.currentData()
+        self.channel.blockSignals(True)
+        self.channel.clear()
+        for name in channels:
+            self.channel.addItem(name, name)
+        if current in channels:
+            self.channel.setCurrentIndex(channels.index(current))
+        self.channel.blockSignals(False)
+        if not results.analysis:
+            self.state.setText("not computed: this run file has no analysis results "
+                               f"(exit status {status}); set the parameters and re-run")
+        else:
+            errors = [f"{r.plugin} on {r.channel}: {r.error}" for groups in results.analysis.values()
+                      for r in groups.values() if not r.ok]
+            self.state.setText("failed: " + "; ".join(errors) if errors else "")
+        self.state.setStyleSheet("color: #b00020;" if results.analysis and
+                                 self.state.text().startswith("failed") else "color: #555;")
+        self._redraw()
+        # the forms after the figures: the figures are what is looked at first
+        self.stepper.cancel(self.parameters)
+        self.stepper.add(self.parameters.loading(*chain_of(results, self.registry)),
+                         self.parameters)
+
+    @property
+    def pending(self) -> bool:
+        """Whether figures or the parameter forms of the run shown are still to be built."""
+        return self.stepper.pending
+
+    def finish(self) -> None:
+        """Build at once what is still pending (tests, screenshots, exports)."""
+        self.stepper.finish()
+
+    def _redraw(self) -> None:
+        """Views are drawn when shown: the current one now (its figures a slice per turn of
+        the event loop), the others on their turn."""
+        self._drawn.clear()
+        for view in self.views:
+            self.stepper.cancel(view)
+        self._draw_current()
+
+    def _draw_current(self, *args) -> None:
+        self._draw(self.tabs.currentIndex())
+
+    def _draw(self, index: int, now: bool = False) -> None:
+        if self.results is None or index < 0 or index in self._drawn:
+            return
+        self._drawn.add(index)
+        view, channel = self.views[index], self.channel.currentData() or ""
+        if isinstance(view, OverviewView) and not now:
+            view.show_results(self.results, channel)  # queues its parts on the stepper
+        elif isinstance(view, View) and not now:
+            self.stepper.add(view.drawing(self.results, channel), view)
+        else:
+            view.show_results(self.results, channel)
+
+    def filled(self) -> dict[str, bool]:
+        """Whether each view shows data (draws the views not drawn yet)."""
+        for index in range(len(self.views)):
+            self._draw(index, now=True)
+        self.finish()
+        return {view.title: view.filled for view in self.views}
+
+    # ------------------------------------------------------------------ re-analysis
+    @property
+    def busy(self) -> bool:
+        return self.job is not None
+
+    def analyse(self, path: str | Path, overrides: list[str] = ()) -> bool:
+        """Run the chain on ``path`` with ``overrides`` in a child process (``fsi-lab analyze``);
+        ``reanalysed(path)`` or ``message`` follows. False if an analysis is already running."""
+        if self.job is not None:
+            return False
+        self.job = AnalysisJob(path, list(overrides), self)
+        self.job.succeeded.connect(self._job_done)
+        self.job.failed.connect(self._job_failed)
+        self.parameters.button.setEnabled(False)
+        self.parameters.note.setText("analysing (fsi-lab analyze in a separate process) ...")
+        self.job.start()
+        return True
+
+    def rerun(self, overrides: list[str]) -> None:
+        if self.results is not None:
+            self.analyse(self.results.path, overrides)
+
+    def wait(self, timeout_ms: int = 30000) -> None:
+        if self.job is not None:
+            self.job.wait(timeout_ms)
+
+    def _end_job(self) -> None:
+        job, self.job = self.job, None
+        if job is not None:
+            job.deleteLater()
+        self.parameters.button.setEnabled(True)
+
+    def _job_done(self, path: Path, summary: object) -> None:
+        self._end_job()
+        self.parameters.note.setText("analysis stored in the run file")
+        self.reanalysed.emit(path)
+
+    def _job_failed(self, path: Path, message: str) -> None:
+        self._end_job()
+        self.parameters.note.setText(f"failed: {message}")
+        self.message.emit("ERROR", f"analysis of {Path(path).name} failed: {message}")
+        self.analysis_failed.emit(path)
