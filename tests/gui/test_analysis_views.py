@@ -209,3 +209,56 @@ def test_stepper_gives_the_event_loop_back_between_slices(qtbot):
     most = math.ceil(SLICE_S / 0.004)
     assert max(slices) <= most, slices
     assert len([n for n in slices if n]) >= math.ceil(6 / most) + math.ceil(3 / most), slices
+
+
+def test_time_and_model_curves_land_where_the_plugins_put_them(qtbot, tmp_path):
+    import h5py
+
+    path = write_run(tmp_path / "shifted.h5")
+    amp = np.linspace(0.004, 0.0005, 30)
+    model_curves = {"backbone_amplitude_model": amp[None, :],
+                    "backbone_frequency_model": (17.2 - 9 * amp)[None, :],
+                    "damping_amplitude_model": amp[None, :],
+                    "damping_velocity_amplitude_model": (2 * np.pi * 17 * amp)[None, :],
+                    "damping_zeta_model": (0.011 + 2.1 * amp)[None, :]}
+    with h5py.File(path, "r+") as f:
+        f["channels/tip_velocity"].attrs["t0"] = 0.25   # the channel starts late on the clock
+        f["analysis/tip_velocity/hvd"].attrs["start_s"] = 0.5  # and HVD later still
+        group = f.create_group("analysis/tip_velocity/modal-model")
+        group.attrs["status"] = "ok"
+        for name, data in model_curves.items():
+            group.create_dataset(name, data=data)
+        zc_times = f["analysis/tip_velocity/instantaneous/frequency_times"][0]
+    results = load_results(path)
+
+    frequency = FrequencyView()
+    qtbot.addWidget(frequency)
+    frequency.show_results(results, "tip_velocity")
+    crossings = [item for item in frequency._plots[(0, 0)].listDataItems()
+                 if item.name() == "zero crossings, component 0"]
+    # instantaneous stores times from the channel's first sample: only the channel's t0 is added
+    np.testing.assert_allclose(crossings[0].getData()[0], 0.25 + zc_times[np.isfinite(zc_times)])
+
+    for cls, x_names, y_name in (
+            (BackboneView, ("backbone_amplitude_model",), "backbone_frequency_model"),
+            (DampingView, ("damping_amplitude_model", "damping_velocity_amplitude_model"),
+             "damping_zeta_model")):
+        view = cls()
+        qtbot.addWidget(view)
+        view.show_results(results, "tip_velocity")
+        for cell, x_name in zip(((0, 0), (0, 1)), x_names):
+            model = [item for item in view._plots[cell].listDataItems()
+                     if item.name() == "modal model"]
+            assert len(model) == 1, (cls.__name__, cell)
+            x, y = model[0].getData()
+            order = np.argsort(model_curves[x_name][0])
+            np.testing.assert_allclose(x, model_curves[x_name][0][order])
+            np.testing.assert_allclose(y, model_curves[y_name][0][order])
+
+
+def test_rows_are_components_however_short():
+    from fsi_lab.gui.analysis.datasets import rows
+
+    three_components_of_two_points = np.arange(6.0).reshape(3, 2)
+    assert [list(r) for r in rows(three_components_of_two_points)] == [[0, 1], [2, 3], [4, 5]]
+    assert [list(r) for r in rows(np.array([1.0, 2.0]))] == [[1, 2]]

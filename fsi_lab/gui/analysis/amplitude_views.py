@@ -30,13 +30,19 @@ class _AmplitudeView(View):
     summary_velocity_section = ""
     y_label = ""
     y_units: str | None = None
+    #: where the curves are read from a run whose datasets lack them
+    summary_section = ""
+    summary_y = ""
+    #: the modal-model datasets of the model's curve: amplitudes against displacement and
+    #: velocity ("" where modal-model does not compute it) and the quantity drawn
+    model_x = ""
+    model_velocity_x = ""
+    model_y = ""
 
     def __init__(self, compact: bool = False, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.compact = compact
         self.cells = ((0, 0),) if compact else ((0, 0), (0, 1))
-    summary_section = ""
-    summary_y = ""
 
     def draw(self, results: RunResults, channel: str) -> Iterator[None]:
         result = results.result(channel, self.plugins[0])
@@ -83,12 +89,13 @@ class _AmplitudeView(View):
             draw_points(plot, a, b, colour, f"component {k}", 5)
 
     def overlay_model(self, results, channel, left, right) -> Iterator[None]:
+        """The modal model's curve (dashed) over the measured one, where it computed it."""
         model = results.result(channel, "modal-model")
         if model is None or not model.ok:
             return
-        y = per_component(model, self.y_name)
-        for plot, name in ((left, DISPLACEMENT_AMPLITUDE), (right, VELOCITY_AMPLITUDE)):
-            if plot is None:
+        y = per_component(model, self.model_y)
+        for plot, name in ((left, self.model_x), (right, self.model_velocity_x)):
+            if plot is None or not name:
                 continue
             for k, (a, b) in enumerate(finite_pairs(zip(per_component(model, name), y))):
                 order = np.argsort(a)
@@ -107,6 +114,8 @@ class BackboneView(_AmplitudeView):
     y_units = "Hz"
     summary_section = "backbone"
     summary_y = "frequency_hz"
+    model_x = "backbone_amplitude_model"
+    model_y = "backbone_frequency_model"
 
 
 class DampingView(_AmplitudeView):
@@ -116,3 +125,6 @@ class DampingView(_AmplitudeView):
     y_label = "damping ratio ζ"
     summary_section = "damping"
     summary_y = "zeta"
+    model_x = "damping_amplitude_model"
+    model_velocity_x = "damping_velocity_amplitude_model"
+    model_y = "damping_zeta_model"

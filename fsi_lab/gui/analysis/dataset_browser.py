@@ -67,5 +67,7 @@ class DatasetBrowser(QWidget):
             return
         if np.iscomplexobj(array):
             array = np.abs(array)
+        if array.ndim == 2 and array.shape[0] > array.shape[1]:
+            array = array.T  # a plugin's own layout, points down the columns: draw the columns
         for k, row in enumerate(rows(array.astype(float))[:MAX_COMPONENTS_DRAWN]):
             draw_line(self.plot.getPlotItem(), np.arange(row.size), row, COLOURS[k % len(COLOURS)])

@@ -14,15 +14,14 @@ from fsi_lab.registry import Registry
 
 
 def rows(array: np.ndarray | None) -> list[np.ndarray]:
-    """A 2-D dataset as its rows (components), a 1-D one as a single row."""
+    """A 2-D dataset as its rows (the plugins store one row per component, however few
+    points a row holds), a 1-D one as a single row."""
     if array is None:
         return []
     array = np.asarray(array)
     if array.ndim == 1:
         return [array]
     if array.ndim == 2:
-        if array.shape[0] > array.shape[1]:
-            array = array.T
         return list(array)
     return []
 
@@ -73,11 +72,16 @@ def time_axis(results: RunResults, channel: str, result: PluginResult | None, n:
     return np.arange(n, dtype=float)
 
 
+def channel_t0(results: RunResults, channel: str) -> float:
+    """Time (s, on the run's clock) of the channel's first sample; 0 for an unknown channel."""
+    data = results.channels.get(channel)
+    return float(data.t0) if data is not None else 0.0
+
+
 def origin(results: RunResults, channel: str, result: PluginResult | None = None) -> float:
     """Time (s, on the run's clock) of sample 0 of the analysed components: the channel's t0
     plus the start the decomposition chose (``start_s``), when there is one."""
-    data = results.channels.get(channel)
-    t0 = float(data.t0) if data is not None else 0.0
+    t0 = channel_t0(results, channel)
     for candidate in (result, results.result(channel, "hvd")):
         if candidate is not None:
             start = candidate.scalar("start_s")

@@ -7,7 +7,7 @@ from typing import Iterator
 import numpy as np
 from PySide6.QtCore import Qt
 
-from fsi_lab.gui.analysis.datasets import finite_pairs, per_component
+from fsi_lab.gui.analysis.datasets import channel_t0, finite_pairs, per_component
 from fsi_lab.gui.analysis.plotting import (
     COLOURS, active_span, draw_line, draw_points, robust_range,
 )
@@ -29,7 +29,7 @@ class ModalModelView(View):
             return False
         data = results.channels.get(channel)
         rate = float(model.scalar("sample_rate") or (data.sample_rate if data else 1.0))
-        t0 = (float(data.t0) if data is not None else 0.0) + float(model.scalar("start_s") or 0.0)
+        t0 = channel_t0(results, channel) + float(model.scalar("start_s") or 0.0)
         unit = data.unit if data is not None else None
         drawn = False
         # modal-model names its time series velocity_* on a velocity channel and signal_* on
@@ -53,7 +53,7 @@ class ModalModelView(View):
             yield
             if top is not None:
                 env.setXLink(top)
-            t_env = (float(data.t0) if data is not None else 0.0) + np.asarray(times, float)
+            t_env = channel_t0(results, channel) + np.asarray(times, float)
             for k, (m, s_) in enumerate(zip(per_component(model, "envelope_measured"),
                                             per_component(model, "envelope_model"))):
                 colour = COLOURS[k % len(COLOURS)]

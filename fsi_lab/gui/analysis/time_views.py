@@ -8,7 +8,9 @@ import numpy as np
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QWidget
 
-from fsi_lab.gui.analysis.datasets import finite_pairs, origin, per_component, time_axis
+from fsi_lab.gui.analysis.datasets import (
+    channel_t0, finite_pairs, per_component, time_axis,
+)
 from fsi_lab.gui.analysis.names import (
     HVD_COMPONENTS, HVD_EDGE, HVD_ENVELOPES, HVD_FREQUENCIES, ZC_FREQUENCY, ZC_TIME,
 )
@@ -119,7 +121,7 @@ class FrequencyView(View):
         if inst is not None and inst.ok:
             times = per_component(inst, ZC_TIME)
             freqs = per_component(inst, ZC_FREQUENCY)
-            shift = origin(results, channel, inst)
+            shift = channel_t0(results, channel)  # the times count from the channel's start
             for k, (t, f) in enumerate(finite_pairs(zip(times, freqs))):
                 draw_points(plot, t + shift, f, COLOURS[k % len(COLOURS)],
                             f"zero crossings, component {k}", 4)
