@@ -14,6 +14,7 @@ from typing import Any, Callable, Mapping
 from fsi_lab.contract import Instrument
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
+from fsi_lab.signals import RunSignals
 
 #: Instruments are put in their safe state in this order: the amplifier first.
 SAFE_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
@@ -23,16 +24,27 @@ OPEN_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
 Log = Callable[[str, str], None]
 
 
-def bench_context(profile: Profile) -> dict[str, Any]:
+#: ``purpose`` of a bench context: opened for a run, or to be made safe or identified outside
+#: one (a driver then changes nothing it need not, e.g. it leaves latched interlocks latched).
+PURPOSES = ("run", "outside-run")
+
+
+def bench_context(profile: Profile, purpose: str = "run") -> dict[str, Any]:
     """The dictionary shared by the instruments of one profile (see ``InstrumentPlugin``):
-    its ``specimen``, ``model``, ``shaker`` and ``bench`` sections and a ``cleanup`` list."""
+    its ``specimen``, ``model``, ``shaker`` and ``bench`` sections, a ``cleanup`` list and the
+    ``purpose`` the instruments are opened for (:data:`PURPOSES`)."""
+    if purpose not in PURPOSES:
+        raise ValueError(f"purpose {purpose!r}; expected one of {', '.join(PURPOSES)}")
     return {"specimen": profile.specimen, "model": profile.model, "shaker": profile.shaker,
-            "bench": dict(profile.bench), "cleanup": []}
+            "bench": dict(profile.bench), "cleanup": [], "purpose": purpose}
 
 
 def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable[[], None]],
                    log: Log = lambda level, text: None) -> dict[str, dict[str, Any]]:
     """Safe state for every instrument (amplifier first), then read its state back and close it.
+
+    An instrument whose safe state failed, or whose state read back still has its output on
+    (a link that hiccuped), gets one more attempt before it is closed.
 
     Parameters
     ----------
@@ -47,29 +59,24 @@ def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable
     -------
     dict
         Per role, the state read back; ``error`` when it could not be read and
-        ``safe_state_error`` when the safe state failed.
+        ``safe_state_error`` when the safe state failed (see :func:`unsafe_roles`).
     """
-    errors: dict[str, str] = {}
-    for role in SAFE_ORDER:
-        instrument = instruments.get(role)
-        if instrument is None:
+    opened = [(role, instruments[role]) for role in SAFE_ORDER if role in instruments]
+    errors = {role: _safe_state(instrument) for role, instrument in opened}
+    states = {role: _read_state(instrument) for role, instrument in opened}
+    for role, instrument in opened:
+        if errors[role] is None and states[role].get("output_enabled") is not True:
             continue
-        try:
-            instrument.safe_state()
-        except Exception as exc:  # noqa: BLE001 - keep going: the others must be safed too
-            errors[role] = f"safe state failed: {type(exc).__name__}: {exc}"
-            log("ERROR", f"{role}: {errors[role]}")
-    states: dict[str, dict[str, Any]] = {}
-    for role in SAFE_ORDER:
-        instrument = instruments.get(role)
-        if instrument is None:
-            continue
-        try:
-            states[role] = dict(instrument.read_state())
-        except Exception as exc:  # noqa: BLE001
-            states[role] = {"error": f"could not read state: {type(exc).__name__}: {exc}"}
-        if role in errors:
+        log("ERROR", f"{role}: {errors[role] or 'output still on after the safe state'}; "
+                     "trying once more")
+        errors[role] = _safe_state(instrument)
+        states[role] = _read_state(instrument)
+        if errors[role] is None and states[role].get("output_enabled") is True:
+            errors[role] = "safe state failed: the output is still on after two attempts"
+        if errors[role] is not None:
             states[role]["safe_state_error"] = errors[role]
+            log("ERROR", f"{role}: NOT confirmed safe: {errors[role]}")
+    for role, instrument in opened:
         try:
             instrument.close()
         except Exception as exc:  # noqa: BLE001
@@ -82,6 +89,34 @@ def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable
     return states
 
 
+def _safe_state(instrument: Instrument) -> str | None:
+    """Put ``instrument`` in its safe state; what went wrong, or None."""
+    try:
+        instrument.safe_state()
+    except Exception as exc:  # noqa: BLE001 - keep going: the others must be safed too
+        return f"safe state failed: {type(exc).__name__}: {exc}"
+    return None
+
+
+def _read_state(instrument: Instrument) -> dict[str, Any]:
+    try:
+        return dict(instrument.read_state())
+    except Exception as exc:  # noqa: BLE001
+        return {"error": f"could not read state: {type(exc).__name__}: {exc}"}
+
+
+def unsafe_roles(states: Mapping[str, Mapping[str, Any]]) -> dict[str, str]:
+    """Per role, why an instrument of :func:`safe_and_close` is not confirmed safe: its safe
+    state failed, or it still reports its output on."""
+    found = {}
+    for role, state in states.items():
+        if "safe_state_error" in state:
+            found[role] = str(state["safe_state_error"])
+        elif state.get("output_enabled") is True:
+            found[role] = "its output is still on"
+    return found
+
+
 def each_instrument(profile: Profile, registry: Registry, order: tuple[str, ...],
                     action: Callable[[str, Instrument], dict[str, Any]],
                     log: Log = lambda level, text: None) -> dict[str, dict[str, Any]]:
@@ -90,30 +125,51 @@ def each_instrument(profile: Profile, registry: Registry, order: tuple[str, ...]
 
     Returns, per role, what ``action`` returned (or ``error`` if opening or the action failed)
     with the ``state`` read back after the safe state (and ``safe_state_error`` if it failed);
-    ``log(level, text)`` hears of failed closes and cleanups.
+    ``log(level, text)`` hears of failed closes and cleanups. Ctrl+C or SIGTERM (in the main
+    thread) is held until every instrument has been made safe, then raised as
+    :class:`BenchInterrupted`, which carries the report.
     """
-    context = bench_context(profile)
+    context = bench_context(profile, "outside-run")
     opened: dict[str, Instrument] = {}
     report: dict[str, dict[str, Any]] = {}
+    signals = RunSignals()  # Ctrl+C and SIGTERM wait until every instrument has been seen to
+    signals.install()
     try:
-        for role in order:
-            config = profile.roles.get(role)
-            if config is None:
-                continue
+        with signals.held():
             try:
-                descriptor = registry.get("instrument", config.plugin)
-                opened[role] = descriptor.open(config.address, dict(config.settings), context)
-                report[role] = action(role, opened[role])
-            except Exception as exc:  # noqa: BLE001 - reported per instrument
-                report[role] = {"error": f"{type(exc).__name__}: {exc}"}
-    finally:  # also on Ctrl+C: everything opened is made safe
-        states = safe_and_close(opened, context["cleanup"], log)
-        for role, state in states.items():
-            safe_error = state.pop("safe_state_error", None)
-            report.setdefault(role, {}).setdefault("state", state)
-            if safe_error:
-                report[role]["safe_state_error"] = safe_error
+                for role in order:
+                    config = profile.roles.get(role)
+                    if config is None:
+                        continue
+                    try:
+                        descriptor = registry.get("instrument", config.plugin)
+                        opened[role] = descriptor.open(config.address, dict(config.settings),
+                                                       context)
+                        report[role] = action(role, opened[role])
+                    except Exception as exc:  # noqa: BLE001 - reported per instrument
+                        report[role] = {"error": f"{type(exc).__name__}: {exc}"}
+            finally:
+                states = safe_and_close(opened, context["cleanup"], log)
+                for role, state in states.items():
+                    safe_error = state.pop("safe_state_error", None)
+                    report.setdefault(role, {}).setdefault("state", state)
+                    if safe_error:
+                        report[role]["safe_state_error"] = safe_error
+    finally:
+        signals.restore()
+    if signals.pending:
+        log("WARNING", "interrupted: every instrument was still made safe first")
+        raise BenchInterrupted(report)
     return report
+
+
+class BenchInterrupted(KeyboardInterrupt):
+    """Ctrl+C or SIGTERM arrived while :func:`each_instrument` worked; ``report`` is what it
+    found, every instrument having been made safe all the same."""
+
+    def __init__(self, report: dict[str, dict[str, Any]]) -> None:
+        super().__init__("interrupted")
+        self.report = report
 
 
 def problems(report: Mapping[str, Mapping[str, Any]]) -> dict[str, str]:

@@ -135,8 +135,11 @@ class InstrumentPlugin:
     ``settings`` has been validated against ``params``. ``bench`` is a dict shared by all
     instruments of one run: it holds the profile's ``specimen``, ``model``, ``shaker`` and
     ``bench`` sections (simulated instruments take their physics from them, and an embedded
-    simulated bench is started by the first driver that needs it), and a ``cleanup`` list of
-    callables the runner calls after every instrument is safe and closed.
+    simulated bench is started by the first driver that needs it), a ``cleanup`` list of
+    callables the runner calls after every instrument is safe and closed, and the ``purpose``:
+    ``"run"``, or ``"outside-run"`` when the instrument is opened only to be made safe or
+    identified (``fsi-lab safe``, ``fsi-lab identify``, the GUI's bench panel), when a driver
+    must change nothing it need not (it leaves latched interlocks latched).
     """
 
     name: str

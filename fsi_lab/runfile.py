@@ -175,6 +175,13 @@ class RunFileWriter:
             self._file.flush()
             self._file.close()
 
+    def abandon(self) -> None:
+        """Close the file without writing more (after a write failed, e.g. a full disk)."""
+        try:
+            self._file.close()
+        except Exception:  # noqa: BLE001 - the library's state is unknown; nothing to save
+            pass
+
 
 # --------------------------------------------------------------------------- reading
 @dataclass

@@ -11,8 +11,6 @@ analysed like any other (root attribute ``stopped_early``).
 
 from __future__ import annotations
 
-import contextlib
-import signal
 import threading
 import time
 import traceback
@@ -22,10 +20,12 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close
+from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close, unsafe_roles
 from fsi_lab.chain import analyse_and_store
 from fsi_lab.contract import ROLE_INTERFACES, Instrument
-from fsi_lab.errors import FsiLabError, InstrumentError, ProfileError, RunAborted
+from fsi_lab.errors import (
+    FsiLabError, InstrumentError, PluginError, ProfileError, RunAborted,
+)
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
@@ -33,6 +33,7 @@ from fsi_lab.runfile import (
     INTERRUPTED, RunFileWriter, new_run_path, read_run, software_version, utc_now,
 )
 from fsi_lab.safety import SafetyReport, assess, require_safe
+from fsi_lab.signals import RunSignals
 
 INTERLOCK_POLL_S = 0.2
 
@@ -66,7 +67,13 @@ def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray
     """Generate the profile's drive waveform (V) and its sample rate (Hz)."""
     descriptor = registry.get("excitation", profile.excitation_plugin)
     rate = float(profile.roles["source"].settings.get("sample_rate") or profile.run["sample_rate"])
-    waveform = np.asarray(descriptor.generate(dict(profile.excitation), rate), dtype=float)
+    try:
+        waveform = np.asarray(descriptor.generate(dict(profile.excitation), rate), dtype=float)
+    except Exception as exc:  # noqa: BLE001 - a plugin's failure, before anything is driven
+        raise PluginError(
+            f"{profile.path}: excitation plugin {profile.excitation_plugin!r} failed to generate "
+            f"its waveform with {profile.excitation} at {rate:g} Hz: {type(exc).__name__}: {exc}"
+        ) from None
     if waveform.ndim != 1 or waveform.size == 0:
         raise ProfileError(
             f"{profile.path}: excitation {profile.excitation_plugin!r} produced no samples "
@@ -86,45 +93,6 @@ def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, floa
         )
     report = assess(waveform, rate, float(gain), profile.safety, profile.shaker)
     return waveform, rate, report
-
-
-class RunSignals:
-    """Turns SIGTERM into RunAborted and can hold signals back while finalizing."""
-
-    def __init__(self) -> None:
-        self.active = threading.current_thread() is threading.main_thread()
-        self._saved: dict[int, Any] = {}
-        self.pending: list[int] = []
-
-    def install(self) -> None:
-        if not self.active:
-            return
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            self._saved[signum] = signal.getsignal(signum)
-        signal.signal(signal.SIGTERM, self._raise)
-
-    def _raise(self, signum, frame):
-        raise RunAborted(f"received {signal.Signals(signum).name}")
-
-    def _defer(self, signum, frame):
-        self.pending.append(signum)
-
-    @contextlib.contextmanager
-    def held(self):
-        """Within this block Ctrl+C and SIGTERM are noted, not raised (safe state, final write)."""
-        if self.active:
-            signal.signal(signal.SIGINT, self._defer)
-            signal.signal(signal.SIGTERM, self._defer)
-        try:
-            yield
-        finally:
-            if self.active:
-                signal.signal(signal.SIGTERM, self._raise)
-                signal.signal(signal.SIGINT, self._saved[signal.SIGINT])
-
-    def restore(self) -> None:
-        for signum, handler in self._saved.items():
-            signal.signal(signum, handler)
 
 
 class Runner:
@@ -188,8 +156,8 @@ class Runner:
         writer: RunFileWriter | None = None
         try:
             path, run_uuid, started = new_run_path(self.out_dir)
-            outcome.path = path
             writer = RunFileWriter(path, self._root_attrs(run_uuid, started))
+            outcome.path = path
             self.bus.log("INFO", f"writing {path}")
             writer.write_excitation(waveform, rate, {
                 "plugin": self.profile.excitation_plugin,
@@ -209,10 +177,13 @@ class Runner:
                 f"{type(exc).__name__}: {exc}")
             outcome.traceback = traceback.format_exc()
         finally:
-            with signals.held():
-                outcome.final_states = self._safe_state_all(writer)
-                self._finalize(writer, outcome)
-            signals.restore()
+            try:
+                with signals.held():
+                    outcome.final_states = self._safe_state_all()
+                    self._require_bench_safe(outcome)
+                    self._finalize(writer, outcome)
+            finally:
+                signals.restore()
         self.bus.emit(StateChanged(outcome.exit_status, outcome.error or ""))
         if signals.pending:
             self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
@@ -321,15 +292,14 @@ class Runner:
             block = acquisition.read_block(timeout)
             if block is None:
                 break
+            size = self._check_block(block, sensitivities)
             calibrated = {}
-            for name, volts in block.items():
-                if name not in sensitivities:
-                    continue
-                values = np.asarray(volts, dtype=float) / sensitivities[name]
+            for name, sensitivity in sensitivities.items():
+                values = np.asarray(block[name], dtype=float) / sensitivity
                 writer.append(name, values)
                 calibrated[name] = values
             t0 = samples / sample_rate
-            samples += len(next(iter(block.values()))) if block else 0
+            samples += size
             if writer.flush_if_due():
                 self.bus.log("DEBUG", f"flushed {samples} samples per channel")
             self.bus.emit(DataBlock(t0, sample_rate, calibrated))
@@ -349,6 +319,24 @@ class Runner:
         writer.flush()
         return stopped
 
+    def _check_block(self, block: dict[str, Any], channels: dict[str, Any]) -> int:
+        """Samples per channel of a block from the digitiser; it must hold every channel of the
+        profile, all of the same length (the channels stay aligned in time)."""
+        plugin = self.profile.roles["acquisition"].plugin
+        missing = sorted(set(channels) - set(block))
+        if missing:
+            raise InstrumentError(
+                f"acquisition ({plugin}): a block lacks channel(s) {', '.join(missing)}; "
+                f"expected {', '.join(sorted(channels))}"
+            )
+        sizes = {name: int(np.size(block[name])) for name in channels}
+        if len(set(sizes.values())) > 1:
+            raise InstrumentError(
+                f"acquisition ({plugin}): a block's channels differ in length "
+                f"({', '.join(f'{n} {k}' for n, k in sizes.items())}); expected equal lengths"
+            )
+        return next(iter(sizes.values()), 0)
+
     @staticmethod
     def _check_interlocks(amplifier) -> None:
         tripped = [name for name, on in amplifier.interlocks().items() if on]
@@ -362,26 +350,46 @@ class Runner:
         if self._abort.is_set():
             raise RunAborted("aborted by the operator")
 
-    def _safe_state_all(self, writer: RunFileWriter | None) -> dict[str, dict[str, Any]]:
+    def _safe_state_all(self) -> dict[str, dict[str, Any]]:
         """Safe state for every opened instrument, amplifier first; then read their state back."""
         self.bus.emit(StateChanged("finalizing"))
-        states = safe_and_close(self.instruments, self.bench_context["cleanup"], self.bus.log)
-        if writer is not None and not writer.closed:
-            for role, state in states.items():
-                writer.write_final_state(role, state)
-        return states
+        return safe_and_close(self.instruments, self.bench_context["cleanup"], self.bus.log)
+
+    def _require_bench_safe(self, outcome: RunOutcome) -> None:
+        """A run that leaves an instrument not confirmed safe has failed, however it ended."""
+        unsafe = unsafe_roles(outcome.final_states)
+        if not unsafe:
+            return
+        note = "NOT confirmed safe after the run: " + "; ".join(
+            f"{role}: {why}" for role, why in unsafe.items()) + "; check the bench by hand"
+        outcome.exit_status = "failed"
+        outcome.stopped_early = False
+        outcome.error = f"{outcome.error}; {note}" if outcome.error else note
 
     def _finalize(self, writer: RunFileWriter | None, outcome: RunOutcome) -> None:
+        """Final states and the ending into the file, then close it; a file that cannot be
+        written any more fails the run (what was flushed before stays)."""
         if writer is None or writer.closed:
             return
-        writer.set_attrs({
-            "stop_time": utc_now(),
-            "exit_status": outcome.exit_status,
-            "stopped_early": outcome.stopped_early,
-            "error": outcome.error or "",
-            "traceback": outcome.traceback,
-        })
-        writer.close()
+        try:
+            for role, state in outcome.final_states.items():
+                writer.write_final_state(role, state)
+            writer.set_attrs({
+                "stop_time": utc_now(),
+                "exit_status": outcome.exit_status,
+                "stopped_early": outcome.stopped_early,
+                "error": outcome.error or "",
+                "traceback": outcome.traceback,
+            })
+            writer.close()
+        except Exception as exc:  # noqa: BLE001 - e.g. a full disk: report, do not crash
+            writer.abandon()
+            note = (f"the run file {outcome.path} could not be finalised ({type(exc).__name__}: "
+                    f"{exc}); it holds at most what was flushed before")
+            outcome.exit_status = "failed"
+            outcome.error = f"{outcome.error}; {note}" if outcome.error else note
+            self.bus.log("ERROR", note)
+            return
         self.bus.log("INFO", f"run {outcome.exit_status}: {outcome.path}")
 
     def _analyse(self, path: Path) -> dict[str, Any]:

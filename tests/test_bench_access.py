@@ -1,5 +1,7 @@
 """`fsi-lab safe` and `fsi-lab identify`: the bench's instruments outside a run."""
 
+import time
+
 from support import cli, cli_json
 
 
@@ -61,3 +63,84 @@ def test_problems_include_a_state_that_could_not_be_read():
     assert problems(report) == {"source": "InstrumentError: no answer",
                                 "acquisition": "could not read state: no answer",
                                 "vibrometer": "safe state failed"}
+
+
+class _Amplifier:
+    """An amplifier whose first ``bad_attempts`` safe states fail (a link that hiccups) or, with
+    ``stuck``, whose output never goes off."""
+
+    def __init__(self, bad_attempts=0, stuck=False):
+        self.bad_attempts, self.stuck = bad_attempts, stuck
+        self.attempts, self.output, self.closed = 0, True, False
+
+    def safe_state(self):
+        self.attempts += 1
+        if self.attempts <= self.bad_attempts:
+            raise TimeoutError("no reply within 2 s")
+        self.output = self.stuck
+
+    def read_state(self):
+        return {"output_enabled": self.output}
+
+    def close(self):
+        self.closed = True
+
+
+def test_a_failed_safe_state_gets_a_second_attempt():
+    from fsi_lab.bench_access import safe_and_close, unsafe_roles
+
+    hiccup, logs = _Amplifier(bad_attempts=1), []
+    states = safe_and_close({"amplifier": hiccup}, [], lambda level, text: logs.append(text))
+    assert hiccup.attempts == 2 and hiccup.closed
+    assert states == {"amplifier": {"output_enabled": False}} and unsafe_roles(states) == {}
+    assert any("trying once more" in text for text in logs)
+
+
+def test_an_output_that_stays_on_is_not_confirmed_safe():
+    from fsi_lab.bench_access import safe_and_close, unsafe_roles
+
+    for amplifier, why in ((_Amplifier(stuck=True), "still on after two attempts"),
+                           (_Amplifier(bad_attempts=2), "TimeoutError: no reply")):
+        states = safe_and_close({"amplifier": amplifier}, [])
+        assert amplifier.attempts == 2 and amplifier.closed
+        assert why in unsafe_roles(states)["amplifier"]
+
+
+def test_ctrl_c_waits_until_every_instrument_is_safe(sim_profile):
+    import json
+    import signal
+    import socket
+    import threading
+
+    from support import LineReader, start_cli
+
+    # an amplifier that accepts the connection and never answers
+    mute = socket.socket()
+    mute.bind(("127.0.0.1", 0))
+    mute.listen()
+    connections = []
+    threading.Thread(target=lambda: connections.append(mute.accept()), daemon=True).start()
+    address = f"TCPIP0::127.0.0.1::{mute.getsockname()[1]}::SOCKET"
+    proc = start_cli("safe", str(sim_profile()), "--json",
+                     "--set", "bench.amplifier.plugin=shaker-amplifier",
+                     "--set", f"bench.amplifier.address={address}",
+                     "--set", "bench.amplifier.timeout_s=3")
+    try:
+        stderr = LineReader(proc.stderr)
+        deadline = time.monotonic() + 30
+        while not connections and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert connections, "the amplifier was never opened"
+        proc.send_signal(signal.SIGINT)  # while the amplifier keeps everything waiting
+        assert proc.wait(timeout=60) == 130
+        data = json.loads(proc.stdout.read())
+    finally:
+        proc.kill()
+        proc.wait(timeout=10)
+        mute.close()
+        for connection, _ in connections:
+            connection.close()
+    assert data["interrupted"] is True and "amplifier" in data["failed"]
+    # the instruments after the hung amplifier were still made safe
+    assert data["instruments"]["source"]["state"] == {"output_enabled": False, "level_v": 0.0}
+    stderr.wait_for(lambda line: "every instrument was still made safe" in line, timeout=10)

@@ -224,3 +224,119 @@ def test_stop_with_the_last_block_is_a_plain_completed_run(sim_profile, registry
     assert runner._stop.is_set()  # the stop did arrive, with the record already complete
     assert outcome.exit_status == "completed" and not outcome.stopped_early
     assert read_run(outcome.path).channels["tip_velocity"].data.size == 1000
+
+
+def test_an_excitation_plugin_that_fails_is_named_before_anything_starts(sim_profile, registry,
+                                                                         tmp_path):
+    import dataclasses
+
+    from fsi_lab.errors import PluginError
+
+    def broken(params, rate):
+        raise ValueError("math domain error")
+
+    step = registry.descriptors["excitation"]["step"]
+    registry.descriptors["excitation"]["step"] = dataclasses.replace(step, generate=broken)
+    runner, run, events = _run(sim_profile(), registry, tmp_path / "runs")
+    with pytest.raises(PluginError, match=r"sim\.toml: excitation plugin 'step' failed to "
+                                          r"generate its waveform .* ValueError: math domain"):
+        run()
+    assert not (tmp_path / "runs").exists() and not events  # nothing written, nothing driven
+
+
+def _with_instrument(registry, plugin, change):
+    """The registry with ``change(instrument)`` applied to each instrument ``plugin`` opens
+    (a fault of our own in-process instruments)."""
+    import dataclasses
+
+    descriptor = registry.descriptors["instrument"][plugin]
+
+    def open_changed(address, settings, context):
+        instrument = descriptor.open(address, settings, context)
+        change(instrument)
+        return instrument
+
+    registry.descriptors["instrument"][plugin] = dataclasses.replace(descriptor,
+                                                                     open=open_changed)
+    return registry
+
+
+def _with_acquisition(registry, mangle):
+    """The registry with its in-process digitiser's blocks passed through ``mangle(n, block)``."""
+
+    def change(instrument):
+        read_block, count = instrument.read_block, [0]
+
+        def mangled(timeout):
+            block = read_block(timeout)
+            count[0] += 1
+            return block if block is None else mangle(count[0], dict(block))
+
+        instrument.read_block = mangled
+
+    return _with_instrument(registry, "inprocess-acquisition", change)
+
+
+def test_an_amplifier_left_on_fails_the_run_however_it_ended(sim_profile, registry, tmp_path):
+    attempts = []
+
+    def stuck(instrument):  # an amplifier whose output stage no longer obeys OUTP 0
+        safe_state = instrument.safe_state
+
+        def stuck_on():
+            attempts.append(len(attempts))
+            if len(attempts) > 1:  # the first comes as the runner opens it
+                raise RuntimeError("relay welded: output stays on")
+            safe_state()
+
+        instrument.safe_state = stuck_on
+
+    registry = _with_instrument(registry, "inprocess-amplifier", stuck)
+    _, run, _ = _run(sim_profile(duration=0.5), registry, tmp_path)
+    outcome = run()
+    assert len(attempts) == 3  # on opening, then the safe state and its second attempt
+    assert outcome.exit_status == "failed"
+    assert outcome.error.startswith("NOT confirmed safe after the run: amplifier: safe state "
+                                    "failed: RuntimeError: relay welded"), outcome.error
+    record = read_run(outcome.path, load_data=False)
+    assert record.attrs["exit_status"] == "failed" and record.attrs["error"] == outcome.error
+    assert "relay welded" in record.instruments["amplifier"]["final_state"]["safe_state_error"]
+    assert record.instruments["source"]["final_state"]["output_enabled"] is False
+
+
+@pytest.mark.parametrize("mangle, message", [
+    (lambda n, b: {k: v for k, v in b.items() if not (n == 2 and k == "base_acceleration")},
+     r"a block lacks channel\(s\) base_acceleration; expected base_acceleration, tip_velocity"),
+    (lambda n, b: {k: (v[:-10] if n == 3 and k == "tip_velocity" else v) for k, v in b.items()},
+     r"a block's channels differ in length \(.*tip_velocity \d+.*\); expected equal lengths"),
+])
+def test_a_malformed_block_fails_the_run_with_the_channels_kept_aligned(
+        sim_profile, registry, tmp_path, mangle, message):
+    _, run, _ = _run(sim_profile(duration=1.0), _with_acquisition(registry, mangle), tmp_path)
+    outcome = run()
+    assert outcome.exit_status == "failed" and re.search(message, outcome.error), outcome.error
+    _assert_safe(outcome.path)
+    lengths = {name: c.data.size for name, c in read_run(outcome.path).channels.items()}
+    assert len(set(lengths.values())) == 1 and 0 < lengths["tip_velocity"] < 2000, lengths
+
+
+def test_a_full_disk_fails_the_run_with_a_message(sim_profile, tmp_path):
+    import json
+    import resource
+    import sys
+
+    def small_files():  # a disk that fills after 100 kB
+        resource.setrlimit(resource.RLIMIT_FSIZE, (100_000, 100_000))
+
+    out = tmp_path / "runs"
+    proc = subprocess.run([sys.executable, "-m", "fsi_lab.cli", "run",
+                           str(sim_profile(duration=5.0)), "--out", str(out), "--json",
+                           "--no-analysis"], capture_output=True, text=True, timeout=120,
+                          preexec_fn=small_files)
+    assert proc.returncode != 0
+    data = json.loads(proc.stdout)
+    assert data["exit_status"] == "failed", data
+    assert "could not be finalised" in data["error"] and data["run"] in data["error"]
+    # the bench was made safe before the file was given up
+    assert data["final_state"]["amplifier"]["output_enabled"] is False
+    assert data["final_state"]["source"]["output_enabled"] is False

@@ -1,0 +1,57 @@
+"""Ctrl+C and SIGTERM while the bench is driven: turned into an abort, or held back while the
+bench is being made safe and the run file finalised."""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from typing import Any
+
+from fsi_lab.errors import RunAborted
+
+
+class RunSignals:
+    """Turns SIGTERM into RunAborted and can hold signals back while finalizing.
+
+    Use: :meth:`install`, then :meth:`held` around what must not be cut short, then
+    :meth:`restore`. Outside the main thread (the GUI's workers) it does nothing: signals are
+    the main thread's.
+    """
+
+    def __init__(self) -> None:
+        self.active = threading.current_thread() is threading.main_thread()
+        self._saved: dict[int, Any] = {}
+        self.pending: list[int] = []
+
+    def install(self) -> None:
+        """Keep the present handlers and turn SIGTERM into :class:`RunAborted`."""
+        if not self.active:
+            return
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            self._saved[signum] = signal.getsignal(signum)
+        signal.signal(signal.SIGTERM, self._raise)
+
+    def _raise(self, signum, frame):
+        raise RunAborted(f"received {signal.Signals(signum).name}")
+
+    def _defer(self, signum, frame):
+        self.pending.append(signum)
+
+    @contextlib.contextmanager
+    def held(self):
+        """Within this block Ctrl+C and SIGTERM are noted, not raised (safe state, final write)."""
+        if self.active:
+            signal.signal(signal.SIGINT, self._defer)
+            signal.signal(signal.SIGTERM, self._defer)
+        try:
+            yield
+        finally:
+            if self.active:
+                signal.signal(signal.SIGTERM, self._raise)
+                signal.signal(signal.SIGINT, self._saved[signal.SIGINT])
+
+    def restore(self) -> None:
+        """Put back the handlers :meth:`install` found; ``pending`` keeps what was held."""
+        for signum, handler in self._saved.items():
+            signal.signal(signum, handler)
