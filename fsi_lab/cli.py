@@ -243,7 +243,7 @@ def cmd_plugins(args) -> int:
 
 def cmd_bench_access(args) -> int:
     """``fsi-lab safe`` and ``fsi-lab identify``: every instrument of the profile, outside a run."""
-    from fsi_lab.bench_access import probe_bench, problems, safe_bench
+    from fsi_lab.bench_access import BenchInterrupted, probe_bench, problems, safe_bench
     from fsi_lab.errors import ProfileError
     from fsi_lab.profile import parse_profile
 
@@ -257,13 +257,19 @@ def cmd_bench_access(args) -> int:
                             sections=("bench", "specimen", "model", "shaker"))
     if not profile.roles:
         raise ProfileError(f"{args.profile}: bench: no instruments; expected [bench.<role>] tables")
+
     def log(level: str, text: str) -> None:
         print(f"[{level.lower()}] {text}", file=sys.stderr)
 
-    report = (safe_bench if args.command == "safe" else probe_bench)(profile, registry, log)
+    interrupted = False
+    try:
+        report = (safe_bench if args.command == "safe" else probe_bench)(profile, registry, log)
+    except BenchInterrupted as exc:  # every instrument was made safe first: show what was found
+        report, interrupted = exc.report, True
     failed = sorted(problems(report))
     if args.json:
-        _emit_json({"profile": str(args.profile), "instruments": report, "failed": failed})
+        _emit_json({"profile": str(args.profile), "instruments": report, "failed": failed,
+                    "interrupted": interrupted})
     else:
         for role, info in report.items():
             verdict = "NOT confirmed safe" if role in failed else "safe"
@@ -276,6 +282,8 @@ def cmd_bench_access(args) -> int:
                     print(f"  {key}: {info[key]}")
         if failed:
             print(f"not confirmed safe: {', '.join(failed)}", file=sys.stderr)
+    if interrupted:
+        return EXIT_FOR_STATUS["aborted"]
     return 1 if failed else 0
 
 
@@ -332,7 +340,8 @@ def cmd_simulate(args) -> int:
     from fsi_lab.errors import ProfileError, RunAborted
     from fsi_lab.modelling import simulate_run
     from fsi_lab.runfile import INTERRUPTED, new_run_path, software_version
-    from fsi_lab.runner import RunSignals, prepare_excitation
+    from fsi_lab.runner import prepare_excitation
+    from fsi_lab.signals import RunSignals
 
     registry, profile = _model_profile(args)
     if profile.excitation_plugin is None:
@@ -412,6 +421,13 @@ def format_summary(summary: dict[str, Any]) -> str:
                     if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
                         text += f"; {name[0].upper()}{name[1:]} is not resolved (its interval contains 0)"
             lines.append(text)
+            # Per-component errors (hvd's on a component that switches modes is carried by
+            # every later analysis): each distinct message once.
+            seen: list[str] = []
+            for value in component.values():
+                if isinstance(value, dict) and value.get("error") and value["error"] not in seen:
+                    seen.append(value["error"])
+            lines.extend(f"    not analysed: {message}" for message in seen)
             model = component.get("modal_model")
             if model and model.get("envelope_rms_error") is not None:
                 lines.append(

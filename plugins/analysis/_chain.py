@@ -9,6 +9,8 @@ Conventions of the chain (documented for plugin users in each plugin's help):
   else the channel integrated on the fly, or the channel itself if it is a displacement).
 - A failure on one component is recorded (``summary`` entry ``"error"`` and attribute
   ``component_<k>_error``) and the others go on; the plugin fails only if every component does.
+  A component ``hvd`` marks as not analysable (one that switches between two modes whose
+  envelopes cross) carries ``hvd``'s message through every later plugin instead of results.
 - Cycles whose amplitude is below 10 x the noise left in a component are not measured (unless
   the plugin's ``min_amplitude`` is set): the white-noise RMS of the raw channel (from its
   spectrum above 3 x the dominant frequency), scaled to the component's band (an HVD component
@@ -68,8 +70,9 @@ class Component:
         Smallest cycle amplitude worth measuring (10 x the noise RMS in the component), in
         ``unit``, or None to let the analysis estimate it.
     settle
-        Time (s) over which the component's filters smear a sudden change (HVD: 2 / cutoff):
-        a free decay is taken to start that long after the largest amplitude.
+        Time (s) over which the component's filters smear a sudden change (HVD: 2 / cutoff,
+        plus the band-pass's smear with ``band_hz``): a free decay is taken to start that long
+        after the largest amplitude.
     t0
         Time of the first sample relative to the channel's first sample, s (HVD ``start_s``).
     frequency
@@ -174,6 +177,13 @@ def _floor(sigma: float, fs: float, f_k: float, band: float, order: int) -> floa
     return 10.0 * sigma * math.sqrt(min(1.0, band / (0.5 * fs))) / (2 * math.pi * f_k) ** order
 
 
+def hvd_settle(res: Any, k: int) -> float:
+    """Settling time (s) of HVD component ``k`` of ``res`` (:meth:`.hvd.HVDResult.settle`:
+    2 / cutoff, plus the band-pass's smear when ``band_hz`` was given)."""
+    settle = getattr(res, "settle", None)
+    return float(settle(k)) if callable(settle) else 2.0 / float(res.cutoffs[k])
+
+
 def components(context: AnalysisContext, order: int = 0) -> list[Component]:
     """The channel's components: HVD's if it ran earlier in the chain, else the channel.
 
@@ -197,7 +207,7 @@ def components(context: AnalysisContext, order: int = 0) -> list[Component]:
             floor = max(floor, HVD_RANGE * largest / (2 * math.pi * f_k) ** order) \
                 if f_k > 0 else floor
             out.append(Component(k, res.components[k], ch.quantity, ch.unit, res.sample_rate,
-                                 res.edge_mask[k], floor, 2.0 / float(res.cutoffs[k]),
+                                 res.edge_mask[k], floor, hvd_settle(res, k),
                                  float(getattr(res, "t0", 0.0)), f_k if f_k > 0 else None))
         return out
     # A cycle-by-cycle measurement feels the noise near the oscillation: about 3 f wide.
@@ -257,21 +267,44 @@ def velocity_components(context: AnalysisContext) -> list[Component] | None:
     return None
 
 
+def hvd_errors(context: AnalysisContext) -> dict[int, str]:
+    """The components that ``hvd`` (earlier in the chain) marked as not analysable, with its
+    message: its attributes ``component_<k>_error`` (a component that switches between two
+    modes, :func:`.hvd.mode_switches`)."""
+    res = context.results.get("hvd")
+    attrs = getattr(res, "attrs", None) or {}
+    out = {}
+    for key, message in attrs.items():
+        head, _, tail = key.partition("_")
+        index = tail[:-len("_error")] if tail.endswith("_error") else ""
+        if head == "component" and index.isdigit():
+            out[int(index)] = str(message)
+    return out
+
+
 def per_component(plugin: str, context: AnalysisContext, comps: list[Component],
                   work: Callable[[Component], Any]) -> tuple[dict[int, Any], dict[int, str]]:
     """Run ``work`` on each component; collect results and per-component error messages.
 
+    A component that ``hvd`` marked as not analysable (:func:`hvd_errors`) is not worked on:
+    its error is ``hvd``'s message, so every later plugin reports it rather than numbers.
     Raises AnalysisError (naming plugin, channel and every component's reason) when all fail.
     """
     done: dict[int, Any] = {}
-    errors: dict[int, str] = {}
+    marked = hvd_errors(context)
+    errors: dict[int, str] = dict(marked)
     for c in comps:
+        if c.index in errors:
+            continue
         try:
             done[c.index] = work(c)
         except AnalysisError as exc:
             errors[c.index] = str(exc)
     if not done:
-        reasons = "; ".join(f"component {k}: {m}" for k, m in errors.items())
+        reasons = "; ".join(
+            f"component {k}: " + ("refused by hvd (see its error for this component)"
+                                  if k in marked else m)
+            for k, m in sorted(errors.items()))
         raise AnalysisError(f"{where(plugin, context)}: {reasons}")
     return done, errors
 

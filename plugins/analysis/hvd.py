@@ -34,6 +34,12 @@ Numerical choices (see the module constants):
   free decays (an impulse train) are those of its decays' averaged spectrum
   (:func:`.spectrum.free_decay_peaks`): the whole record's spectrum is a comb of lines
   1 / spacing apart around each mode, which would pass for close peaks and give tiny cut-offs.
+- Crossing envelopes: HVD follows the largest component at each instant, so when two modes'
+  envelopes cross (a short impulse makes a higher mode the larger at first, and it decays
+  faster) a component switches from one mode to the other. :func:`mode_switches` finds such
+  components (:attr:`HVDResult.switches`); the plugin marks them with an error, which every
+  later analysis of the chain reports instead of results. ``band`` (``band_hz``) decomposes a
+  band-passed record (:func:`._signal.bandpass`), one mode at a time.
 """
 
 from __future__ import annotations
@@ -47,9 +53,11 @@ import numba
 import numpy as np
 import scipy.fft as sfft
 
+from fsi_lab.plugins.analysis._decays import decay_segments
 from fsi_lab.plugins.analysis._signal import (
-    FFT_WORKERS, as_record, check_rate, check_samples_per_cycle, fail, lowpass_gain, mirror_pad,
-    predict_pad, smooth_step,
+    BAND_HIGH_STOP, BAND_LOW_STOP, FFT_WORKERS, as_record, bandpass, bandpass_smear, check_rate,
+    check_samples_per_cycle, fail, lowpass_gain, mirror_pad, moving_average, predict_pad,
+    smooth_step,
 )
 from fsi_lab.plugins.analysis.spectrum import free_decay_peaks
 
@@ -71,6 +79,21 @@ PEAK_SMOOTHING = 0.05
 #: The decomposition band is flat up to BAND_FACTOR x the highest significant peak.
 BAND_FACTOR = 3.0
 PADDINGS = ("predict", "mirror")
+#: A band (``band_hz``) must hold a spectral peak of the record at least this fraction of its
+#: largest.
+BAND_PEAK_THRESHOLD = 1e-3
+#: Mode switches (:func:`mode_switches`): samples whose envelope is below SWITCH_LEVEL x the
+#: record's largest (trusted) envelope are not looked at (their frequency is noise-prone) ...
+SWITCH_LEVEL = 1e-2
+#: ... an instantaneous frequency within SWITCH_TOLERANCE (relative) of a spectral peak sits
+#: near that peak (a Duffing decay's drift beyond it is near no peak: never a switch) ...
+SWITCH_TOLERANCE = 0.1
+#: ... only stays near one peak of at least SWITCH_CYCLES of its periods count (a component
+#: passing a peak while its filters settle after an impulse is no switch) ...
+SWITCH_CYCLES = 5.0
+#: ... and a component switches when a second peak holds at least SWITCH_SHARE of the time
+#: it spends near peaks.
+SWITCH_SHARE = 0.1
 #: Largest growth allowed to the predicted extension (a decay read backwards grows; letting a
 #: fast-decaying small component grow past the dominant one would switch the tracked component).
 PAD_GROWTH = 1.0
@@ -99,6 +122,16 @@ class HVDResult:
     t0
         Time of the first sample relative to the channel's first sample, s (the ``hvd``
         plugin's ``start_s``; 0 for :func:`hvd`).
+    switches
+        Per component, None, or the two spectral peaks (Hz, the one it stays near longer
+        first) it switches between (:func:`mode_switches`: two modes' envelopes cross); empty
+        when not checked.
+    band
+        The pass band ``(low, high)`` (Hz) the record was filtered to before the
+        decomposition, or None.
+    peaks
+        The significant spectral peaks of the record decomposed, Hz, largest first (those of
+        its decays' averaged spectrum for several decays), which set the automatic cut-offs.
     """
 
     components: np.ndarray
@@ -109,10 +142,19 @@ class HVDResult:
     cutoffs: np.ndarray
     sample_rate: float
     t0: float = 0.0
+    switches: tuple[tuple[float, float] | None, ...] = ()
+    band: tuple[float, float] | None = None
+    peaks: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
 
     @property
     def n_components(self) -> int:
         return self.components.shape[0]
+
+    def settle(self, k: int) -> float:
+        """Time (s) over which component ``k``'s filters smear a sudden change (an impulse):
+        2 / cutoff, plus the band-pass's smear (:func:`._signal.bandpass_smear`) with a band.
+        """
+        return settle_time(float(self.cutoffs[k]), self.band)
 
     def mean_frequency(self, k: int) -> float:
         """Envelope-weighted mean instantaneous frequency of component ``k`` (trusted part), Hz."""
@@ -121,6 +163,12 @@ class HVDResult:
             good = np.ones_like(good)
         w = self.envelopes[k, good]
         return float(np.sum(w * self.frequencies[k, good]) / max(np.sum(w), 1e-300))
+
+
+def settle_time(cutoff: float, band: tuple[float, float] | None) -> float:
+    """2 / ``cutoff`` (Hz), plus :func:`._signal.bandpass_smear` of ``band``'s low edge (Hz)
+    when given: s."""
+    return 2.0 / cutoff + (bandpass_smear(band[0]) if band is not None else 0.0)
 
 
 # ----------------------------------------------------------------------------- kernels
@@ -222,6 +270,180 @@ def _significant_peaks(x: np.ndarray, fs: float, func: str) -> np.ndarray:
     return peaks.frequencies
 
 
+def _check_band_peaks(x: np.ndarray, fs: float, band: tuple[float, float], func: str) -> None:
+    """Raise unless ``band`` (Hz) suits the spectral peaks of ``x`` (the record before the
+    band-pass): one of them (at least BAND_PEAK_THRESHOLD of the largest) must lie in it - a
+    band around no mode would decompose the filter's transients - and none of the significant
+    ones (PEAK_THRESHOLD) in its transitions (:func:`._signal.bandpass`), where a mode would
+    pass attenuated by a factor that varies with frequency."""
+    found = free_decay_peaks(x, fs, min_relative=BAND_PEAK_THRESHOLD, smoothing=PEAK_SMOOTHING)
+    f = found.frequencies
+    low, high = band
+    where = f"band_hz [{low:g}, {high:g}] Hz"
+    if not np.any((f >= low) & (f <= high)):
+        listed = ", ".join(f"{v:.4g}" for v in np.sort(f)) or "none"
+        raise fail(func, f"{where} holds no spectral peak of the record (its peaks are at "
+                         f"{listed} Hz); expected a band around one of them")
+    big = f[found.amplitudes >= PEAK_THRESHOLD * float(np.max(found.amplitudes))]
+    edges = ((BAND_LOW_STOP * low, low), (high, BAND_HIGH_STOP * high))
+    for lo, hi in edges:
+        inside = big[(big > lo) & (big < hi)]
+        if inside.size:
+            raise fail(func, f"{where}: the record's spectral peak at {inside[0]:.4g} Hz lies in "
+                             f"the band's transition ({lo:.4g} to {hi:.4g} Hz), where it would "
+                             "pass partly attenuated; expected every mode inside the band or "
+                             f"outside {BAND_LOW_STOP:g} x low to {BAND_HIGH_STOP:g} x high")
+
+
+def _check_band(band: Any, fs: float, func: str) -> tuple[float, float] | None:
+    """``band`` as ``(low, high)`` Hz with ``0 < low < high < fs / 2``, or None; raises an
+    AnalysisError naming ``func`` otherwise."""
+    if band is None:
+        return None
+    try:
+        values = [float(v) for v in band]
+    except (TypeError, ValueError):
+        values = []
+    if len(values) != 2 or not all(math.isfinite(v) for v in values) \
+            or not 0.0 < values[0] < values[1] < 0.5 * fs:
+        raise fail(func, f"band_hz = {band!r} is not usable; expected [low, high] in Hz with "
+                         f"0 < low < high < {0.5 * fs:g} Hz (the Nyquist frequency)")
+    return values[0], values[1]
+
+
+def _free_samples(x: np.ndarray, fs: float, settle: float, period: float) -> np.ndarray:
+    """Boolean mask of the samples of ``x`` inside a free decay: from each decay's largest
+    sample plus ``settle`` s to its end minus twice that (the last decay: to the record's end);
+    the decays are those of :func:`._decays.decay_segments` (blocks of ``period`` s)."""
+    segments = decay_segments(x, fs, period)
+    free = np.zeros(x.size, dtype=bool)
+    lag = int(round(settle * fs))
+    for j, (lo, hi) in enumerate(segments):
+        if len(segments) == 1:
+            lo = int(np.argmax(np.abs(x)))
+        if j < len(segments) - 1:
+            hi -= 2 * lag
+        if hi > lo + lag:
+            free[lo + lag:hi] = True
+    return free
+
+
+def _stays(labels: np.ndarray, rate: float, peaks: np.ndarray) -> np.ndarray:
+    """Time (s) spent near each of ``peaks`` (Hz) in stays of at least SWITCH_CYCLES of its
+    periods; ``labels`` holds the peak index of consecutive samples at ``rate`` Hz, -1 where
+    near none or not looked at."""
+    cuts = np.flatnonzero(labels[1:] != labels[:-1]) + 1
+    starts = np.concatenate(([0], cuts))
+    length = np.diff(np.concatenate((starts, [labels.size])))
+    lab = labels[starts]
+    keep = (lab >= 0) & (length >= SWITCH_CYCLES * rate / peaks[np.maximum(lab, 0)])
+    return np.bincount(lab[keep], weights=length[keep], minlength=peaks.size) / rate
+
+
+def _distinct(peaks: np.ndarray, apart: float) -> np.ndarray:
+    """``peaks`` (Hz, largest first) without those within ``apart`` (relative) of a larger
+    one: a noise ripple next to a mode is no second mode."""
+    kept: list[float] = []
+    for f in peaks:
+        if all(abs(f - g) > apart * g for g in kept):
+            kept.append(float(f))
+    return np.asarray(kept)
+
+
+def mode_switches(x: np.ndarray, fs: float, envelopes: np.ndarray, frequencies: np.ndarray,
+                  edge_mask: np.ndarray, cutoffs: np.ndarray, peaks: np.ndarray,
+                  band: tuple[float, float] | None = None
+                  ) -> tuple[tuple[float, float] | None, ...]:
+    """Which HVD components switch from one mode to another (two envelopes cross).
+
+    HVD extracts the largest component at each instant: when two modes' envelopes cross (a
+    short impulse makes a higher mode the larger at first, and it decays faster), a component
+    follows one mode, then the other. Looked at: the free parts of the record's decays
+    (:func:`._decays.decay_segments`, from each decay's largest sample plus the component's
+    :func:`settle_time`, to its end less twice that), where the component's envelope is at
+    least SWITCH_LEVEL of the largest and its edge mask trusts it. There its instantaneous
+    frequency, averaged over 2 / cutoff (the beat of two modes of similar size makes it
+    ripple), is near a spectral peak when within SWITCH_TOLERANCE of it (of peaks closer than
+    twice that, only the largest counts); stays near a peak shorter than SWITCH_CYCLES of its
+    periods do not count. A component switches when a second peak holds at least
+    SWITCH_SHARE of the time spent near peaks. A frequency drifting with the amplitude (a
+    Duffing decay) stays near one peak, or near none: no switch.
+
+    Parameters
+    ----------
+    x
+        The record decomposed, any unit U.
+    fs
+        Sample rate, Hz.
+    envelopes, frequencies, edge_mask
+        The components' envelopes (U), instantaneous frequencies (Hz) and untrusted samples,
+        shape ``(K, len(x))`` (:class:`HVDResult`).
+    cutoffs
+        The components' cut-offs, Hz, shape ``(K,)``.
+    peaks
+        The record's significant spectral peaks, Hz, largest first
+        (:func:`.spectrum.free_decay_peaks`).
+    band
+        The band the record was filtered to (Hz), or None: its smear adds to the settling.
+
+    Returns
+    -------
+    tuple
+        Per component, None or the two peaks (Hz) it switches between, the one it stays
+        near longer first.
+    """
+    peaks = _distinct(np.asarray(peaks, dtype=np.float64), 2.0 * SWITCH_TOLERANCE)
+    k_total = envelopes.shape[0]
+    trusted = ~edge_mask
+    if peaks.size < 2 or not trusted.any():
+        return (None,) * k_total
+    floor = SWITCH_LEVEL * float(np.max(envelopes[trusted]))
+    stride = max(1, int(fs / (20.0 * float(peaks.max()))))     # 20 samples per shortest period
+    out: list[tuple[float, float] | None] = []
+    for k in range(k_total):
+        use = _free_samples(x, fs, settle_time(float(cutoffs[k]), band), 1.0 / float(peaks[0]))
+        use &= trusted[k] & (envelopes[k] >= floor)
+        # Averaged over 2 / cutoff (at least 4 periods of the beat between this component and
+        # the nearest other peak): two modes of similar size make the frequency ripple.
+        f = moving_average(frequencies[k, ::stride],
+                           int(round(fs / stride / float(cutoffs[k]))))
+        near = np.argmin(np.abs(f[:, None] - peaks[None, :]), axis=1)
+        close = np.abs(f - peaks[near]) <= SWITCH_TOLERANCE * peaks[near]
+        labels = np.where(use[::stride] & close, near, -1)
+        time = _stays(labels, fs / stride, peaks)
+        order = np.argsort(-time, kind="stable")
+        total = float(time.sum())
+        if total > 0 and time[order[1]] >= SWITCH_SHARE * total:
+            out.append((float(peaks[order[0]]), float(peaks[order[1]])))
+        else:
+            out.append(None)
+    return tuple(out)
+
+
+def band_around(f: float, peaks: np.ndarray) -> tuple[float, float] | None:
+    """A ``band_hz`` (Hz, two significant digits) that keeps the spectral peak ``f`` (Hz) and
+    stops every other of ``peaks`` (:func:`._signal.bandpass`: nothing below BAND_LOW_STOP x
+    low or above BAND_HIGH_STOP x high), with ``f`` at least 20 % inside each edge; None when
+    the other peaks are too close for one."""
+    others = peaks[np.abs(peaks - f) > PEAK_SMOOTHING * f]
+    below, above = others[others < f], others[others > f]
+    low = f / 1.5
+    high = 1.5 * f
+    if below.size:
+        low = max(low, 1.05 * float(below.max()) / BAND_LOW_STOP)
+    if above.size:
+        high = min(high, float(above.min()) / BAND_HIGH_STOP / 1.05)
+
+    def digits(v: float) -> float:
+        return 10.0 ** (math.floor(math.log10(v)) - 1)
+
+    low = math.ceil(low / digits(low)) * digits(low)
+    high = math.floor(high / digits(high)) * digits(high)
+    if not (1.2 * low <= f <= high / 1.2):
+        return None
+    return float(f"{low:.2g}"), float(f"{high:.2g}")
+
+
 def _cutoff_for(f_k: float, peaks: np.ndarray) -> float:
     """Automatic cut-off for a component at ``f_k`` Hz among the record's ``peaks``."""
     others = peaks[np.abs(peaks - f_k) > PEAK_SMOOTHING * f_k]
@@ -254,7 +476,7 @@ def _analytic(spec: np.ndarray, m: int, out_len: int, band_gain: np.ndarray | No
 
 # ----------------------------------------------------------------------------- main
 def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float] | None = None,
-        *, padding: str = "predict") -> HVDResult:
+        *, padding: str = "predict", band: Sequence[float] | None = None) -> HVDResult:
     """Hilbert Vibration Decomposition of a real record.
 
     Parameters
@@ -272,25 +494,33 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
         stay below the difference between the component frequencies.
     padding
         ``"predict"`` (default: linear-prediction extension of both ends) or ``"mirror"``.
+    band
+        ``[low, high]``, Hz, ``0 < low < high < fs / 2``: decompose the record band-passed to
+        it (:func:`._signal.bandpass`: gain exactly 1 from low to high, 0 below low / 2 and
+        above 1.5 high, zero phase), so one mode can be analysed on its own; None (default):
+        the whole record. The content outside the band stays in the residual.
 
     Returns
     -------
     HVDResult
-        Components, envelopes (U), instantaneous frequencies (Hz), residual, edge mask and
-        cut-offs; components sorted by decreasing RMS envelope over their trusted samples.
+        Components, envelopes (U), instantaneous frequencies (Hz), residual, edge mask,
+        cut-offs and mode switches (:func:`mode_switches`); components sorted by decreasing
+        RMS envelope over their trusted samples.
 
     Raises
     ------
     AnalysisError
         NaN/inf, constant or clipped record, bad sample rate, ``n_components`` < 1, a cut-off
-        that is not positive or not below the Nyquist frequency, one of the ``n_components``
+        that is not positive or not below the Nyquist frequency, a band that is not
+        ``0 < low < high < fs / 2`` or holds no spectral peak, one of the ``n_components``
         largest spectral peaks with fewer than 4 samples per cycle, or a record too short for
         the cut-off (no trusted sample left).
 
     Notes
     -----
     Components are extracted in order of decreasing instantaneous amplitude; when two
-    envelopes cross, a component can switch from one mode to the other mid-record.
+    envelopes cross, a component can switch from one mode to the other mid-record
+    (:attr:`HVDResult.switches` tells; ``band`` around one mode avoids it).
     """
     func = "hvd"
     fs = check_rate(fs, func)
@@ -300,6 +530,11 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
         raise fail(func, f"n_components = {n_components!r}; expected an integer >= 1")
     if padding not in PADDINGS:
         raise fail(func, f"padding = {padding!r}; expected one of {', '.join(PADDINGS)}")
+    band_t = _check_band(band, fs, func)
+    raw = x
+    if band_t is not None:
+        _check_band_peaks(raw, fs, band_t, func)
+        x = bandpass(raw, fs, *band_t)
     n = x.size
     k_total = int(n_components)
 
@@ -365,7 +600,7 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
     inst = np.empty((k_total, n))
     cutoffs = np.empty(k_total)
     mask = np.zeros((k_total, n), dtype=bool)
-    residual = x.copy()
+    residual = raw.copy()
     omega = np.empty(m_b)
     b = np.empty(m_b, dtype=np.complex128)
     fband = np.empty(m_b)
@@ -427,8 +662,10 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
     order = np.argsort(-rms, kind="stable")
     if np.any(order != np.arange(k_total)):          # (a copy only when needed)
         comps, envs, inst, mask, cutoffs = (a[order] for a in (comps, envs, inst, mask, cutoffs))
+    switches = mode_switches(x, fs, envs, inst, mask, cutoffs, peaks, band_t)
     return HVDResult(components=comps, envelopes=envs, frequencies=inst, residual=residual,
-                     edge_mask=mask, cutoffs=cutoffs, sample_rate=fs)
+                     edge_mask=mask, cutoffs=cutoffs, sample_rate=fs, switches=switches,
+                     band=band_t, peaks=peaks)
 
 
 # ----------------------------------------------------------------------------- plugin
@@ -487,6 +724,25 @@ def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
     return data - base, ref_name
 
 
+def switch_message(context: AnalysisContext, k: int, pair: tuple[float, float],
+                   peaks: np.ndarray) -> str:
+    """The error recorded for component ``k`` that switches between the modes ``pair`` (Hz,
+    :attr:`HVDResult.switches`): what happened, and the two ways out (an impulse width whose
+    half-sine spectrum is zero on the higher mode; a ``band_hz`` around each mode, from the
+    record's spectral ``peaks``, Hz)."""
+    from fsi_lab.plugins.analysis._chain import where
+    high = max(pair)
+    bands = [(f, band_around(f, peaks)) for f in sorted(pair)] if peaks.size else []
+    hint = "; ".join(f"[{b[0]:g}, {b[1]:g}] for the {f:.1f} Hz mode" for f, b in bands if b)
+    return (f"{where('hvd', context)}: component {k} switches between the modes near "
+            f"{pair[0]:.1f} Hz and {pair[1]:.1f} Hz (their envelopes cross, which HVD cannot "
+            "separate: it follows the larger); its frequencies, damping and C_i / C_f would mix "
+            "the two modes. Excite the higher mode less (e.g. impulse-train width "
+            f"{1.5 / high:.2g} s puts a half-sine's first spectral zero on {high:.1f} Hz) or "
+            "decompose one mode at a time with analysis.hvd.band_hz"
+            + (f" (e.g. {hint})" if hint else ""))
+
+
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     ch = context.channel
     data, relative_to = relative_signal(context, params["relative"])
@@ -512,15 +768,19 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                             " s record; expected a start inside the record")
     with guarded("hvd", context):
         res = hvd(data[i0:], ch.sample_rate, params["components"], params["cutoff_hz"],
-                  padding=params["padding"])
+                  padding=params["padding"], band=params["band_hz"])
     res = dataclasses.replace(res, t0=i0 / float(ch.sample_rate))
+    from fsi_lab.plugins.analysis._chain import error_entries
+    errors = {k: switch_message(context, k, pair, res.peaks)
+              for k, pair in enumerate(res.switches) if pair is not None}
     comps = []
     for k in range(res.n_components):
         good = ~res.edge_mask[k]
         comps.append({"index": k, "frequency_hz": res.mean_frequency(k),
                       "cutoff_hz": float(res.cutoffs[k]),
                       "hvd_peak_envelope": float(res.envelopes[k][good].max())
-                      if good.any() else None})
+                      if good.any() else None,
+                      **({"hvd": {"error": errors[k]}} if k in errors else {})})
     return AnalysisResult(
         datasets={"components": res.components, "envelopes": res.envelopes,
                   "frequencies": res.frequencies, "residual": res.residual,
@@ -534,7 +794,10 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                "start_s": res.t0, "start_rule": start_rule,
                "edge_mask_meaning": "1 where the sample is too close to a record end to be "
                                     "trusted (within 1 / cutoff)",
-               "order": "components sorted by decreasing RMS envelope; row k = index k"},
+               "band_hz": list(res.band) if res.band is not None
+               else "none (the whole record)",
+               "order": "components sorted by decreasing RMS envelope; row k = index k",
+               **error_entries(errors, "hvd")[1]},
         summary={"components": comps}, values=res)
 
 
@@ -554,6 +817,11 @@ PLUGIN = AnalysisPlugin(
                    "start disturbs its first cycles); unset = from the largest sample of the "
                    "first free decay (automatic: the record's largest sample when it holds one "
                    "decay), 0 = the whole record."),
+        Param("band_hz", "floats", "Hz", None, minimum=0.0, exclusive_minimum=True,
+              help="[low, high]: decompose the record band-passed to this band (gain 1 from "
+                   "low to high, 0 below low/2 and above 1.5 high, zero phase), so one mode is "
+                   "analysed on its own - e.g. when two modes' envelopes cross and a component "
+                   "switches between them; 0 < low < high < Nyquist; unset = the whole record."),
         Param("relative", "str", "", "auto", choices=("auto", "yes", "no"),
               help="Subtract the base motion (integrated reference acceleration) first, so the "
                    "components are motion relative to the clamp as in the modal model; auto = "

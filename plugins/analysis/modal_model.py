@@ -18,8 +18,8 @@ velocity at the measuring point goes through the same processing as the measurem
    model's decay tail more than the base estimate's own low-frequency error spoils the
    measurement's, on the simulated bench and in the tests alike.)
 3. :func:`.hvd.hvd` from the measurement's start (``start_s``) with its number of components,
-   its cut-offs and its padding; each measured component is paired with the model component of
-   nearest mean frequency (within 25 %);
+   its cut-offs, its padding and its band (``band_hz``); each measured component is paired
+   with the model component of nearest mean frequency (within 25 %);
 4. per pair: the HVD envelopes and instantaneous frequencies, then - on the displacement
    components (``integrate``'s for the measurement when it ran, integrated the same way for
    the model) - the zero-crossing backbone and damping curve as the ``backbone`` and
@@ -394,7 +394,8 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
 
     # -- the measurement's HVD on the model
     with guarded(PLUGIN_NAME, context):
-        res_s = hvd(y_s[i0:], fs, k_total, res_m.cutoffs, padding=padding)
+        res_s = hvd(y_s[i0:], fs, k_total, res_m.cutoffs, padding=padding,
+                    band=getattr(res_m, "band", None))
     res_s = dataclasses.replace(res_s, t0=float(res_m.t0))
     model_ch = ChannelData(name=ch.name, data=y_s, sample_rate=fs, quantity=ch.quantity,
                            unit=ch.unit, t0=ch.t0)
@@ -442,7 +443,7 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
         if ok.sum() < 8:
             raise AnalysisError(f"{here}: component {k}: no trusted samples to compare")
         idx = np.flatnonzero(ok)
-        start = int(idx[np.argmax(e_m[idx])]) + int(round(2.0 / float(res_m.cutoffs[k]) * fs))
+        start = int(idx[np.argmax(e_m[idx])]) + int(round(res_m.settle(k) * fs))
         floor = max(c.noise_floor or 0.0, HVD_RANGE * largest)
         below = np.flatnonzero((e_m < floor) & (np.arange(e_m.size) >= start))
         end = int(below[0]) if below.size else e_m.size

@@ -68,7 +68,7 @@ def test_noise_tail_is_dropped():
 
 def test_duffing_backbone_matches_harmonic_balance():
     duffing = duffing_record()
-    t, fs, w0, alpha = duffing["t"], duffing["fs"], duffing["w0"], duffing["alpha"]
+    fs, w0, alpha = duffing["fs"], duffing["w0"], duffing["alpha"]
     bb = backbone(duffing["x"], fs)
     sel = middle(bb.amplitude.size)
     a, f = bb.amplitude[sel], bb.frequency[sel]

@@ -6,12 +6,17 @@
 - dry: ``fsi-lab run profiles/dry-beam-sim.toml --json`` recovers the configured modal damping
   ratios within 10 %;
 - wet, impulse train: the wet profile with a descending impulse-train excitation (one record,
-  several free decays) identifies C_i and C_f within 15 % too, from one free decay per impulse.
+  several free decays) identifies C_i and C_f within 15 % too, from one free decay per impulse;
+- wet, impulse train of the excitation's default (shorter) impulses: the 47 Hz mode's envelope
+  crosses the 17 Hz one's in every decay, and HVD's components switch mode - reported as a
+  per-component error, no C_i or C_f; with ``analysis.hvd.band_hz`` around 17 Hz, that mode
+  is decomposed alone and C_i is identified within 15 %.
 
 Both run through the ``fsi-lab`` command on the embedded simulated bench (the lab drivers over
 loopback TCP and a pseudo-terminal), fast.
 """
 
+import re
 import tomllib
 
 import numpy as np
@@ -66,6 +71,43 @@ def test_wet_impulse_train_identifies_c_i_and_c_f_on_the_simulated_bench(tmp_pat
     assert found["decays"] == IMPULSES["count"]
     assert found["c_i"] == pytest.approx(model["c_i"], rel=0.15)
     assert found["c_f"] == pytest.approx(model["c_f"], rel=0.15)
+
+
+#: The impulse-train excitation with its default 20 ms impulses on the wet profile.
+SHORT_IMPULSES = ("excitation.plugin=impulse-train", "run.duration=14")
+
+
+def test_wet_short_impulses_report_the_mode_switch_instead_of_numbers(tmp_path):
+    summary = _run(WET, tmp_path, *SHORT_IMPULSES)
+    assert summary["components"]
+    for component in summary["components"]:
+        assert "equivalent_damping" not in component, component["equivalent_damping"]
+        message = component["hvd"]["error"]
+        modes = re.search(r"switches between the modes near ([\d.]+) Hz and ([\d.]+) Hz",
+                          message).groups()
+        low, high = sorted(float(f) for f in modes)
+        assert 16.0 < low < 18.0 and 46.0 < high < 49.0, message
+        assert "band_hz" in message
+    failed = {e["plugin"] for e in summary["errors"]}
+    assert "equivalent-damping" in failed
+
+
+def test_wet_short_impulses_with_a_band_around_17_hz(tmp_path):
+    """One component in [10, 25] Hz. C_i is within 15 % (measured: 0.653, +0.5 %; 0.629 to
+    0.667 for low edges 8 to 13 Hz). C_f is resolved but not asserted: each decay's free part
+    spans only about 2.5-fold in amplitude on this bench (the 17 Hz decays fall 20-fold in
+    1.5 s, less the settling and guard times), and the fit follows which early points of each
+    decay are kept - measured 32.1 (-2.8 %) with [10, 25] Hz, but 23 to 49 for low edges 8 to
+    13 Hz, against 33.0."""
+    model = tomllib.loads(WET.read_text())["model"]
+    summary = _run(WET, tmp_path, *SHORT_IMPULSES, "analysis.hvd.band_hz=[10,25]",
+                   "analysis.hvd.components=1")
+    (component,) = summary["components"]
+    assert "hvd" not in component
+    assert 16.0 < component["frequency_hz"] < 18.0
+    found = component["equivalent_damping"]
+    assert found["c_i"] == pytest.approx(model["c_i"], rel=0.15)
+    assert found["c_f_ci95"][0] > 0.0
 
 
 def test_dry_profile_recovers_the_modal_damping_ratios(tmp_path):
