@@ -270,7 +270,7 @@ def velocity_components(context: AnalysisContext) -> list[Component] | None:
 def hvd_errors(context: AnalysisContext) -> dict[int, str]:
     """The components that ``hvd`` (earlier in the chain) marked as not analysable, with its
     message: its attributes ``component_<k>_error`` (a component that switches between two
-    modes, :func:`.hvd.mode_switches`)."""
+    modes, :func:`._mode_switch.mode_switches`)."""
     res = context.results.get("hvd")
     attrs = getattr(res, "attrs", None) or {}
     out = {}

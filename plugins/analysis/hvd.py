@@ -36,7 +36,7 @@ Numerical choices (see the module constants):
   1 / spacing apart around each mode, which would pass for close peaks and give tiny cut-offs.
 - Crossing envelopes: HVD follows the largest component at each instant, so when two modes'
   envelopes cross (a short impulse makes a higher mode the larger at first, and it decays
-  faster) a component switches from one mode to the other. :func:`mode_switches` finds such
+  faster) a component switches from one mode to the other. :func:`._mode_switch.mode_switches` finds such
   components (:attr:`HVDResult.switches`); the plugin marks them with an error, which every
   later analysis of the chain reports instead of results. ``band`` (``band_hz``) decomposes a
   band-passed record (:func:`._signal.bandpass`), one mode at a time.
@@ -53,11 +53,10 @@ import numba
 import numpy as np
 import scipy.fft as sfft
 
-from fsi_lab.plugins.analysis._decays import decay_segments
+from fsi_lab.plugins.analysis._mode_switch import mode_switches
 from fsi_lab.plugins.analysis._signal import (
     BAND_HIGH_STOP, BAND_LOW_STOP, FFT_WORKERS, as_record, bandpass, bandpass_smear, check_rate,
-    check_samples_per_cycle, fail, lowpass_gain, mirror_pad, moving_average, predict_pad,
-    smooth_step,
+    check_samples_per_cycle, fail, lowpass_gain, mirror_pad, predict_pad, smooth_step,
 )
 from fsi_lab.plugins.analysis.spectrum import free_decay_peaks
 
@@ -82,18 +81,6 @@ PADDINGS = ("predict", "mirror")
 #: A band (``band_hz``) must hold a spectral peak of the record at least this fraction of its
 #: largest.
 BAND_PEAK_THRESHOLD = 1e-3
-#: Mode switches (:func:`mode_switches`): samples whose envelope is below SWITCH_LEVEL x the
-#: record's largest (trusted) envelope are not looked at (their frequency is noise-prone) ...
-SWITCH_LEVEL = 1e-2
-#: ... an instantaneous frequency within SWITCH_TOLERANCE (relative) of a spectral peak sits
-#: near that peak (a Duffing decay's drift beyond it is near no peak: never a switch) ...
-SWITCH_TOLERANCE = 0.1
-#: ... only stays near one peak of at least SWITCH_CYCLES of its periods count (a component
-#: passing a peak while its filters settle after an impulse is no switch) ...
-SWITCH_CYCLES = 5.0
-#: ... and a component switches when a second peak holds at least SWITCH_SHARE of the time
-#: it spends near peaks.
-SWITCH_SHARE = 0.1
 #: Largest growth allowed to the predicted extension (a decay read backwards grows; letting a
 #: fast-decaying small component grow past the dominant one would switch the tracked component).
 PAD_GROWTH = 1.0
@@ -124,7 +111,7 @@ class HVDResult:
         plugin's ``start_s``; 0 for :func:`hvd`).
     switches
         Per component, None, or the two spectral peaks (Hz, the one it stays near longer
-        first) it switches between (:func:`mode_switches`: two modes' envelopes cross); empty
+        first) it switches between (:func:`._mode_switch.mode_switches`: two modes' envelopes cross); empty
         when not checked.
     band
         The pass band ``(low, high)`` (Hz) the record was filtered to before the
@@ -311,115 +298,6 @@ def _check_band(band: Any, fs: float, func: str) -> tuple[float, float] | None:
     return values[0], values[1]
 
 
-def _free_samples(x: np.ndarray, fs: float, settle: float, period: float) -> np.ndarray:
-    """Boolean mask of the samples of ``x`` inside a free decay: from each decay's largest
-    sample plus ``settle`` s to its end minus twice that (the last decay: to the record's end);
-    the decays are those of :func:`._decays.decay_segments` (blocks of ``period`` s)."""
-    segments = decay_segments(x, fs, period)
-    free = np.zeros(x.size, dtype=bool)
-    lag = int(round(settle * fs))
-    for j, (lo, hi) in enumerate(segments):
-        if len(segments) == 1:
-            lo = int(np.argmax(np.abs(x)))
-        if j < len(segments) - 1:
-            hi -= 2 * lag
-        if hi > lo + lag:
-            free[lo + lag:hi] = True
-    return free
-
-
-def _stays(labels: np.ndarray, rate: float, peaks: np.ndarray) -> np.ndarray:
-    """Time (s) spent near each of ``peaks`` (Hz) in stays of at least SWITCH_CYCLES of its
-    periods; ``labels`` holds the peak index of consecutive samples at ``rate`` Hz, -1 where
-    near none or not looked at."""
-    cuts = np.flatnonzero(labels[1:] != labels[:-1]) + 1
-    starts = np.concatenate(([0], cuts))
-    length = np.diff(np.concatenate((starts, [labels.size])))
-    lab = labels[starts]
-    keep = (lab >= 0) & (length >= SWITCH_CYCLES * rate / peaks[np.maximum(lab, 0)])
-    return np.bincount(lab[keep], weights=length[keep], minlength=peaks.size) / rate
-
-
-def _distinct(peaks: np.ndarray, apart: float) -> np.ndarray:
-    """``peaks`` (Hz, largest first) without those within ``apart`` (relative) of a larger
-    one: a noise ripple next to a mode is no second mode."""
-    kept: list[float] = []
-    for f in peaks:
-        if all(abs(f - g) > apart * g for g in kept):
-            kept.append(float(f))
-    return np.asarray(kept)
-
-
-def mode_switches(x: np.ndarray, fs: float, envelopes: np.ndarray, frequencies: np.ndarray,
-                  edge_mask: np.ndarray, cutoffs: np.ndarray, peaks: np.ndarray,
-                  band: tuple[float, float] | None = None
-                  ) -> tuple[tuple[float, float] | None, ...]:
-    """Which HVD components switch from one mode to another (two envelopes cross).
-
-    HVD extracts the largest component at each instant: when two modes' envelopes cross (a
-    short impulse makes a higher mode the larger at first, and it decays faster), a component
-    follows one mode, then the other. Looked at: the free parts of the record's decays
-    (:func:`._decays.decay_segments`, from each decay's largest sample plus the component's
-    :func:`settle_time`, to its end less twice that), where the component's envelope is at
-    least SWITCH_LEVEL of the largest and its edge mask trusts it. There its instantaneous
-    frequency, averaged over 2 / cutoff (the beat of two modes of similar size makes it
-    ripple), is near a spectral peak when within SWITCH_TOLERANCE of it (of peaks closer than
-    twice that, only the largest counts); stays near a peak shorter than SWITCH_CYCLES of its
-    periods do not count. A component switches when a second peak holds at least
-    SWITCH_SHARE of the time spent near peaks. A frequency drifting with the amplitude (a
-    Duffing decay) stays near one peak, or near none: no switch.
-
-    Parameters
-    ----------
-    x
-        The record decomposed, any unit U.
-    fs
-        Sample rate, Hz.
-    envelopes, frequencies, edge_mask
-        The components' envelopes (U), instantaneous frequencies (Hz) and untrusted samples,
-        shape ``(K, len(x))`` (:class:`HVDResult`).
-    cutoffs
-        The components' cut-offs, Hz, shape ``(K,)``.
-    peaks
-        The record's significant spectral peaks, Hz, largest first
-        (:func:`.spectrum.free_decay_peaks`).
-    band
-        The band the record was filtered to (Hz), or None: its smear adds to the settling.
-
-    Returns
-    -------
-    tuple
-        Per component, None or the two peaks (Hz) it switches between, the one it stays
-        near longer first.
-    """
-    peaks = _distinct(np.asarray(peaks, dtype=np.float64), 2.0 * SWITCH_TOLERANCE)
-    k_total = envelopes.shape[0]
-    trusted = ~edge_mask
-    if peaks.size < 2 or not trusted.any():
-        return (None,) * k_total
-    floor = SWITCH_LEVEL * float(np.max(envelopes[trusted]))
-    stride = max(1, int(fs / (20.0 * float(peaks.max()))))     # 20 samples per shortest period
-    out: list[tuple[float, float] | None] = []
-    for k in range(k_total):
-        use = _free_samples(x, fs, settle_time(float(cutoffs[k]), band), 1.0 / float(peaks[0]))
-        use &= trusted[k] & (envelopes[k] >= floor)
-        # Averaged over 2 / cutoff (at least 4 periods of the beat between this component and
-        # the nearest other peak): two modes of similar size make the frequency ripple.
-        f = moving_average(frequencies[k, ::stride],
-                           int(round(fs / stride / float(cutoffs[k]))))
-        near = np.argmin(np.abs(f[:, None] - peaks[None, :]), axis=1)
-        close = np.abs(f - peaks[near]) <= SWITCH_TOLERANCE * peaks[near]
-        labels = np.where(use[::stride] & close, near, -1)
-        time = _stays(labels, fs / stride, peaks)
-        order = np.argsort(-time, kind="stable")
-        total = float(time.sum())
-        if total > 0 and time[order[1]] >= SWITCH_SHARE * total:
-            out.append((float(peaks[order[0]]), float(peaks[order[1]])))
-        else:
-            out.append(None)
-    return tuple(out)
-
-
 def band_around(f: float, peaks: np.ndarray) -> tuple[float, float] | None:
     """A ``band_hz`` (Hz, two significant digits) that keeps the spectral peak ``f`` (Hz) and
     stops every other of ``peaks`` (:func:`._signal.bandpass`: nothing below BAND_LOW_STOP x
@@ -504,7 +382,7 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
     -------
     HVDResult
         Components, envelopes (U), instantaneous frequencies (Hz), residual, edge mask,
-        cut-offs and mode switches (:func:`mode_switches`); components sorted by decreasing
+        cut-offs and mode switches (:func:`._mode_switch.mode_switches`); components sorted by decreasing
         RMS envelope over their trusted samples.
 
     Raises
@@ -662,7 +540,8 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
     order = np.argsort(-rms, kind="stable")
     if np.any(order != np.arange(k_total)):          # (a copy only when needed)
         comps, envs, inst, mask, cutoffs = (a[order] for a in (comps, envs, inst, mask, cutoffs))
-    switches = mode_switches(x, fs, envs, inst, mask, cutoffs, peaks, band_t)
+    settles = np.array([settle_time(float(c), band_t) for c in cutoffs])
+    switches = mode_switches(x, fs, envs, inst, mask, cutoffs, settles, peaks)
     return HVDResult(components=comps, envelopes=envs, frequencies=inst, residual=residual,
                      edge_mask=mask, cutoffs=cutoffs, sample_rate=fs, switches=switches,
                      band=band_t, peaks=peaks)
