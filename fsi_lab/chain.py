@@ -93,6 +93,7 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
             continue
         channel_summary: dict[str, Any] = {"components": []}
         results: dict[str, AnalysisResult] = {}
+        failed: dict[str, str] = {}
         for plugin_name in chain:
             bus.emit(Progress("analysis", done / total, f"{channel_name}: {plugin_name}"))
             done += 1
@@ -109,7 +110,7 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                 context = AnalysisContext(
                     channel=channels[channel_name], channels=channels, results=results,
                     specimen=specimen, mass_per_length=mass_per_length,
-                    reference=analysis.get("reference"),
+                    reference=analysis.get("reference"), failed=dict(failed),
                 )
                 result = plugin.run(context, plugin_params)
                 if not isinstance(result, AnalysisResult):
@@ -120,12 +121,16 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                 message = str(exc) if isinstance(exc, FsiLabError) else (
                     f"{type(exc).__name__}: {exc}"
                 )
+                where = f"{plugin_name} on channel {channel_name!r}"
+                if not message.startswith(where):  # every message names plugin and channel
+                    message = f"{where}: {message}"
                 bus.log("ERROR", f"analysis {plugin_name} on channel {channel_name}: {message}")
                 channel_summary.setdefault("errors", []).append(
                     {"plugin": plugin_name, "message": message})
                 groups[key] = {"attrs": {"status": "failed", "error": message,
                                          "traceback": traceback.format_exc()},
                                "params": plugin_params}
+                failed[plugin_name] = message
                 continue
             results[plugin_name] = result
             groups[key] = {"datasets": result.datasets, "units": result.units,

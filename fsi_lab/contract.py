@@ -224,6 +224,9 @@ class AnalysisContext:
         Name of the reference (base acceleration) channel, or None.
     progress
         Callable taking a fraction 0..1 for long analyses.
+    failed
+        Analyses that ran earlier in the chain on this channel and failed, by plugin name, with
+        their error messages (an analysis that would use one must not quietly do without).
     """
 
     channel: ChannelData
@@ -233,6 +236,7 @@ class AnalysisContext:
     mass_per_length: float | None = None
     reference: str | None = None
     progress: Callable[[float], None] = lambda fraction: None
+    failed: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -31,8 +31,10 @@ def test_analyze_runs_the_chain_and_isolates_failures(imported_run, example_plug
     assert tip["components"] == [{"index": 0, "crossings": 36}]
     # the constant channel fails in `crossings` only; its rms is still there
     assert flat["rms"] == pytest.approx(0.0, abs=1e-12)
+    # the core names the plugin and the channel before the plugin's own words
     assert flat["errors"] == [{"plugin": "crossings", "message":
-                               "crossings: channel flat: 0 zero crossings, need at least 1"}]
+                               "crossings on channel 'flat': crossings: channel flat: 0 zero "
+                               "crossings, need at least 1"}]
     assert "analysis crossings on channel flat" in proc.stderr
 
     with h5py.File(imported_run, "r") as handle:

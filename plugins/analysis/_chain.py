@@ -187,8 +187,13 @@ def hvd_settle(res: Any, k: int) -> float:
 def components(context: AnalysisContext, order: int = 0) -> list[Component]:
     """The channel's components: HVD's if it ran earlier in the chain, else the channel.
 
-    ``order`` (integrations the caller will apply) only scales the noise floors.
+    ``order`` (integrations the caller will apply) only scales the noise floors. Raises
+    AnalysisError when HVD failed earlier in the chain: the whole channel is no stand-in for
+    the components the chain asked for.
     """
+    if "hvd" in context.failed:
+        raise AnalysisError(f"hvd failed earlier in the chain on this channel, so there are no "
+                            f"components to analyse (hvd: {context.failed['hvd']})")
     ch = context.channel
     fs = float(ch.sample_rate)
     sigma, f_dom = channel_noise(context)

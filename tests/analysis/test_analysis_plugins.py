@@ -266,3 +266,17 @@ def test_simulated_wet_bench_gives_back_the_model_damping(tmp_path):
         assert eq["amplitude_convention"].startswith("modal: q_2")
         assert eq["c_i"] == pytest.approx(0.65, rel=0.05), method
         assert eq["c_f"] == pytest.approx(33.0, rel=0.15), method
+
+
+def test_a_failed_hvd_is_not_replaced_by_the_whole_channel():
+    q, ch = two_mode_velocity()
+    # a band with no spectral peak in it: hvd refuses it
+    groups, summary = run({"tip": ch}, ("hvd", "integrate", "backbone", "equivalent-damping"),
+                          params={"hvd": {"band_hz": [400.0, 450.0]}}, mass_per_length=q["m"])
+    errors = {e["plugin"]: e["message"] for e in summary["tip"]["errors"]}
+    assert set(errors) == {"hvd", "integrate", "backbone", "equivalent-damping"}
+    for plugin in ("integrate", "backbone", "equivalent-damping"):
+        assert errors[plugin].startswith(f"{plugin} on channel 'tip': hvd failed earlier in "
+                                         "the chain on this channel"), errors[plugin]
+        assert errors["hvd"] in errors[plugin]
+    assert not any("equivalent_damping" in c for c in summary["tip"]["components"])
