@@ -356,14 +356,23 @@ def cmd_simulate(args) -> int:
     bus = EventBus()
     console = Console(args.quiet or args.json, args.verbose)
     bus.subscribe(console)
-    signals = RunSignals()  # SIGTERM ends the simulation as Ctrl+C does: recorded as aborted
+    # Ctrl+C and SIGTERM end the simulation between two blocks, recorded as aborted
+    signals = RunSignals()
     signals.install()
+
+    def progress(fraction: float) -> None:
+        bus.emit(Progress("simulate", fraction, "simulating"))
+        signals.raise_pending()
+
     try:
-        simulate_run(profile, waveform, rate, args.duration, args.rate, args.output, args.modes,
-                     {"uuid": run_uuid, "start_time": started, "profile": profile.text,
-                      "profile_path": profile.path, "overrides": list(profile.overrides),
-                      "run_name": profile.run["name"], "software_version": software_version()},
-                     progress=lambda f: bus.emit(Progress("simulate", f, "simulating")))
+        with signals.held():
+            simulate_run(profile, waveform, rate, args.duration, args.rate, args.output,
+                         args.modes,
+                         {"uuid": run_uuid, "start_time": started, "profile": profile.text,
+                          "profile_path": profile.path, "overrides": list(profile.overrides),
+                          "run_name": profile.run["name"],
+                          "software_version": software_version()},
+                         progress=progress)
     except (KeyboardInterrupt, RunAborted) as exc:
         console.close()
         reason = str(exc) or INTERRUPTED

@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 
 from fsi_lab.errors import InputFileError
+from fsi_lab.profile import CHANNEL_NAME
 from fsi_lab.runfile import RunFileWriter, new_run_path, software_version, utc_now
 from fsi_lab.units import QUANTITY_OF_UNIT, to_si
 
 _HEADER = re.compile(r"^\s*(?P<name>[^\[\]]+?)\s*\[(?P<unit>[^\[\]]*)\]\s*$")
-_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]*$")
 TIME_TOLERANCE = 1e-3  # relative spread of the time steps accepted as uniform sampling
 
 
@@ -33,10 +33,10 @@ def _parse_header(path: Path, cells: list[str]) -> list[tuple[str, str]]:
                 f"one of {accepted}"
             )
         name, unit = match["name"].strip(), match["unit"].strip()
-        if not _NAME.match(name):
+        if not CHANNEL_NAME.fullmatch(name):  # the names a profile accepts
             raise InputFileError(
-                f"{path}: header column {number}: name {name!r} must start with a letter and "
-                "hold only letters, digits, '_', '-' or '.'"
+                f"{path}: header column {number}: name {name!r} is not accepted; expected a "
+                "letter followed by letters, digits, '_' or '-' (e.g. tip_velocity)"
             )
         is_time = name.lower() == "time"
         if (is_time and unit != "s") or (not is_time and unit not in QUANTITY_OF_UNIT):

@@ -9,6 +9,7 @@ named plugin's parameters) before anything is started or written. Every problem 
 from __future__ import annotations
 
 import copy
+import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -59,8 +60,13 @@ CHANNEL_PARAMS: tuple[Param, ...] = (
           help="Sensor sensitivity: volts at the digitiser per unit of the quantity."),
     Param("input", "int", "", minimum=1, maximum=64, help="Digitiser input number."),
     Param("sensor", "str", "", "",
-          help="Instrument role that sets this channel's sensitivity (e.g. 'vibrometer')."),
+          help="Instrument role that sets this channel's sensitivity (e.g. 'vibrometer'); "
+               "empty, or a role with a [bench.<role>] table."),
 )
+
+#: Channel names: they name HDF5 datasets in the run file and ``--set channels.<name>.key``
+#: paths, so neither '/' nor '.' may appear in them.
+CHANNEL_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_-]*")
 
 BENCH_PARAMS: tuple[Param, ...] = (
     Param("embedded", "bool", "", False,
@@ -290,14 +296,43 @@ def parse_profile(text: str, path: str, registry: Registry, overrides: list[str]
     try:
         raw = apply_overrides(raw, list(overrides), registry)
         return _validate(raw, path, text, registry, tuple(overrides),
-                         complete=sections is None)
+                         complete=sections is None,
+                         bench_kept=sections is None or "bench" in sections)
     except ParameterError as exc:
         raise ProfileError(f"{path}: {exc}") from None
 
 
-def _validate(raw, path, text, registry, overrides, complete=True) -> Profile:
+def _channel(name: str, table: Any, roles: Mapping[str, RoleConfig] | None) -> ChannelConfig:
+    """The checked ``[channels.<name>]`` table; its ``sensor`` must name one of ``roles`` (not
+    checked when ``roles`` is None: the bench was not kept)."""
+    where = f"channels.{name}"
+    if not CHANNEL_NAME.fullmatch(name):
+        raise ParameterError(
+            f"{where}: channel name {name!r} is not accepted; expected a letter followed by "
+            "letters, digits, '_' or '-' (e.g. tip_velocity)"
+        )
+    if not isinstance(table, dict):
+        raise ParameterError(f"{where}: expected a table ([{where}]), got {table!r}")
+    values = validate(CHANNEL_PARAMS, table, where)
+    implied = QUANTITY_OF_UNIT[values["unit"]]
+    if implied != values["quantity"]:
+        raise ParameterError(
+            f"{where}.unit: {values['unit']!r} is a unit of {implied}, but the channel's "
+            f"quantity is {values['quantity']!r}"
+        )
+    if values["sensor"] and roles is not None and values["sensor"] not in roles:
+        accepted = ", ".join(repr(role) for role in roles) or "none (no [bench.<role>] tables)"
+        raise ParameterError(
+            f"{where}.sensor: {values['sensor']!r} is not an instrument of this bench; expected "
+            f"empty or one of the roles with a [bench.<role>] table: {accepted}"
+        )
+    return ChannelConfig(name=name, **values)
+
+
+def _validate(raw, path, text, registry, overrides, complete=True, bench_kept=True) -> Profile:
     """The checked profile; ``complete`` False when only some sections were kept, so a bench
-    need not come with its excitation and channels."""
+    need not come with its excitation and channels; ``bench_kept`` False when ``[bench]`` was
+    not among them, so a channel's ``sensor`` cannot be checked against its roles."""
     unknown = sorted(set(raw) - set(SECTIONS))
     if unknown:
         raise ParameterError(
@@ -327,19 +362,8 @@ def _validate(raw, path, text, registry, overrides, complete=True) -> Profile:
         roles[role] = RoleConfig(role, table["plugin"], address,
                                  validate(schema, settings, where))
 
-    channels: dict[str, ChannelConfig] = {}
-    for name, table in _table(raw, "channels", "channels").items():
-        where = f"channels.{name}"
-        if not isinstance(table, dict):
-            raise ParameterError(f"{where}: expected a table ([{where}]), got {table!r}")
-        values = validate(CHANNEL_PARAMS, table, where)
-        implied = QUANTITY_OF_UNIT[values["unit"]]
-        if implied != values["quantity"]:
-            raise ParameterError(
-                f"{where}.unit: {values['unit']!r} is a unit of {implied}, but the channel's "
-                f"quantity is {values['quantity']!r}"
-            )
-        channels[name] = ChannelConfig(name=name, **values)
+    channels = {name: _channel(name, table, roles if bench_kept else None)
+                for name, table in _table(raw, "channels", "channels").items()}
 
     excitation_plugin = None
     excitation: dict[str, Any] = {}

@@ -91,7 +91,10 @@ def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, floa
             f"{profile.path}: bench.amplifier: plugin {profile.roles['amplifier'].plugin!r} "
             "declares no 'gain' parameter, so the gain limit cannot be checked"
         )
-    report = assess(waveform, rate, float(gain), profile.safety, profile.shaker)
+    # A source that declares ``arb_filter`` says how it reconstructs its output; without it
+    # the check assumes the worse of a held and a band-limited output.
+    arb_filter = profile.roles["source"].settings.get("arb_filter")
+    report = assess(waveform, rate, float(gain), profile.safety, profile.shaker, arb_filter)
     return waveform, rate, report
 
 

@@ -12,6 +12,8 @@ paper observed (about 30 Hz loaded, 47 Hz unloaded).
 
 from __future__ import annotations
 
+from typing import Iterable
+
 import numpy as np
 from scipy import signal
 
@@ -67,7 +69,8 @@ def predicted_stroke_mm(drive: np.ndarray, sample_rate: float, gain: float,
     Parameters
     ----------
     drive
-        Source voltage, V, at ``sample_rate`` Hz.
+        Source voltage, V, at ``sample_rate`` Hz, as it reaches the amplifier (the model
+        sees only these samples: see :mod:`fsi_lab.safety` for the output between them).
     gain
         Amplifier voltage gain, V/V.
     shaker
@@ -76,10 +79,21 @@ def predicted_stroke_mm(drive: np.ndarray, sample_rate: float, gain: float,
     The drive is followed by five suspension periods at 0 V so that overshoot after the drive
     ends is included.
     """
-    drive = np.asarray(drive, dtype=float)
-    if drive.size == 0:
-        return 0.0
-    tail = int(np.ceil(5 * sample_rate / shaker["suspension_hz"]))
+    return stroke_of_blocks_mm([np.asarray(drive, dtype=float)], sample_rate, gain, shaker)
+
+
+def stroke_of_blocks_mm(blocks: Iterable[np.ndarray], sample_rate: float, gain: float,
+                        shaker: dict) -> float:
+    """:func:`predicted_stroke_mm` of a drive given as consecutive blocks (V at
+    ``sample_rate`` Hz), so that a long drive need not be held in memory at once."""
     model = ShakerModel.from_profile(sample_rate, shaker)
-    displacement, _ = model.advance(np.concatenate([drive * gain, np.zeros(tail)]))
-    return float(np.max(np.abs(displacement))) * 1e3
+    largest, samples = 0.0, 0
+    for block in blocks:
+        displacement, _ = model.advance(np.asarray(block, dtype=float) * gain)
+        if displacement.size:
+            largest = max(largest, float(np.max(np.abs(displacement))))
+        samples += displacement.size
+    if samples == 0:
+        return 0.0
+    tail, _ = model.advance(np.zeros(int(np.ceil(5 * sample_rate / shaker["suspension_hz"]))))
+    return max(largest, float(np.max(np.abs(tail)))) * 1e3

@@ -51,6 +51,16 @@ class RunSignals:
                 signal.signal(signal.SIGTERM, self._raise)
                 signal.signal(signal.SIGINT, self._saved[signal.SIGINT])
 
+    def raise_pending(self) -> None:
+        """Raise what :meth:`held` noted, at a point the caller chose: KeyboardInterrupt for
+        Ctrl+C, :class:`RunAborted` for SIGTERM. (Raised from the handler instead, the
+        exception could land inside a library's cleanup code, which may swallow it.)"""
+        if not self.pending:
+            return
+        if self.pending[0] == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise RunAborted(f"received {signal.Signals(self.pending[0]).name}")
+
     def restore(self) -> None:
         """Put back the handlers :meth:`install` found; ``pending`` keeps what was held."""
         for signum, handler in self._saved.items():

@@ -2,7 +2,8 @@
 
 The drive waveform is uploaded as an arbitrary waveform: the samples divided by their peak, as
 an IEEE 488.2 definite-length block of float32 in little-endian order (``FORM:BORD SWAP``),
-played at ``FUNC:ARB:SRAT`` with an amplitude of twice the peak (Vpp, high-impedance load) and no
+played at ``FUNC:ARB:SRAT`` with an amplitude of twice the peak (Vpp, high-impedance load; a peak
+below 1 mV is played at the smallest amplitude, 2 mVpp, with the points scaled down) and no
 offset, as one triggered burst. ``start`` switches the output on and sends a bus trigger
 (``*TRG``); the generator's trigger output marks t = 0 for a digitiser waiting for it.
 ``SYST:ERR?`` is read after every configuration step and any error stops the run with the
@@ -30,6 +31,24 @@ MAX_POINTS = 1_000_000
 MIN_VPP = 0.002
 FILTERS = {"normal": "NORM", "step": "STEP", "off": "OFF"}
 SAFE_TIMEOUT_S = 1.0
+
+
+def arb_points(wave: np.ndarray) -> tuple[np.ndarray, float]:
+    """Arb points (float32, in -1..1) and the amplitude (Vpp) that play ``wave`` (V).
+
+    The points are the samples divided by their peak, played at twice the peak in Vpp. A peak
+    below half the instrument's smallest amplitude :data:`MIN_VPP` is played at ``MIN_VPP``
+    with the points scaled down by ``2 peak / MIN_VPP``, so that the output still peaks at the
+    requested voltage.
+    """
+    peak = float(np.max(np.abs(wave)))
+    if 2.0 * peak >= MIN_VPP:
+        points, amplitude = wave / peak, 2.0 * peak
+    else:
+        points, amplitude = wave * (2.0 / MIN_VPP), MIN_VPP
+    points = points.astype("<f4")
+    np.clip(points, -1.0, 1.0, out=points)
+    return points, amplitude
 
 
 class Keysight33500(SignalSource):
@@ -65,10 +84,7 @@ class Keysight33500(SignalSource):
                 f"{MAX_POINTS:,} points: lower the source sample_rate or the excitation duration")
         if wave.size < MIN_POINTS:
             wave = np.concatenate([wave, np.zeros(MIN_POINTS - wave.size)])
-        peak = float(np.max(np.abs(wave)))
-        points = (wave / peak if peak > 0 else wave).astype("<f4")
-        np.clip(points, -1.0, 1.0, out=points)
-        amplitude = max(2.0 * peak, MIN_VPP)
+        points, amplitude = arb_points(wave)
         src, ch, link = self._src, self.channel, self.link
         link.send_checked(f"OUTP{ch} OFF")
         link.send_checked("FORM:BORD SWAP")
@@ -145,7 +161,9 @@ class Keysight33500(SignalSource):
 
 
 def open_source(address: str, settings: dict[str, Any], context: dict[str, Any]) -> Keysight33500:
-    """Connect, identify, clear the status and switch the output off."""
+    """Connect, switch the output off, identify, clear the status and confirm the output off
+    (the first ``OUTP<n> OFF`` goes out before the identity is known, so that the output goes
+    off even when the reply to ``*IDN?`` is unexpected)."""
     from fsi_lab.instruments._visa import VisaLink
 
     if address.strip() in ("", "embedded"):
@@ -154,10 +172,12 @@ def open_source(address: str, settings: dict[str, Any], context: dict[str, Any])
         address = resolve_address("source", NAME, address, context)
     link = VisaLink(NAME, address, settings["timeout_s"])
     try:
+        link.write(f"OUTP{settings['channel']} OFF")
         identity = link.query("*IDN?")
         if identity.count(",") < 3:
             raise InstrumentError(f"{NAME} at {address}: unexpected identity {identity!r}; "
-                                  "expected <maker>,<model>,<serial>,<firmware>")
+                                  "expected <maker>,<model>,<serial>,<firmware> (OUTP OFF was "
+                                  "sent first)")
         link.write("*CLS")
         link.send_checked(f"OUTP{settings['channel']} OFF")
     except BaseException:

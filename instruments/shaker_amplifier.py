@@ -70,7 +70,7 @@ class ShakerAmplifier(Amplifier):
                 raise InstrumentError(
                     f"{self._where()}: output on refused: interlock {', '.join(active)} is "
                     "active; remove its cause, then clear it with INTL:RES (or set "
-                    "reset_interlocks = true to do so when the amplifier is opened)")
+                    "reset_interlocks = true to do so when the amplifier is opened for a run)")
         self.link.send_checked(f"OUTP {1 if enabled else 0}")
         if self.link.query_bool("OUTP?") != enabled:
             raise InstrumentError(f"{self._where()}: the output did not switch "
@@ -111,8 +111,24 @@ class ShakerAmplifier(Amplifier):
 
 def open_amplifier(address: str, settings: dict[str, Any],
                    context: dict[str, Any]) -> ShakerAmplifier:
-    """Connect, identify, clear the status, switch the output off (and clear interlocks when
-    ``reset_interlocks`` is set)."""
+    """Connect, switch the output off, identify, clear the status and confirm the output off.
+
+    ``OUTP 0`` is the first thing sent, before the identity is known, so that the output goes
+    off even when the reply to ``*IDN?`` is unexpected; once the error queue is cleared it is
+    sent again and checked. Latched interlocks are cleared (``INTL:RES``) only when
+    ``reset_interlocks`` is set and the instruments are opened for a run
+    (``context["purpose"] == "run"``, the default); ``fsi-lab safe`` and ``identify`` open them
+    ``"outside-run"`` and leave latched interlocks latched.
+
+    Parameters
+    ----------
+    address
+        VISA resource, or ``embedded`` for the simulated bench.
+    settings
+        Validated settings (:data:`PLUGIN` parameters).
+    context
+        The bench context shared by the profile's instruments.
+    """
     from fsi_lab.instruments._visa import VisaLink
 
     if address.strip() in ("", "embedded"):
@@ -121,13 +137,15 @@ def open_amplifier(address: str, settings: dict[str, Any],
         address = resolve_address("amplifier", NAME, address, context)
     link = VisaLink(NAME, address, settings["timeout_s"], settings["baud_rate"])
     try:
+        link.write("OUTP 0")
         identity = link.query("*IDN?")
         if identity.count(",") < 3:
             raise InstrumentError(f"{NAME} at {address}: unexpected identity {identity!r}; "
-                                  "expected <maker>,<model>,<serial>,<firmware>")
+                                  "expected <maker>,<model>,<serial>,<firmware> (OUTP 0 was "
+                                  "sent first)")
         link.write("*CLS")
         link.send_checked("OUTP 0")
-        if settings["reset_interlocks"]:
+        if settings["reset_interlocks"] and context.get("purpose", "run") == "run":
             link.send_checked("INTL:RES")
     except BaseException:
         link.close()
@@ -142,7 +160,8 @@ PLUGIN = InstrumentPlugin(
         Param("gain", "float", "V/V", 1.0, minimum=0.0, maximum=100.0,
               help="Voltage gain of the amplifier."),
         Param("reset_interlocks", "bool", "", False,
-              help="Clear latched interlocks (INTL:RES) when the amplifier is opened."),
+              help="Clear latched interlocks (INTL:RES) when the amplifier is opened for a run "
+                   "(not by fsi-lab safe or identify)."),
         Param("baud_rate", "int", "Bd", 115200, minimum=1200, maximum=921600,
               help="Serial addresses only: line speed (8 data bits, no parity, 1 stop bit)."),
         Param("timeout_s", "float", "s", 2.0, minimum=0.05, maximum=60.0,

@@ -61,6 +61,9 @@ def test_time_column_replaces_rate(tmp_path):
     (["time [s]", "tip [m/s]"], [[0, 1], [0.1, 2], [0.25, 3]], [],
      "the time column is not uniformly sampled"),
     (["tip [m/s]"], [[1], ["nan"]], ["--rate", "10"], "expected a finite number"),
+    (["tip/velocity [m/s]"], [[1], [2]], ["--rate", "10"],
+     "header column 1: name 'tip/velocity' is not accepted; expected a letter followed by "
+     "letters, digits, '_' or '-'"),
 ])
 def test_bad_csv_is_refused_with_file_and_place(tmp_path, header, rows, args, fragment):
     csv_path = _write(tmp_path / "bad.csv", header, rows)

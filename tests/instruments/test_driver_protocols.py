@@ -27,11 +27,21 @@ def checked(*commands: bytes) -> list:
 
 
 # --------------------------------------------------------------------------- Keysight 33500B
-KEYSIGHT_OPEN = [(b"*IDN?\n", IDN), (b"*CLS\n", None)] + checked(b"OUTP1 OFF")
+KEYSIGHT_OPEN = [(b"OUTP1 OFF\n", None), (b"*IDN?\n", IDN), (b"*CLS\n", None)] \
+    + checked(b"OUTP1 OFF")
 
 
 def _keysight(peer: ScriptedPeer, **values):
     return keysight33500.PLUGIN.open(peer.address, settings(keysight33500, **values), {})
+
+
+def test_keysight_output_goes_off_even_when_the_identity_is_unexpected(tcp_peer):
+    peer = tcp_peer([(b"OUTP1 OFF\n", None), (b"*IDN?\n", b"33521B\n")])
+    with pytest.raises(InstrumentError, match="unexpected identity '33521B'; expected "
+                                              r"<maker>,<model>,<serial>,<firmware> \(OUTP OFF "
+                                              r"was sent first\)"):
+        _keysight(peer)
+    peer.expect_all()
 
 
 def test_keysight_uploads_a_float32_block_and_checks_each_step(tcp_peer):
@@ -101,11 +111,30 @@ def test_keysight_refuses_more_points_than_its_memory_before_sending(tcp_peer):
 
 # --------------------------------------------------------------------------- amplifier
 AMP_IDN = b"fsi-lab,PA25E,0001,1.0\n"
-AMP_OPEN = [(b"*IDN?\n", AMP_IDN), (b"*CLS\n", None)] + checked(b"OUTP 0")
+# the output goes off first, before the identity is known, and again once the queue is clear
+AMP_OPEN = [(b"OUTP 0\n", None), (b"*IDN?\n", AMP_IDN), (b"*CLS\n", None)] + checked(b"OUTP 0")
 
 
-def _amplifier(peer, **values):
-    return shaker_amplifier.PLUGIN.open(peer.address, settings(shaker_amplifier, **values), {})
+def _amplifier(peer, context=None, **values):
+    return shaker_amplifier.PLUGIN.open(peer.address, settings(shaker_amplifier, **values),
+                                        {} if context is None else context)
+
+
+def test_amplifier_output_goes_off_even_when_the_identity_is_unexpected(tcp_peer):
+    peer = tcp_peer([(b"OUTP 0\n", None), (b"*IDN?\n", b"PA25E amplifier v2\n")])
+    with pytest.raises(InstrumentError, match="unexpected identity 'PA25E amplifier v2'; "
+                                              "expected <maker>,<model>,<serial>,<firmware> "
+                                              r"\(OUTP 0 was sent first\)"):
+        _amplifier(peer)
+    peer.expect_all()
+
+
+@pytest.mark.parametrize("context, resets", [({}, True), ({"purpose": "run"}, True),
+                                             ({"purpose": "outside-run"}, False)])
+def test_amplifier_clears_interlocks_only_when_opened_for_a_run(tcp_peer, context, resets):
+    peer = tcp_peer(AMP_OPEN + (checked(b"INTL:RES") if resets else []))
+    _amplifier(peer, context, reset_interlocks=True).close()
+    peer.expect_all()
 
 
 def test_amplifier_gain_output_and_safe_state(tcp_peer):
