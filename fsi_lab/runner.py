@@ -11,6 +11,7 @@ analysed like any other (root attribute ``stopped_early``).
 
 from __future__ import annotations
 
+import signal
 import threading
 import time
 import traceback
@@ -125,6 +126,7 @@ class Runner:
         self.bus = bus or EventBus()
         self.analyze = analyze
         self._abort = threading.Event()
+        self._abort_reason = "aborted by the operator"
         self._stop = threading.Event()
         self.instruments: dict[str, Instrument] = {}
         # Shared by the instruments of this run; simulated ones find the physics here, and
@@ -153,7 +155,7 @@ class Runner:
         self.bus.log("INFO", f"safety check passed: peak drive {report.peak_drive_v:.3g} V, "
                              f"gain {report.gain:g}, predicted stroke "
                              f"{report.predicted_stroke_mm:.3g} mm")
-        signals = RunSignals()
+        signals = RunSignals(on_signal=self._signalled)
         signals.install()
         outcome = RunOutcome(path=None, exit_status="failed", safety=report)
         writer: RunFileWriter | None = None
@@ -349,9 +351,16 @@ class Runner:
                 "off by the amplifier"
             )
 
+    def _signalled(self, signum: int) -> None:
+        """Ctrl+C or SIGTERM: also an abort request, which the run checks at every step, should
+        the exception the handler raises be lost in a library's cleanup code."""
+        self._abort_reason = INTERRUPTED if signum == signal.SIGINT \
+            else f"received {signal.Signals(signum).name}"
+        self._abort.set()
+
     def _check_abort(self) -> None:
         if self._abort.is_set():
-            raise RunAborted("aborted by the operator")
+            raise RunAborted(self._abort_reason)
 
     def _safe_state_all(self) -> dict[str, dict[str, Any]]:
         """Safe state for every opened instrument, amplifier first; then read their state back."""

@@ -6,7 +6,7 @@ from __future__ import annotations
 import contextlib
 import signal
 import threading
-from typing import Any
+from typing import Any, Callable
 
 from fsi_lab.errors import RunAborted
 
@@ -17,22 +17,40 @@ class RunSignals:
     Use: :meth:`install`, then :meth:`held` around what must not be cut short, then
     :meth:`restore`. Outside the main thread (the GUI's workers) it does nothing: signals are
     the main thread's.
+
+    Parameters
+    ----------
+    on_signal
+        Called with the signal number before the exception is raised, e.g. to set a flag the
+        caller checks at its own pace: an exception raised from a handler can land inside a
+        library's cleanup code, which may swallow it, and a flag is not lost that way.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, on_signal: Callable[[int], None] | None = None) -> None:
         self.active = threading.current_thread() is threading.main_thread()
         self._saved: dict[int, Any] = {}
         self.pending: list[int] = []
+        self._on_signal = on_signal
 
     def install(self) -> None:
-        """Keep the present handlers and turn SIGTERM into :class:`RunAborted`."""
+        """Keep the present handlers and turn SIGTERM into :class:`RunAborted` (and Ctrl+C
+        into KeyboardInterrupt after ``on_signal``, when given)."""
         if not self.active:
             return
         for signum in (signal.SIGINT, signal.SIGTERM):
             self._saved[signum] = signal.getsignal(signum)
+        self._set_raising()
+
+    def _set_raising(self) -> None:
         signal.signal(signal.SIGTERM, self._raise)
+        signal.signal(signal.SIGINT, self._raise if self._on_signal is not None
+                      else self._saved[signal.SIGINT])
 
     def _raise(self, signum, frame):
+        if self._on_signal is not None:
+            self._on_signal(signum)
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
         raise RunAborted(f"received {signal.Signals(signum).name}")
 
     def _defer(self, signum, frame):
@@ -48,8 +66,7 @@ class RunSignals:
             yield
         finally:
             if self.active:
-                signal.signal(signal.SIGTERM, self._raise)
-                signal.signal(signal.SIGINT, self._saved[signal.SIGINT])
+                self._set_raising()
 
     def raise_pending(self) -> None:
         """Raise what :meth:`held` noted, at a point the caller chose: KeyboardInterrupt for

@@ -340,3 +340,18 @@ def test_a_full_disk_fails_the_run_with_a_message(sim_profile, tmp_path):
     # the bench was made safe before the file was given up
     assert data["final_state"]["amplifier"]["output_enabled"] is False
     assert data["final_state"]["source"]["output_enabled"] is False
+
+
+def test_a_signal_whose_exception_is_lost_still_aborts_the_run(sim_profile, registry, tmp_path):
+    runner, run, events = _run(sim_profile(duration=5.0, realtime="true"), registry, tmp_path)
+
+    def swallowed_sigterm(event):
+        # what the handler does before raising; the exception itself never arrives here
+        if isinstance(event, DataBlock) and not runner._abort.is_set():
+            runner._signalled(signal.SIGTERM)
+
+    runner.bus.subscribe(swallowed_sigterm)
+    outcome = run()
+    assert outcome.exit_status == "aborted" and outcome.error == "received SIGTERM"
+    _assert_safe(outcome.path)
+    assert read_run(outcome.path).channels["tip_velocity"].data.size < 10000
