@@ -193,11 +193,19 @@ class Runner:
         if signals.pending:
             self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
         elif outcome.exit_status == "completed" and self.analyze and self.profile.analysis["chain"]:
+            analysis_signals = RunSignals()  # SIGTERM, like Ctrl+C, ends only the analysis
+            analysis_signals.install()
             try:
                 outcome.summary = self._analyse(outcome.path)
             except (FsiLabError, OSError) as exc:  # the record is safe; only the analysis is lost
                 outcome.error = f"analysis not stored: {exc}; run `fsi-lab analyze` on the file"
                 self.bus.log("ERROR", outcome.error)
+            except (KeyboardInterrupt, RunAborted) as exc:
+                outcome.error = (f"the analysis was stopped ({str(exc) or 'Ctrl+C'}); the record "
+                                 "is complete: run `fsi-lab analyze` on the file")
+                self.bus.log("WARNING", outcome.error)
+            finally:
+                analysis_signals.restore()
         return outcome
 
     def _root_attrs(self, run_uuid: str, started: str) -> dict[str, Any]:

@@ -355,3 +355,22 @@ def test_a_signal_whose_exception_is_lost_still_aborts_the_run(sim_profile, regi
     assert outcome.exit_status == "aborted" and outcome.error == "received SIGTERM"
     _assert_safe(outcome.path)
     assert read_run(outcome.path).channels["tip_velocity"].data.size < 10000
+
+
+def test_ctrl_c_during_the_analysis_keeps_the_completed_run(sim_profile, registry, tmp_path):
+    analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
+    runner, run, _ = _run(sim_profile(duration=0.5, analysis=analysis), registry, tmp_path)
+
+    def ctrl_c_while_analysing(event):
+        if isinstance(event, StateChanged) and event.state == "analyzing":
+            raise KeyboardInterrupt
+
+    runner.bus.subscribe(ctrl_c_while_analysing)
+    outcome = run()
+    assert outcome.exit_status == "completed" and outcome.summary is None
+    assert outcome.error.startswith("the analysis was stopped (Ctrl+C); the record is "
+                                    "complete"), outcome.error
+    record = _assert_safe(outcome.path)
+    assert record.attrs["exit_status"] == "completed"
+    assert read_run(outcome.path).channels["tip_velocity"].data.size == 1000
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # handlers put back
