@@ -125,7 +125,14 @@ def cmd_run(args) -> int:
         print(f"exit status: {outcome.exit_status}" + (f" ({outcome.error})" if outcome.error else ""))
         if outcome.summary:
             print(format_summary(outcome.summary))
-    return EXIT_FOR_STATUS[outcome.exit_status]
+    code = EXIT_FOR_STATUS[outcome.exit_status]
+    if outcome.file_abandoned:
+        # After a failed write HDF5 crashes in its own shutdown: leave without it, so that the
+        # exit code says what happened (the bench is safe and the outcome printed).
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
 
 
 def cmd_analyze(args) -> int:

@@ -51,6 +51,8 @@ class RunOutcome:
     summary: dict[str, Any] | None = None
     final_states: dict[str, dict[str, Any]] = field(default_factory=dict)
     stopped_early: bool = False
+    #: the run file could not be finalised and was given up (a full disk)
+    file_abandoned: bool = False
 
     def as_json(self) -> dict[str, Any]:
         return {
@@ -404,6 +406,7 @@ class Runner:
             writer.close()
         except Exception as exc:  # noqa: BLE001 - e.g. a full disk: report, do not crash
             writer.abandon()
+            outcome.file_abandoned = True
             note = (f"the run file {outcome.path} could not be finalised ({type(exc).__name__}: "
                     f"{exc}); it holds at most what was flushed before")
             outcome.exit_status = "failed"

@@ -333,7 +333,7 @@ def test_a_full_disk_fails_the_run_with_a_message(sim_profile, tmp_path):
                            str(sim_profile(duration=5.0)), "--out", str(out), "--json",
                            "--no-analysis"], capture_output=True, text=True, timeout=120,
                           preexec_fn=small_files)
-    assert proc.returncode != 0
+    assert proc.returncode == 1, proc.stderr
     data = json.loads(proc.stdout)
     assert data["exit_status"] == "failed", data
     assert "could not be finalised" in data["error"] and data["run"] in data["error"]
