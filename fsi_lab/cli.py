@@ -227,7 +227,8 @@ def cmd_plugins(args) -> int:
         record["params"] = [p.as_dict() for p in descriptor.params] if descriptor else []
         record["help"] = getattr(descriptor, "help", "") if descriptor else ""
     records.sort(key=lambda r: (r["kind"] or "", r["name"]))
-    commands = [{"name": ep.name, "distribution": ep.dist.name if ep.dist else "",
+    commands = [{"name": command.name if command else ep.name,
+                 "distribution": ep.dist.name if ep.dist else "",
                  "version": ep.dist.version if ep.dist else "", "entry_point": ep.value,
                  "status": "loaded" if command else "failed", "error": error,
                  "help": command.help if command else ""}

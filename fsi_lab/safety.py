@@ -110,23 +110,24 @@ def source_output(waveform: np.ndarray, factor: int, reconstruction: str,
 
     :data:`HOLD` repeats each sample; :data:`BAND_LIMITED` interpolates through a windowed-sinc
     filter cut off at half the source rate (``scipy.signal.resample_poly``, as the simulated
-    source does). The output spans the waveform, from its first sample on, and ends abruptly
-    after the last, as the simulated source returns to its idle level (the harsher end for the
-    stroke); with ``edges`` it also includes the reconstruction's ringing before the first and
-    after the last sample, for its peak.
+    source does). The output spans the waveform, from its first sample on, to its last (what
+    the source rests at afterwards is :func:`output_stroke_mm`'s concern); with ``edges`` it
+    also includes the reconstruction's ringing before the first and after the last sample, for
+    its peak.
     """
     n, step = waveform.size, max(1, BLOCK // factor)
     if reconstruction == HOLD:
         for start in range(0, n, step):
             yield np.repeat(waveform[start:start + step], factor)
         return
-    zeros = np.zeros(2 * CONTEXT)
-    padded = np.concatenate([zeros, waveform, zeros])  # index: waveform index + 2 CONTEXT
     first, last = (-CONTEXT, n + CONTEXT) if edges else (0, n)
     for start in range(first, last, step):
         stop = min(start + step, last)
-        # waveform samples start - CONTEXT .. stop + CONTEXT: the block and its context
-        segment = padded[start + CONTEXT:stop + 3 * CONTEXT]
+        # waveform samples start - CONTEXT .. stop + CONTEXT (zero outside): the block and
+        # its context
+        lo, hi = start - CONTEXT, stop + CONTEXT
+        segment = np.concatenate([np.zeros(max(0, -lo)), waveform[max(lo, 0):min(hi, n)],
+                                  np.zeros(max(0, hi - n))])
         out = signal.resample_poly(segment, factor, 1)
         yield out[CONTEXT * factor:(CONTEXT + stop - start) * factor]
 
@@ -148,10 +149,20 @@ def output_stroke_mm(waveform: np.ndarray, sample_rate: float, reconstruction: s
                      gain: float, shaker: dict) -> float:
     """Largest base displacement, mm, the ``[shaker]`` model predicts for the source output
     (``waveform`` in V at ``sample_rate`` Sa/s, reconstructed as ``reconstruction``) amplified
-    by ``gain`` (V/V), followed by 0 V as after the burst."""
-    factor = output_oversampling(sample_rate, reconstruction, shaker["suspension_hz"])
-    return stroke_of_blocks_mm(source_output(waveform, factor, reconstruction),
-                               sample_rate * factor, gain, shaker)
+    by ``gain`` (V/V).
+
+    After the waveform a source rests at 0 V, or at the waveform's first sample (a Keysight
+    33500 in triggered burst mode idles at the first point): the worse of the two is kept.
+    """
+    # The shaker only needs STROKE_SAMPLES_PER_PERIOD points per period: at a source rate
+    # above that the samples serve as they are (the filter's overshoot is far above its band).
+    factor = output_oversampling(sample_rate, HOLD, shaker["suspension_hz"])
+    if factor == 1:
+        reconstruction = HOLD
+    rests = {0.0, float(waveform[0])} if waveform.size else {0.0}
+    return max(stroke_of_blocks_mm(source_output(waveform, factor, reconstruction),
+                                   sample_rate * factor, gain, shaker, rest)
+               for rest in rests)
 
 
 def assess(waveform: np.ndarray, sample_rate: float, gain: float, safety: dict,

@@ -83,9 +83,10 @@ def predicted_stroke_mm(drive: np.ndarray, sample_rate: float, gain: float,
 
 
 def stroke_of_blocks_mm(blocks: Iterable[np.ndarray], sample_rate: float, gain: float,
-                        shaker: dict) -> float:
+                        shaker: dict, rest_v: float = 0.0) -> float:
     """:func:`predicted_stroke_mm` of a drive given as consecutive blocks (V at
-    ``sample_rate`` Hz), so that a long drive need not be held in memory at once."""
+    ``sample_rate`` Hz), so that a long drive need not be held in memory at once, followed by
+    ``rest_v`` (V) held for five suspension periods (where the source rests after it)."""
     model = ShakerModel.from_profile(sample_rate, shaker)
     largest, samples = 0.0, 0
     for block in blocks:
@@ -95,5 +96,6 @@ def stroke_of_blocks_mm(blocks: Iterable[np.ndarray], sample_rate: float, gain: 
         samples += displacement.size
     if samples == 0:
         return 0.0
-    tail, _ = model.advance(np.zeros(int(np.ceil(5 * sample_rate / shaker["suspension_hz"]))))
+    tail, _ = model.advance(np.full(int(np.ceil(5 * sample_rate / shaker["suspension_hz"])),
+                                    rest_v * gain))
     return max(largest, float(np.max(np.abs(tail)))) * 1e3

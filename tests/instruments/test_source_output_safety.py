@@ -109,3 +109,24 @@ def test_a_drive_below_the_smallest_amplitude_comes_out_as_requested(tmp_path, a
     assert np.median(plateau) == pytest.approx(amplitude, abs=2e-5)
     source = read_run(outcome.path).instruments["source"]
     assert source["settings"]["amplitude_vpp"] == pytest.approx(0.002)
+
+
+def test_a_source_resting_at_the_first_sample_after_the_burst_is_bounded(tmp_path):
+    # a pulse at t = 0: the source (in triggered burst mode) rests at that first sample, 1 V,
+    # once the burst is over - a second step the model of a 0 V rest would not see
+    gain, rate = 5.0, 10000.0
+    pulse = ('plugin = "ramp-derivative"\nheight = 0.01\nramp_duration = 0.01\ndelay = 0.0\n'
+             'duration = 0.03')
+    path = _profile(tmp_path, f'sample_rate = {rate}\narb_filter = "off"', gain=gain,
+                    duration=1.5)
+    path.write_text(path.read_text().replace(_step(1.0), pulse))
+    outcome = run_profile(path, lab_registry(), tmp_path / "runs")
+    drive, record_rate = _recorded_drive(outcome)
+    assert np.median(drive[int(0.5 * record_rate):]) == pytest.approx(1.0, rel=1e-3)
+    measured = predicted_stroke_mm(drive, record_rate, gain, SHAKER)
+    waveform = read_run(outcome.path).excitation["waveform"]
+    predicted = assess(waveform, rate, gain, LIMITS, SHAKER, "off").predicted_stroke_mm
+    resting_at_zero = predicted_stroke_mm(waveform, rate, gain, SHAKER)
+    assert measured > 1.5 * resting_at_zero   # the rest at 1 V matters here
+    assert predicted >= 0.995 * measured
+    assert outcome.safety.predicted_stroke_mm >= predicted
