@@ -253,16 +253,12 @@ def cmd_bench_access(args) -> int:
     """``fsi-lab safe`` and ``fsi-lab identify``: every instrument of the profile, outside a run."""
     from fsi_lab.bench_access import BenchInterrupted, probe_bench, problems, safe_bench
     from fsi_lab.errors import ProfileError
-    from fsi_lab.profile import parse_profile
+    from fsi_lab.profile import load_profile
 
     registry = _registry()
-    try:
-        text = args.profile.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ProfileError(f"{args.profile}: cannot read the profile ({exc.strerror})") from None
     # Only what opening the instruments needs: a mistake elsewhere must not stop a safe state.
-    profile = parse_profile(text, str(args.profile), registry, args.set,
-                            sections=("bench", "specimen", "model", "shaker"))
+    profile = load_profile(args.profile, registry, args.set,
+                           sections=("bench", "specimen", "model", "shaker"))
     if not profile.roles:
         raise ProfileError(f"{args.profile}: bench: no instruments; expected [bench.<role>] tables")
 

@@ -249,7 +249,8 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], registry: Registr
     return raw
 
 
-def load_profile(path: str | Path, registry: Registry, overrides: list[str] = ()) -> Profile:
+def load_profile(path: str | Path, registry: Registry, overrides: list[str] = (),
+                 sections: tuple[str, ...] | None = None) -> Profile:
     """Read, override and validate a profile.
 
     Parameters
@@ -260,6 +261,8 @@ def load_profile(path: str | Path, registry: Registry, overrides: list[str] = ()
         Loaded plugins, whose schemas validate the plugin sections.
     overrides
         ``key.path=value`` strings from ``--set``.
+    sections
+        Keep only these sections (:func:`parse_profile`), or None for the whole profile.
 
     Raises
     ------
@@ -271,7 +274,7 @@ def load_profile(path: str | Path, registry: Registry, overrides: list[str] = ()
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ProfileError(f"{path}: cannot read the profile ({exc.strerror})") from None
-    return parse_profile(text, str(path), registry, overrides)
+    return parse_profile(text, str(path), registry, overrides, sections=sections)
 
 
 def parse_profile(text: str, path: str, registry: Registry, overrides: list[str] = (),

@@ -177,13 +177,6 @@ def _floor(sigma: float, fs: float, f_k: float, band: float, order: int) -> floa
     return 10.0 * sigma * math.sqrt(min(1.0, band / (0.5 * fs))) / (2 * math.pi * f_k) ** order
 
 
-def hvd_settle(res: Any, k: int) -> float:
-    """Settling time (s) of HVD component ``k`` of ``res`` (:meth:`.hvd.HVDResult.settle`:
-    2 / cutoff, plus the band-pass's smear when ``band_hz`` was given)."""
-    settle = getattr(res, "settle", None)
-    return float(settle(k)) if callable(settle) else 2.0 / float(res.cutoffs[k])
-
-
 def components(context: AnalysisContext, order: int = 0) -> list[Component]:
     """The channel's components: HVD's if it ran earlier in the chain, else the channel.
 
@@ -212,7 +205,7 @@ def components(context: AnalysisContext, order: int = 0) -> list[Component]:
             floor = max(floor, HVD_RANGE * largest / (2 * math.pi * f_k) ** order) \
                 if f_k > 0 else floor
             out.append(Component(k, res.components[k], ch.quantity, ch.unit, res.sample_rate,
-                                 res.edge_mask[k], floor, hvd_settle(res, k),
+                                 res.edge_mask[k], floor, res.settle(k),
                                  float(getattr(res, "t0", 0.0)), f_k if f_k > 0 else None))
         return out
     # A cycle-by-cycle measurement feels the noise near the oscillation: about 3 f wide.
@@ -390,13 +383,8 @@ def decay_summary(decays: FreeDecays | None, t0: float = 0.0) -> dict[str, Any]:
 def decay_attrs(decays: dict[int, FreeDecays | None], t0s: dict[int, float]) -> dict[str, Any]:
     """Attributes ``component_<k>_decays``, ``component_<k>_decay_starts_s`` and
     ``component_<k>_decay_ends_s`` (s from the channel's first sample) of the split records."""
-    out: dict[str, Any] = {}
-    for k, d in sorted(decays.items()):
-        if d is not None:
-            out[f"component_{k}_decays"] = d.count
-            out[f"component_{k}_decay_starts_s"] = [float(v) for v in d.starts + t0s[k]]
-            out[f"component_{k}_decay_ends_s"] = [float(v) for v in d.ends + t0s[k]]
-    return out
+    return {f"component_{k}_{key}": value for k, d in sorted(decays.items())
+            for key, value in decay_summary(d, t0s[k]).items()}
 
 
 def jsonable(values: Any) -> Any:

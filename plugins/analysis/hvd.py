@@ -111,8 +111,8 @@ class HVDResult:
         plugin's ``start_s``; 0 for :func:`hvd`).
     switches
         Per component, None, or the two spectral peaks (Hz, the one it stays near longer
-        first) it switches between (:func:`._mode_switch.mode_switches`: two modes' envelopes cross); empty
-        when not checked.
+        first) it switches between (:func:`._mode_switch.mode_switches`: two modes' envelopes
+        cross); empty when not checked.
     band
         The pass band ``(low, high)`` (Hz) the record was filtered to before the
         decomposition, or None.

@@ -109,10 +109,11 @@ class View(QWidget):
         names = " / ".join(self.plugins)
         return f"not computed: this run has no {names} results for channel {channel}"
 
-    def draw(self, results: RunResults, channel: str) -> bool | Iterator[None]:  # pragma: no cover
+    def draw(self, results: RunResults, channel: str) -> bool | Iterator[None]:
         """Draw the view; True if it shows data. A generator (``yield`` between steps,
-        ``return`` the verdict) can be drawn a step at a time."""
-        raise NotImplementedError
+        ``return`` the verdict) can be drawn a step at a time. Each figure overrides it; the
+        bare view has no figure and shows nothing."""
+        return False
 
     def add_plot(self, row: int, col: int, left: str, bottom: str, left_units: str | None = None,
                  bottom_units: str | None = None, colspan: int = 1) -> pg.PlotItem:
