@@ -87,7 +87,7 @@ def _chain_row() -> Row:
 
 
 def rows() -> list[Row]:
-    from fsi_lab.plugins.analysis.hvd import hvd
+    from fsi_lab.dsp.hvd import hvd
 
     x, parts = _signal()
     ours = hvd(x, FS, 3)                                     # warm-up (numba, FFT plans)

@@ -37,8 +37,8 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from fsi_lab.contract import AnalysisContext
+from fsi_lab.dsp.decays import FreeDecays, split_decays
 from fsi_lab.errors import AnalysisError
-from fsi_lab.plugins.analysis._decays import FreeDecays, split_decays
 
 #: Dynamic range of HVD components: cycles below this fraction of the largest envelope of the
 #: record are decomposition residue (about 1e-4) rather than signal.
@@ -153,8 +153,8 @@ def channel_noise(context: AnalysisContext) -> tuple[float, float]:
 
 
 def _channel_noise_uncached(context: AnalysisContext) -> tuple[float, float]:
-    from fsi_lab.plugins.analysis.instantaneous import noise_rms
-    from fsi_lab.plugins.analysis.spectrum import spectral_peaks
+    from fsi_lab.dsp.instantaneous import noise_rms
+    from fsi_lab.dsp.spectrum import spectral_peaks
 
     ch = context.channel
     x = np.asarray(ch.data, dtype=np.float64)
@@ -216,7 +216,7 @@ def components(context: AnalysisContext, order: int = 0) -> list[Component]:
 
 def displacement_components(context: AnalysisContext, plugin: str) -> list[Component]:
     """Components as displacement (m): from ``integrate`` if it ran, else integrated here."""
-    from fsi_lab.plugins.analysis.integrate import integrate
+    from fsi_lab.dsp.integrate import integrate
 
     integ = context.results.get("integrate")
     if integ is not None and isinstance(integ.values, ComponentSignals) \
@@ -245,7 +245,7 @@ def displacement_components(context: AnalysisContext, plugin: str) -> list[Compo
 def velocity_components(context: AnalysisContext) -> list[Component] | None:
     """Components as velocity (m/s), or None when the channel is not a velocity or an
     acceleration (a displacement is not differentiated: it would amplify noise)."""
-    from fsi_lab.plugins.analysis.integrate import integrate
+    from fsi_lab.dsp.integrate import integrate
 
     quantity = context.channel.quantity
     if quantity == "velocity":
@@ -268,7 +268,7 @@ def velocity_components(context: AnalysisContext) -> list[Component] | None:
 def hvd_errors(context: AnalysisContext) -> dict[int, str]:
     """The components that ``hvd`` (earlier in the chain) marked as not analysable, with its
     message: its attributes ``component_<k>_error`` (a component that switches between two
-    modes, :func:`._mode_switch.mode_switches`)."""
+    modes, :func:`fsi_lab.dsp.mode_switch.mode_switches`)."""
     res = context.results.get("hvd")
     attrs = getattr(res, "attrs", None) or {}
     out = {}

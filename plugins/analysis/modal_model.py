@@ -113,17 +113,30 @@ import math
 from typing import Any
 
 import numpy as np
+from fsi_lab.plugins.analysis._chain import (
+    HVD_RANGE,
+    SI_UNITS,
+    components,
+    displacement_components,
+    error_entries,
+    guarded,
+    jsonable,
+    per_component,
+    stack_rows,
+    where,
+)
 
 from fsi_lab.beam import PROJECTIONS
-from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult, ChannelData
+from fsi_lab.contract import (
+    AnalysisContext,
+    AnalysisPlugin,
+    AnalysisResult,
+    ChannelData,
+)
+from fsi_lab.dsp.damping import METHODS as DAMPING_METHODS
 from fsi_lab.errors import AnalysisError
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
-from fsi_lab.plugins.analysis._chain import (
-    HVD_RANGE, SI_UNITS, components, displacement_components, error_entries, guarded,
-    jsonable, per_component, stack_rows, where,
-)
-from fsi_lab.plugins.analysis.damping import METHODS as DAMPING_METHODS
 
 PLUGIN_NAME = "modal-model"
 #: A model component is paired with a measured one when their mean frequencies differ by less.
@@ -271,8 +284,10 @@ def component_curves(c: Any, smooth: int, method: str) -> tuple[Any, Any]:
     zero-crossing analysis: untrusted record ends and the points outside the free decays left
     out. Times are from the channel's first sample."""
     from fsi_lab.plugins.analysis.backbone import decay_backbone
-    from fsi_lab.plugins.analysis.damping import damping_from_peaks, decay_peaks
-    from fsi_lab.plugins.analysis.instantaneous import instantaneous
+    from fsi_lab.plugins.analysis.damping import decay_peaks
+
+    from fsi_lab.dsp.damping import damping_from_peaks
+    from fsi_lab.dsp.instantaneous import instantaneous
 
     inst = instantaneous(c.signal, c.sample_rate, offset="cycles", smooth=0,
                          min_amplitude=None, noise_floor=c.noise_floor,
@@ -351,9 +366,9 @@ def _check_inputs(context: AnalysisContext) -> ChannelData:
 
 # ----------------------------------------------------------------------------- plugin
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+    from fsi_lab.dsp.hvd import hvd
     from fsi_lab.errors import ParameterError
     from fsi_lab.modelling import beam_model
-    from fsi_lab.plugins.analysis.hvd import hvd
 
     ch = context.channel
     here = where(PLUGIN_NAME, context)

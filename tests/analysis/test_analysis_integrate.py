@@ -7,7 +7,7 @@ import pytest
 
 from _analysis_sims import linear_decay, noisy, time_axis
 from fsi_lab.errors import AnalysisError
-from fsi_lab.plugins.analysis.integrate import integrate
+from fsi_lab.dsp.integrate import integrate
 
 FS = 5000.0
 T = time_axis(8.0, FS)

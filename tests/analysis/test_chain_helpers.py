@@ -12,8 +12,8 @@ from test_analysis_plugins import run
 from fsi_lab.contract import AnalysisContext, ChannelData
 from fsi_lab.errors import AnalysisError
 from fsi_lab.plugins.analysis import _chain
-from fsi_lab.plugins.analysis._decays import decay_runs, smooth_per_decay
-from fsi_lab.plugins.analysis.damping import damping_from_peaks
+from fsi_lab.dsp.decays import decay_runs, smooth_per_decay
+from fsi_lab.dsp.damping import damping_from_peaks
 
 
 def noisy_tone(fs: float = 2000.0, sigma: float = 1e-3) -> ChannelData:

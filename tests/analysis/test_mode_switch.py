@@ -24,8 +24,8 @@ from test_free_decays import COUNT, SPACING, WIDTH, check_split, forces, quadrat
 from fsi_lab.contract import ChannelData
 from fsi_lab.errors import AnalysisError, ParameterError
 from fsi_lab.params import validate
-from fsi_lab.plugins.analysis._signal import bandpass, bandpass_smear
-from fsi_lab.plugins.analysis.hvd import hvd
+from fsi_lab.dsp._signal import bandpass, bandpass_smear
+from fsi_lab.dsp.hvd import hvd
 
 UPPER_HZ, UPPER_ZETA, UPPER_GAIN = 14.0, 0.01, 10.0
 CHAIN = ("hvd", "integrate", "backbone", "damping", "equivalent-damping")
@@ -162,7 +162,7 @@ def test_bandpass_keeps_a_decay_and_removes_the_neighbouring_mode():
     amplitude within 3e-3 (the envelope bias; measured 1.9e-3 at worst, on the small tail
     just before an impulse, and 4e-5 typically) and its time; the 14 Hz mode alone is stopped
     to below 2e-3 of the 5 Hz mode's peak there (measured 7.7e-4)."""
-    from fsi_lab.plugins.analysis.instantaneous import instantaneous
+    from fsi_lab.dsp.instantaneous import instantaneous
 
     q = crossing_train()
     fs, band = q["fs"], (3.4, 7.5)

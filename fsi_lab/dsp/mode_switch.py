@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fsi_lab.plugins.analysis._decays import decay_segments
-from fsi_lab.plugins.analysis._signal import moving_average
+from fsi_lab.dsp._signal import moving_average
+from fsi_lab.dsp.decays import decay_segments
 
 #: Samples whose envelope is below SWITCH_LEVEL x the
 #: record's largest (trusted) envelope are not looked at (their frequency is noise-prone) ...
@@ -31,7 +31,7 @@ SWITCH_SHARE = 0.1
 def _free_samples(x: np.ndarray, fs: float, settle: float, period: float) -> np.ndarray:
     """Boolean mask of the samples of ``x`` inside a free decay: from each decay's largest
     sample plus ``settle`` s to its end minus twice that (the last decay: to the record's end);
-    the decays are those of :func:`._decays.decay_segments` (blocks of ``period`` s)."""
+    the decays are those of :func:`.decays.decay_segments` (blocks of ``period`` s)."""
     segments = decay_segments(x, fs, period)
     free = np.zeros(x.size, dtype=bool)
     lag = int(round(settle * fs))
@@ -75,7 +75,7 @@ def mode_switches(x: np.ndarray, fs: float, envelopes: np.ndarray, frequencies: 
     HVD extracts the largest component at each instant: when two modes' envelopes cross (a
     short impulse makes a higher mode the larger at first, and it decays faster), a component
     follows one mode, then the other. Looked at: the free parts of the record's decays
-    (:func:`._decays.decay_segments`, from each decay's largest sample plus the component's
+    (:func:`.decays.decay_segments`, from each decay's largest sample plus the component's
     settling time, to its end less twice that), where the component's envelope is at
     least SWITCH_LEVEL of the largest and its edge mask trusts it. There its instantaneous
     frequency, averaged over 2 / cutoff (the beat of two modes of similar size makes it

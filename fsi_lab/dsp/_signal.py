@@ -1,6 +1,6 @@
 """Shared helpers of the analysis functions: input checks, padding, FFT-domain filters.
 
-Every public function of :mod:`fsi_lab.plugins.analysis` checks its input with these helpers,
+Every public function of :mod:`fsi_lab.dsp` checks its input with these helpers,
 so that a bad record always gives the same clear :class:`fsi_lab.errors.AnalysisError`: the
 message names the function, the condition found and what would be accepted.
 """

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.plugins.analysis._signal import fail, moving_average
+from fsi_lab.dsp._signal import fail, moving_average
 
 #: Factor by which the amplitude must fall below a decay's peak and then rise above its lowest
 #: value for a new decay to start: far above the ripple of HVD envelopes (a few %) and the
