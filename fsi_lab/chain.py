@@ -33,7 +33,12 @@ def merge_summary(into: dict[str, Any], part: Mapping[str, Any]) -> None:
                     target = {"index": component["index"]}
                     into["components"].append(target)
                     existing[component["index"]] = target
-                target.update(component)
+                for name, item in component.items():
+                    if name == "warnings":      # every plugin's sentences are kept
+                        kept = target.setdefault("warnings", [])
+                        kept.extend(w for w in item if w not in kept)
+                    else:
+                        target[name] = item
             into["components"].sort(key=lambda c: c["index"])
         elif isinstance(value, dict) and isinstance(into.get(key), dict):
             into[key].update(value)

@@ -126,6 +126,8 @@ def cmd_run(args) -> int:
         if outcome.summary:
             print(format_summary(outcome.summary))
     code = EXIT_FOR_STATUS[outcome.exit_status]
+    if args.strict and not args.no_analysis:
+        code = _strict_exit(outcome.summary or {}, code)
     if outcome.file_abandoned:
         # After a failed write HDF5 crashes in its own shutdown: leave without it, so that the
         # exit code says what happened (the bench is safe and the outcome printed).
@@ -136,7 +138,7 @@ def cmd_run(args) -> int:
 
 
 def cmd_analyze(args) -> int:
-    from fsi_lab.chain import DEFAULT_CHAIN, analyse_and_store
+    from fsi_lab.chain import DEFAULT_CHAIN, analyse_and_store, channels_to_analyse
     from fsi_lab.profile import parse_profile
     from fsi_lab.runfile import read_run
 
@@ -154,6 +156,12 @@ def cmd_analyze(args) -> int:
                             sections=sections)
     if args.mass_per_length is not None and not (args.mass_per_length > 0):
         raise InputFileError(f"--mass-per-length {args.mass_per_length}: expected kg/m > 0")
+    if not channels_to_analyse(run.channels, profile.analysis.get("channels", [])):
+        listed = ", ".join(f"{n} ({c.quantity}, {c.unit})" for n, c in run.channels.items())
+        raise InputFileError(
+            f"{args.run}: nothing to analyse: no velocity or displacement channel (channels: "
+            f"{listed or 'none'}); an acceleration or voltage channel is analysed when named, "
+            "e.g. --set analysis.channels=NAME")
     bus = EventBus()
     console = Console(args.quiet or args.json, args.verbose)
     bus.subscribe(console)
@@ -167,7 +175,7 @@ def cmd_analyze(args) -> int:
         _emit_json(summary)
     else:
         print(format_summary(summary))
-    return 0
+    return _strict_exit(summary, 0) if args.strict else 0
 
 
 def cmd_import(args) -> int:
@@ -406,6 +414,35 @@ def cmd_gui(args) -> int:
     return gui_main(args)
 
 
+EXIT_STRICT = 3
+
+
+def strict_problems(summary: dict[str, Any]) -> list[str]:
+    """What makes ``--strict`` fail: every refused result (an analysis or a component that
+    failed) and every warning, one line each, naming the channel and component."""
+    problems = []
+    for channel, info in summary.get("channels", {}).items():
+        for error in info.get("errors", []):
+            problems.append(f"channel {channel}: {error['message']}")
+        for component in info.get("components", []):
+            where = f"channel {channel} component {component['index']}"
+            problems.extend(f"{where}: {w}" for w in component.get("warnings", []))
+            for value in component.values():
+                if isinstance(value, dict) and value.get("error"):
+                    problems.append(f"{where}: {value['error']}")
+    return list(dict.fromkeys(problems))
+
+
+def _strict_exit(summary: dict[str, Any], code: int) -> int:
+    """``code``, or :data:`EXIT_STRICT` with the problems on stderr when there are any."""
+    problems = strict_problems(summary)
+    if code != 0 or not problems:
+        return code
+    for line in problems:
+        print(f"[strict] {line}", file=sys.stderr)
+    return EXIT_STRICT
+
+
 def _interval(bounds) -> str:
     """``[lo, hi]`` with four significant digits (95 % interval), or nothing."""
     if not bounds or any(b is None for b in bounds):
@@ -420,20 +457,29 @@ def format_summary(summary: dict[str, Any]) -> str:
         peaks = info.get("spectrum_peaks_hz")
         lines.append(f"channel {channel}" + (
             f": spectrum peaks {', '.join(f'{p:.2f}' for p in peaks[:6])} Hz" if peaks else ""))
+        for note in info.get("notes", []):
+            lines.append(f"  note: {note}")
         for component in info.get("components", []):
             text = f"  component {component['index']}"
             if component.get("frequency_hz") is not None:
                 text += f" at {component['frequency_hz']:.3f} Hz"
+                bounds = component.get("frequency_ci95_hz")
+                if bounds and None not in bounds:
+                    text += f" (+-{0.5 * (bounds[1] - bounds[0]):.2g})"
             eq = component.get("equivalent_damping")
             if eq and eq.get("c_i") is not None:
                 text += (f": C_i = {eq['c_i']:.4g} kg/(m s) {_interval(eq.get('c_i_ci95'))}, "
                          f"C_f = {eq['c_f']:.4g} kg/m^2 {_interval(eq.get('c_f_ci95'))}, "
                          f"R^2 = {eq['r2']:.3f}")
+                if eq.get("preferred_law"):
+                    text += f", preferred law: {eq['preferred_law']}"
                 for name in ("c_i", "c_f"):
                     bounds = eq.get(f"{name}_ci95")
                     if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
-                        text += f"; {name[0].upper()}{name[1:]} is not resolved (its interval contains 0)"
+                        label = f"{name[0].upper()}{name[1:]}"
+                        text += f"; {label} is not resolved (its interval contains 0)"
             lines.append(text)
+            lines.extend(f"    warning: {w}" for w in component.get("warnings", []))
             # Per-component errors (hvd's on a component that switches modes is carried by
             # every later analysis): each distinct message once.
             seen: list[str] = []
@@ -516,6 +562,8 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a profile parameter, e.g. excitation.amplitude=0.5")
     p.add_argument("--no-analysis", action="store_true", help="acquire only")
+    p.add_argument("--strict", action="store_true",
+                   help="exit 3 when the run completed but a result was refused or warned")
     common(p)
     p.set_defaults(func=cmd_run)
 
@@ -523,6 +571,8 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     p.add_argument("run", type=Path)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override an analysis parameter, e.g. analysis.hvd.components=2")
+    p.add_argument("--strict", action="store_true",
+                   help="exit 3 when a result was refused or carries a warning")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
                    help="mu + M for data without a specimen (kg/m)")
     common(p)

@@ -121,8 +121,9 @@ class Param:
 
         ``where`` is the key path used in the message (``excitation.amplitude``).
         """
-        if value is None and self.default is None:
-            return None
+        if self.default is None and (value is None or (value == "auto"
+                                                       and self.type not in ("str", "strs"))):
+            return None                     # unset: the plugin chooses ("auto")
         expected = _TYPES[self.type]
         # bool is an int subclass: refuse True where a number is expected, and vice versa.
         if isinstance(value, bool) != (self.type == "bool") or not isinstance(value, expected):

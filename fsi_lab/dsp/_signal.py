@@ -244,6 +244,8 @@ def ar_extend(x: np.ndarray, n_ext: int, order: int, stride: int, fit_length: in
         sol = scipy.linalg.solve(gram + ridge * np.eye(order + 1), rhs, assume_a="pos",
                                  check_finite=False)
     coef, c = sol[:-1], sol[-1]
+    if not np.all(np.isfinite(sol)):        # a silent or degenerate stretch: hold the level
+        return np.full(n_ext, level)
     denom = 1.0 - coef.sum()
     if abs(denom) > 1e-6:
         level += c / denom                  # the model's own mean level

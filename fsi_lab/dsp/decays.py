@@ -323,3 +323,58 @@ def decay_segments(x: Any, fs: float, period: float) -> list[tuple[int, int]]:
     region_ends = np.append(ib[np.searchsorted(tb, decays.bounds)], n)
     stops = region_ends[decays.region]
     return [(int(a), int(b)) for a, b in zip(starts, stops) if b > a]
+
+
+#: The base is still once its envelope has fallen below this fraction of its last peak.
+QUIET_LEVEL = 0.05
+
+
+def quiet_times(reference: Any, fs: float, *, level: float = QUIET_LEVEL,
+                noise: float = 0.0) -> np.ndarray:
+    """Times at which an excitation has died away: after each burst of the ``reference``
+    record (the base acceleration), the first time its envelope falls below ``level`` times
+    the burst's peak (or 3 x ``noise``, its noise RMS, when that is higher).
+
+    A structure on a shaker is not free while the base still rings (a shaker's suspension
+    rings for tenths of a second after a pulse): its motion is forced until then, and a
+    damping fit that starts earlier mistakes the forcing for damping.
+
+    Parameters
+    ----------
+    reference
+        Samples of the excitation (any unit), 1-D.
+    fs
+        Sample rate, Hz.
+    level
+        Fraction of each burst's peak envelope below which the excitation counts as gone.
+    noise
+        RMS of the reference's noise (its unit).
+
+    Returns
+    -------
+    numpy.ndarray
+        Increasing times, s from the first sample; empty when the reference never calms down.
+    """
+    from scipy.signal import hilbert
+
+    x = np.asarray(reference, dtype=np.float64)
+    x = x - float(np.median(x))
+    env = np.abs(hilbert(x))
+    top = float(np.max(env)) if env.size else 0.0
+    if top <= 0:
+        return np.empty(0)
+    # Bursts: where the envelope rises above half the record's largest, each burst's peak.
+    loud = env >= 0.2 * top
+    edges = np.flatnonzero(np.diff(loud.astype(np.int8)))
+    starts = list(np.flatnonzero(loud[:1])) + [int(e) + 1 for e in edges if not loud[e]]
+    out = []
+    for s in starts:
+        stop = s
+        while stop < env.size and loud[stop]:
+            stop += 1
+        peak = s + int(np.argmax(env[s:max(stop, s + 1)]))
+        threshold = max(level * float(env[peak]), 3.0 * noise)
+        below = np.flatnonzero(env[peak:] < threshold)
+        if below.size:
+            out.append((peak + int(below[0])) / float(fs))
+    return np.array(sorted(set(out)))

@@ -37,9 +37,9 @@ Numerical choices (see the module constants):
 - Crossing envelopes: HVD follows the largest component at each instant, so when two modes'
   envelopes cross (a short impulse makes a higher mode the larger at first, and it decays
   faster) a component switches from one mode to the other. :func:`.mode_switch.mode_switches`
-  finds such components (:attr:`HVDResult.switches`); the plugin marks them with an error, which every
-  later analysis of the chain reports instead of results. ``band`` (``band_hz``) decomposes a
-  band-passed record (:func:`._signal.bandpass`), one mode at a time.
+  finds such components (:attr:`HVDResult.switches`); the plugin marks them with an error,
+  which every later analysis of the chain reports instead of results. ``band`` (``band_hz``)
+  decomposes a band-passed record (:func:`._signal.bandpass`), one mode at a time.
 """
 
 from __future__ import annotations

@@ -203,6 +203,79 @@ def _refine_extrema(x: np.ndarray, idx: np.ndarray, half: np.ndarray, wdt: np.nd
     return pos, val
 
 
+@dataclass(frozen=True)
+class HalfCycles:
+    """Zero crossings and the extremum of each half cycle of an oscillation.
+
+    Attributes
+    ----------
+    crossings
+        Interpolated zero-crossing times, s from the first sample.
+    times
+        Refined time of each extremum, s; one per half cycle, in order, from the first
+        complete extremum of the record (one before the first crossing counts when it is a
+        true maximum of |x|, not the record's edge).
+    values
+        Refined signed extremum values, unit of the record.
+    """
+
+    crossings: np.ndarray
+    times: np.ndarray
+    values: np.ndarray
+
+
+def half_cycles(x: Any, fs: float, frequency: float) -> HalfCycles:
+    """Zero crossings and refined extrema of a band-limited oscillation about zero.
+
+    Unlike :func:`instantaneous`, the record's first and last partial half cycles keep their
+    extremum when it is a true maximum of ``|x|`` (a free decay recorded from its first
+    extremum, or from release, loses no cycle), and no offset is removed (the band signals of
+    :func:`fsi_lab.dsp.bands.split` hold none).
+
+    Parameters
+    ----------
+    x
+        Samples, unit U (1-D, finite).
+    fs
+        Sample rate, Hz.
+    frequency
+        Approximate frequency of the oscillation, Hz (sets the merge of chatter near zero: sign
+        changes closer than 5 % of a period are one crossing).
+
+    Returns
+    -------
+    HalfCycles
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fsi_lab.dsp.instantaneous import half_cycles
+    >>> t = np.arange(1000) / 1000.0
+    >>> hc = half_cycles(np.sin(2 * np.pi * 5 * t), 1000.0, 5.0)
+    >>> np.round(hc.times[:2], 4).tolist(), np.round(hc.values[:2], 4).tolist()
+    ([0.05, 0.15], [1.0, -1.0])
+    """
+    y = as_record(x, "half_cycles", min_samples=8, check_clipping=False, allow_constant=True)
+    fs = check_rate(fs, "half_cycles")
+    spc = fs / frequency if frequency > 0 else float(y.size)
+    cross = _crossings(y, 0.05 * spc)
+    if cross.size == 0:
+        return HalfCycles(cross / fs, np.empty(0), np.empty(0))
+    bounds = np.concatenate(([0], np.ceil(cross), [y.size])).astype(np.int64)
+    bounds = np.clip(bounds, 0, y.size)
+    ay = np.abs(y)
+    imax = _segment_argmax(ay, bounds)
+    keep = np.ones(imax.size, dtype=bool)
+    for j in (0, imax.size - 1):                 # the partial half cycles at the edges
+        i = imax[j]
+        keep[j] = 0 < i < y.size - 1 and ay[i] >= ay[i - 1] and ay[i] >= ay[i + 1] \
+            and ay[i] > 0.0
+    hp = np.diff(np.concatenate(([cross[0] - 0.5 * spc], cross, [cross[-1] + 0.5 * spc])))
+    half = np.clip(np.rint(0.1 * hp).astype(np.int64), 1, 32)
+    pos, val = _refine_extrema(y, imax, half, np.pi / np.maximum(hp, 1e-9))
+    return HalfCycles(cross / fs, pos[keep] / fs, val[keep])
+
+
 # ----------------------------------------------------------------------------- offset
 def _extrema(y: np.ndarray, merge: float, refine: bool = True
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -260,6 +260,7 @@ def find_peaks_interpolated(freqs: Any, amplitude: Any, *, min_relative: float =
     idx = bins[idx[grid_f[idx] >= fmin]]
     out_f = []
     out_a = []
+    seen = set()
     for i in idx:
         if smoothing > 0:
             half = max(1, int(np.ceil(smoothing * f[i] / df)))
@@ -268,6 +269,12 @@ def find_peaks_interpolated(freqs: Any, amplitude: Any, *, min_relative: float =
             j = lo + int(np.argmax(a[lo:hi]))
         else:
             j = i
+        if j in seen:                   # two smoothed peaks refined onto the same bin
+            continue
+        if smoothing > 0 and not (a[j] >= a[j - 1] and a[j] >= a[min(j + 1, a.size - 1)]):
+            continue                    # the running maximum's step on a flank: no peak
+
+        seen.add(j)
         fj, aj = _parabolic(f, a, j)
         out_f.append(fj)
         out_a.append(aj)

@@ -37,6 +37,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from fsi_lab.contract import AnalysisContext
+from fsi_lab.dsp.components import BandComponents
 from fsi_lab.dsp.decays import FreeDecays, split_decays
 from fsi_lab.errors import AnalysisError
 
@@ -191,6 +192,8 @@ def components(context: AnalysisContext, order: int = 0) -> list[Component]:
     fs = float(ch.sample_rate)
     sigma, f_dom = channel_noise(context)
     hvd = context.results.get("hvd")
+    if hvd is not None and isinstance(hvd.values, BandComponents):
+        return _band_components(hvd.values, ch, order)
     if hvd is not None and hvd.values is not None:
         res = hvd.values
         out = []
@@ -214,6 +217,20 @@ def components(context: AnalysisContext, order: int = 0) -> list[Component]:
                       floor, frequency=f_dom if f_dom > 0 else None)]
 
 
+def _band_components(res: BandComponents, ch: Any, order: int) -> list[Component]:
+    """Components of the ``bands`` decomposition: no settling time (each decay is filtered on
+    its own), the noise floor of the identification scaled by ``order`` integrations."""
+    ident = res.identification
+    quantity, unit = ("velocity", "m/s") if res.integrate else (ch.quantity, ch.unit)
+    out = []
+    for k, mode in enumerate(ident.modes):
+        f_k = mode.frequency_hz
+        floor = mode.noise_floor / (2 * math.pi * f_k) ** order
+        out.append(Component(k, res.components[k], quantity, unit, res.sample_rate,
+                             res.edge_mask[k], floor, 0.0, 0.0, f_k))
+    return out
+
+
 def displacement_components(context: AnalysisContext, plugin: str) -> list[Component]:
     """Components as displacement (m): from ``integrate`` if it ran, else integrated here."""
     from fsi_lab.dsp.integrate import integrate
@@ -225,9 +242,19 @@ def displacement_components(context: AnalysisContext, plugin: str) -> list[Compo
         return [Component(k, sig, "displacement", v.unit, v.sample_rate, v.edge_masks.get(k),
                           v.noise_floors.get(k), v.settles.get(k, 0.0), v.t0s.get(k, 0.0),
                           v.frequencies.get(k)) for k, sig in sorted(v.signals.items())]
-    quantity = context.channel.quantity
+    quantity = component_quantity(context)
     if quantity == "displacement":
         return components(context)
+    hvd = context.results.get("hvd")
+    if quantity in ("velocity", "acceleration") and hvd is not None \
+            and isinstance(hvd.values, BandComponents):
+        # Band by band: a band holds no zero frequency, so no high-pass is needed.
+        comps = _band_components(hvd.values.integrated(1 if quantity == "velocity" else 2),
+                                 context.channel, 0)
+        order = 1 if quantity == "velocity" else 2
+        return [Component(c.index, c.signal, "displacement", "m", c.sample_rate, c.edge_mask,
+                          c.noise_floor / (2 * math.pi * c.frequency) ** order, 0.0, 0.0,
+                          c.frequency) for c in comps]
     if quantity not in ("velocity", "acceleration"):
         raise AnalysisError(
             f"{where(plugin, context)}: the channel measures {quantity!r} ({context.channel.unit})"
@@ -242,12 +269,21 @@ def displacement_components(context: AnalysisContext, plugin: str) -> list[Compo
     return out
 
 
+def component_quantity(context: AnalysisContext) -> str:
+    """What the channel's components measure: the channel's quantity, or a velocity when
+    the ``bands`` decomposition integrated an acceleration band by band."""
+    hvd = context.results.get("hvd")
+    if hvd is not None and isinstance(hvd.values, BandComponents) and hvd.values.integrate:
+        return "velocity"
+    return context.channel.quantity
+
+
 def velocity_components(context: AnalysisContext) -> list[Component] | None:
     """Components as velocity (m/s), or None when the channel is not a velocity or an
     acceleration (a displacement is not differentiated: it would amplify noise)."""
     from fsi_lab.dsp.integrate import integrate
 
-    quantity = context.channel.quantity
+    quantity = component_quantity(context)
     if quantity == "velocity":
         return components(context)
     integ = context.results.get("integrate")

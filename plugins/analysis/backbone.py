@@ -5,6 +5,14 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
+from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
+from fsi_lab.dsp._signal import fail
+from fsi_lab.dsp.backbone import Backbone
+from fsi_lab.dsp.decays import smooth_per_decay
+from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
+from fsi_lab.hookspecs import hookimpl
+from fsi_lab.params import Param
 from fsi_lab.plugins.analysis._chain import (
     Component,
     decay_attrs,
@@ -19,14 +27,6 @@ from fsi_lab.plugins.analysis._chain import (
     velocity_components,
 )
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS
-
-from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
-from fsi_lab.dsp._signal import fail
-from fsi_lab.dsp.backbone import Backbone
-from fsi_lab.dsp.decays import smooth_per_decay
-from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
-from fsi_lab.hookspecs import hookimpl
-from fsi_lab.params import Param
 
 
 def decay_backbone(inst: Instantaneous, c: Component, smooth: int = 0,

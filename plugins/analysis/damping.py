@@ -7,6 +7,12 @@ import math
 from typing import Any
 
 import numpy as np
+
+from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
+from fsi_lab.dsp.damping import METHODS, DampingCurve, damping_from_peaks
+from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
+from fsi_lab.hookspecs import hookimpl
+from fsi_lab.params import Param
 from fsi_lab.plugins.analysis._chain import (
     Component,
     decay_attrs,
@@ -20,12 +26,6 @@ from fsi_lab.plugins.analysis._chain import (
     stack_rows,
 )
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS
-
-from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
-from fsi_lab.dsp.damping import METHODS, DampingCurve, damping_from_peaks
-from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
-from fsi_lab.hookspecs import hookimpl
-from fsi_lab.params import Param
 
 
 def decay_peaks(inst: Instantaneous, c: Component, decay_only: bool = True):

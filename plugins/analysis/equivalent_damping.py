@@ -7,17 +7,10 @@ import math
 from typing import Any
 
 import numpy as np
-from fsi_lab.plugins.analysis._chain import (
-    decay_summary,
-    displacement_components,
-    error_entries,
-    guarded,
-    jsonable,
-    per_component,
-    where,
-)
 
 from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
+from fsi_lab.dsp.components import BandComponents
+from fsi_lab.dsp.damping import damping_decrement
 from fsi_lab.dsp.equivalent_damping import (
     WEIGHTINGS,
     equivalent_coefficient,
@@ -27,8 +20,19 @@ from fsi_lab.dsp.equivalent_damping import (
 from fsi_lab.errors import AnalysisError
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis._chain import (
+    components,
+    decay_summary,
+    displacement_components,
+    error_entries,
+    guarded,
+    jsonable,
+    per_component,
+    stack_rows,
+    where,
+)
 
-METHODS = ("regression", "envelope")
+METHODS = ("law", "regression", "envelope")
 
 
 def specimen_mass_per_length(specimen: Any) -> float:
@@ -69,6 +73,130 @@ def modal_scale_from_beam(specimen: Any, frequency_hz: float, mode: int | None =
     return value, int(mode)
 
 
+def amplitude_convention(context: AnalysisContext, params: dict[str, Any], f_hz: float
+                         ) -> tuple[float, str]:
+    """``modal_scale`` for a component at ``f_hz`` (Hz) and the words that say which amplitude
+    the coefficients belong to (see :mod:`fsi_lab.dsp.equivalent_damping`)."""
+    given = params["modal_scale"]
+    if given is not None:
+        return float(given), f"modal (modal_scale = {given:g} given)"
+    if context.specimen is not None:
+        found = modal_scale_from_beam(context.specimen, f_hz, params["mode"])
+        if found is not None:
+            return found[0], (f"modal: q_{found[1]} = w(x_meas) / W_{found[1]}(x_meas), "
+                              f"W_{found[1]}(x_meas) = {found[0]:.6g} (Eq. 15, int W^2 = L)")
+        return 1.0, "measured (no beam model available for the modal conversion)"
+    return 1.0, "measured (displacement amplitude at the measuring point)"
+
+
+def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, Any]:
+    """C_i, C_f and the law comparison of one identified mode (method ``law``)."""
+    quad = mode.quadratic
+    a, beta = quad.value("a"), quad.value("beta")
+    (a_lo, a_hi), (b_lo, b_hi) = quad.interval("a", level), quad.interval("beta", level)
+    amp = np.concatenate([d.amplitude for d in mode.decays])
+    model = np.concatenate(quad.model)
+    r2 = 1.0 - float(np.sum((amp - model) ** 2)) / max(float(np.sum((amp - amp.mean()) ** 2)),
+                                                       1e-300)
+    laws = {}
+    for name, fit in mode.laws.fits.items():
+        laws[name] = {"delta_aicc": float(mode.laws.delta[name]),
+                      **{p: float(v) for p, v in zip(fit.names, fit.params)},
+                      **{f"{p}_se": float(s) for p, s in zip(fit.names, fit.se)}}
+    entry = {"c_i": 2.0 * mass * a, "c_f": mass * beta * scale,
+             "c_i_ci95": [2.0 * mass * a_lo, 2.0 * mass * a_hi],
+             "c_f_ci95": [mass * scale * b_lo, mass * scale * b_hi],
+             "c_i_se": 2.0 * mass * float(quad.se[0]), "c_f_se": mass * scale * float(quad.se[1]),
+             "r2": r2, "points": mode.extrema_count, "decays": len(mode.decays),
+             "decay_starts_s": [float(d.times[0]) for d in mode.decays],
+             "decay_ends_s": [float(d.times[-1]) for d in mode.decays],
+             "preferred_law": mode.laws.preferred, "laws": laws}
+    coulomb = mode.laws.fits.get("coulomb")
+    if coulomb is not None and mode.laws.preferred == "coulomb":
+        # gamma is a friction force per unit mass in the measured coordinate.
+        entry["friction_force_per_length"] = mass * coulomb.value("gamma") * scale
+    return entry
+
+
+def _law_points(mode: Any, mass: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Displacement amplitude (m, in the amplitude convention) and C_q (kg/(m s)) from each
+    pair of successive extrema of the same sign (the measured points of the C_q plot)."""
+    amps, cqs = [], []
+    w = 2.0 * math.pi * mode.frequency_hz
+    for d in mode.decays:
+        if d.amplitude.size < 3:
+            continue
+        curve = damping_decrement(d.times, d.amplitude, mode.frequency_hz, span=2)
+        disp = curve.amplitude / (w if mode.quantity == "velocity" else 1.0)
+        amps.append(disp / scale)
+        cqs.append(equivalent_coefficient(curve.zeta, curve.frequency, mass))
+    if not amps:
+        return np.empty(0), np.empty(0)
+    return np.concatenate(amps), np.concatenate(cqs)
+
+
+def _run_law(context: AnalysisContext, params: dict[str, Any], mass: float, mass_source: str
+             ) -> AnalysisResult:
+    """Method ``law``: C_i and C_f from the linear + quadratic law fitted by the ``bands``
+    decomposition (:mod:`fsi_lab.dsp.identify`), with the law the record prefers."""
+    plugin = "equivalent-damping"
+    with guarded(plugin, context):
+        comps = components(context)            # (refuses when hvd failed earlier)
+    hvd = context.results.get("hvd")
+    res = hvd.values if hvd is not None else None
+    if not isinstance(res, BandComponents) or res.identification is None:
+        raise AnalysisError(
+            f"{where(plugin, context)}: method 'law' uses the damping laws fitted by hvd "
+            "(method 'bands') earlier in the chain on this channel; put hvd before it, or use "
+            "method = 'regression'")
+    if context.channel.quantity not in ("displacement", "velocity", "acceleration"):
+        raise AnalysisError(
+            f"{where(plugin, context)}: the channel measures {context.channel.quantity!r} "
+            f"({context.channel.unit}); C_i and C_f need a calibrated displacement, velocity "
+            "or acceleration channel")
+    conventions: dict[int, str] = {}
+
+    def work(c):
+        mode = res.identification.modes[c.index]
+        scale, conventions[c.index] = amplitude_convention(context, params, mode.frequency_hz)
+        entry = _law_entry(mode, mass, scale, params["confidence"])
+        amplitude, c_q = _law_points(mode, mass, scale)
+        return {**entry, "amplitude": amplitude, "c_q": c_q}
+
+    done, errors = per_component(plugin, context, comps, work)
+    return _result(done, errors, conventions, len(comps), mass, mass_source, params)
+
+
+def _result(done: dict[int, dict], errors: dict[int, str], conventions: dict[int, str],
+            count: int, mass: float, mass_source: str, params: dict[str, Any]
+            ) -> AnalysisResult:
+    """The plugin's result from per-component entries (each with ``amplitude`` and ``c_q``
+    arrays for the datasets)."""
+    entries = []
+    for k, r in done.items():
+        summary = {key: jsonable(v) for key, v in r.items() if key not in ("amplitude", "c_q")}
+        summary.update(mass_per_length=mass, method=params["method"],
+                       amplitude_convention=conventions.get(k, "measured"))
+        entries.append({"index": k, "equivalent_damping": summary})
+    err_entries, err_attrs = error_entries(errors, "equivalent_damping")
+    attrs = {"mass_per_length": mass, "mass_per_length_source": mass_source,
+             "method": params["method"], "weighting": params["weighting"],
+             "confidence": params["confidence"],
+             "amplitude_convention": "; ".join(f"component {k}: {v}"
+                                               for k, v in sorted(conventions.items())),
+             **err_attrs}
+    for k, r in done.items():
+        for key in ("c_i", "c_f", "r2"):
+            attrs[f"component_{k}_{key}"] = float(r[key])
+        if "preferred_law" in r:
+            attrs[f"component_{k}_preferred_law"] = r["preferred_law"]
+    return AnalysisResult(
+        datasets={"amplitude": stack_rows({k: r["amplitude"] for k, r in done.items()}, count),
+                  "c_q": stack_rows({k: r["c_q"] for k, r in done.items()}, count)},
+        units={"amplitude": "m", "c_q": "kg/(m s)"},
+        attrs=attrs, summary={"components": entries + err_entries}, values=done)
+
+
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     plugin = "equivalent-damping"
     if context.mass_per_length is not None:
@@ -81,11 +209,19 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
         raise AnalysisError(
             f"{where(plugin, context)}: needs mu + M, the mass per length of beam plus added "
             "fluid mass: pass --mass-per-length KG_PER_M or give the profile a [specimen]")
+    fallback = None
+    if params["method"] == "law":
+        hvd = context.results.get("hvd")
+        if hvd is None or isinstance(hvd.values, BandComponents):
+            return _run_law(context, params, mass, mass_source)
+        # Feldman's HVD components carry no law fit: the paper's regression, said so.
+        params = {**params, "method": "regression"}
+        fallback = ("C_i and C_f from the paper's regression of C_q against amplitude: the "
+                    "damping-law fit needs hvd's method 'bands'")
     with guarded(plugin, context):
         disp = displacement_components(context, plugin)
-    from fsi_lab.plugins.analysis.damping import curve_for, trusted_peaks
-
     from fsi_lab.dsp.damping import damping_from_peaks
+    from fsi_lab.plugins.analysis.damping import curve_for, trusted_peaks
 
     prior = context.results.get("damping")
     prior_curves = prior.values if prior is not None and isinstance(prior.values, dict) else {}
@@ -94,21 +230,8 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     conventions: dict[int, str] = {}
 
     def scale_for(k: int, f_hz: float) -> float:
-        given = params["modal_scale"]
-        if given is not None:
-            conventions[k] = f"modal (modal_scale = {given:g} given)"
-            return float(given)
-        if context.specimen is not None:
-            found = modal_scale_from_beam(context.specimen, f_hz, params["mode"])
-            if found is not None:
-                conventions[k] = (f"modal: q_{found[1]} = w(x_meas) / W_{found[1]}(x_meas), "
-                                  f"W_{found[1]}(x_meas) = {found[0]:.6g} (Eq. 15, "
-                                  "int W^2 = L)")
-                return found[0]
-            conventions[k] = "measured (no beam model available for the modal conversion)"
-            return 1.0
-        conventions[k] = "measured (displacement amplitude at the measuring point)"
-        return 1.0
+        scale, conventions[k] = amplitude_convention(context, params, f_hz)
+        return scale
 
     def work(c):
         with guarded(plugin, context):
@@ -137,38 +260,23 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                     "damping_method": curve.method}
 
     done, errors = per_component(plugin, context, disp, work)
-    entries = []
-    for k, r in done.items():
-        summary = {key: jsonable(v) for key, v in r.items() if key not in ("amplitude", "c_q")}
-        summary.update(mass_per_length=mass, method=params["method"],
-                       amplitude_convention=conventions.get(k, "measured"))
-        entries.append({"index": k, "equivalent_damping": summary})
-    err_entries, err_attrs = error_entries(errors, "equivalent_damping")
-    from fsi_lab.plugins.analysis._chain import stack_rows
-    count = len(disp)
-    attrs = {"mass_per_length": mass, "mass_per_length_source": mass_source,
-             "method": params["method"], "weighting": params["weighting"],
-             "confidence": params["confidence"],
-             "amplitude_convention": "; ".join(f"component {k}: {v}"
-                                               for k, v in sorted(conventions.items())),
-             **err_attrs}
-    for k, r in done.items():
-        for key in ("c_i", "c_f", "r2"):
-            attrs[f"component_{k}_{key}"] = float(r[key])
-    return AnalysisResult(
-        datasets={"amplitude": stack_rows({k: r["amplitude"] for k, r in done.items()}, count),
-                  "c_q": stack_rows({k: r["c_q"] for k, r in done.items()}, count)},
-        units={"amplitude": "m", "c_q": "kg/(m s)"},
-        attrs=attrs, summary={"components": entries + err_entries}, values=done)
+    result = _result(done, errors, conventions, len(disp), mass, mass_source, params)
+    if fallback:
+        for entry in result.summary["components"]:
+            entry.setdefault("warnings", []).append(fallback)
+    return result
 
 
 PLUGIN = AnalysisPlugin(
     name="equivalent-damping",
     params=(
-        Param("method", "str", "", "regression", choices=METHODS,
-              help="regression: the paper's first-order fit of C_q = 2 zeta (mu+M) 2 pi f "
+        Param("method", "str", "", "law", choices=METHODS,
+              help="law (default): the linear + quadratic damping law fitted to every extremum "
+                   "of every free decay by hvd's bands decomposition, from the first cycle on, "
+                   "compared with viscous and viscous + Coulomb damping (preferred_law); "
+                   "regression: the paper's first-order fit of C_q = 2 zeta (mu+M) 2 pi f "
                    "against displacement amplitude (uses the chain's damping curves); "
-                   "envelope: direct fit of the linear + quadratic envelope law to the peaks."),
+                   "envelope: the averaged envelope law's closed form fitted to the peaks."),
         Param("weighting", "str", "", "amplitude", choices=WEIGHTINGS,
               help="regression weights: amplitude (W^2, inverse noise variance) or uniform "
                    "(ordinary least squares)."),

@@ -5,13 +5,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from fsi_lab.plugins.analysis._chain import guarded, jsonable, where
 
 from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
 from fsi_lab.dsp.frf import frf
 from fsi_lab.errors import AnalysisError
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis._chain import guarded, jsonable, where
 
 
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:

@@ -1,4 +1,8 @@
-"""The ``hvd`` analysis plugin: an adapter around :mod:`fsi_lab.dsp.hvd`."""
+"""The ``hvd`` analysis plugin: the decomposition of a channel into one component per mode.
+
+Two methods: ``bands`` (default) adapts :mod:`fsi_lab.dsp.identify` and
+:mod:`fsi_lab.dsp.components`; ``hvd`` adapts :mod:`fsi_lab.dsp.hvd` (the paper's method).
+"""
 
 from __future__ import annotations
 
@@ -6,12 +10,18 @@ import dataclasses
 from typing import Any
 
 import numpy as np
-from fsi_lab.plugins.analysis._chain import guarded
 
 from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
-from fsi_lab.dsp.hvd import PADDINGS, band_around, hvd
+from fsi_lab.dsp.components import band_components
+from fsi_lab.dsp.decays import QUIET_LEVEL, quiet_times
+from fsi_lab.dsp.hvd import PADDINGS, PEAK_SMOOTHING, PEAK_THRESHOLD, band_around, hvd
+from fsi_lab.dsp.identify import identify
+from fsi_lab.dsp.spectrum import free_decay_peaks
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis._chain import guarded
+
+METHODS = ("bands", "hvd")
 
 
 def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
@@ -24,10 +34,9 @@ def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
     :func:`.integrate.integrate`, high-passed at half the lowest spectral peak of the channel
     (so the base motion at the beam's modes is kept).
     """
-    from fsi_lab.plugins.analysis._chain import where
-
     from fsi_lab.dsp.integrate import integrate, lowest_mode
     from fsi_lab.errors import AnalysisError
+    from fsi_lab.plugins.analysis._chain import where
 
     ch = context.channel
     data = np.asarray(ch.data, dtype=np.float64)
@@ -83,16 +92,99 @@ def switch_message(context: AnalysisContext, k: int, pair: tuple[float, float],
             + (f" (e.g. {hint})" if hint else ""))
 
 
+#: The quantity :func:`fsi_lab.dsp.identify.identify` analyses for each channel quantity (a
+#: voltage from an unknown sensor is taken as the coordinate itself).
+_IDENTIFY_AS = {"velocity": "velocity", "displacement": "displacement",
+                "acceleration": "acceleration", "voltage": "displacement"}
+
+
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+    if params["method"] == "bands":
+        return _run_bands(context, params)
+    return _run_hvd(context, params)
+
+
+def _run_bands(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+    """One component per mode: :func:`fsi_lab.dsp.identify.identify` and
+    :func:`fsi_lab.dsp.components.band_components`."""
+    ch = context.channel
+    data, relative_to = relative_signal(context, params["relative"])
+    fs = float(ch.sample_rate)
+    quantity = _IDENTIFY_AS.get(ch.quantity, "displacement")
+    starts = [] if params["start_s"] is None else [params["start_s"]]
+    quiet = base_quiet(context)
+    with guarded("hvd", context):
+        ident = identify(data, fs, quantity=quantity,
+                         components=params["components"] or "auto", band=params["band_hz"],
+                         decay_starts=(starts + list(quiet)) or None)
+        res = band_components(data, fs, ident, integrate=int(quantity == "acceleration"))
+    comps = []
+    for k, mode in enumerate(ident.modes):
+        good = ~res.edge_mask[k]
+        comps.append({
+            "index": k, "frequency_hz": mode.frequency_hz,
+            "frequency_ci95_hz": list(mode.frequency_ci),
+            "damped_frequency_hz": mode.damped_frequency_hz,
+            "spectral_peak_hz": mode.spectral_peak_hz, "band_hz": list(mode.band_hz),
+            "extrema": mode.extrema_count, "decays": len(mode.decays),
+            "hvd_peak_envelope": float(res.envelopes[k][good].max()) if good.any() else None,
+            "warnings": list(mode.warnings)})
+    flat = np.array([list(m.band_hz) for m in ident.modes])
+    unit = ch.unit if quantity != "acceleration" else "m/s"
+    notes = list(ident.notes)
+    return AnalysisResult(
+        datasets={"components": res.components, "envelopes": res.envelopes,
+                  "frequencies": res.frequencies, "residual": res.residual,
+                  "edge_mask": res.edge_mask.astype(np.uint8), "cutoffs": res.cutoffs,
+                  "bands": flat},
+        units={"components": unit, "envelopes": unit, "frequencies": "Hz",
+               "residual": ch.unit, "edge_mask": "", "cutoffs": "Hz", "bands": "Hz"},
+        attrs={"method": "bands", "n_components": res.n_components, "sample_rate": fs,
+               "relative_to": relative_to if relative_to else "none (the channel as measured)",
+               "start_s": 0.0,
+               "start_rule": "each free decay from its largest sample"
+               + ("" if params["start_s"] is None else f", not before {params['start_s']:g} s")
+               + (f", and not before the base has calmed down ({QUIET_LEVEL:g} of its peak "
+                  f"envelope) at {', '.join(f'{s:.4g}' for s in quiet)} s" if len(quiet)
+                  else ""),
+               "edge_mask_meaning": "1 outside the free part of every decay (excitation, "
+                                    "build-ups): not used",
+               "band_hz": list(params["band_hz"]) if params["band_hz"] is not None
+               else "none (the whole record)",
+               "order": "components by decreasing energy of their free decays; row k = index k",
+               "noise_rms": ident.noise_rms, "notes": notes},
+        summary={"components": comps, **({"notes": notes} if notes else {})}, values=res)
+
+
+def base_quiet(context: AnalysisContext) -> np.ndarray:
+    """Times (s, on the channel's clock) at which the base acceleration (the chain's reference)
+    has calmed down after each excitation (:func:`fsi_lab.dsp.decays.quiet_times`); empty
+    without a usable reference."""
+    ch = context.channel
+    ref = context.channels.get(context.reference) if context.reference else None
+    if ref is None or ref.name == ch.name or ref.quantity != "acceleration" \
+            or ref.data.size < 64 or not np.all(np.isfinite(ref.data)):
+        return np.empty(0)
+    times = quiet_times(ref.data, float(ref.sample_rate))
+    return times + (float(ref.t0) - float(ch.t0))
+
+
+def _auto_components(data: np.ndarray, fs: float) -> int:
+    """Feldman's HVD with ``components`` unset: one per significant spectral peak of the free
+    decays (at most 7, his limit)."""
+    peaks = free_decay_peaks(data, fs, min_relative=PEAK_THRESHOLD, smoothing=PEAK_SMOOTHING)
+    return int(min(max(peaks.frequencies.size, 1), 7))
+
+
+def _run_hvd(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     ch = context.channel
     data, relative_to = relative_signal(context, params["relative"])
     if params["start_s"] is None:
         # Automatic: the free decay starts where the excitation leaves the structure, at the
         # largest sample (0 for a record that starts with the decay); for several decays (an
         # impulse train) at the largest sample of the first one.
-        from fsi_lab.plugins.analysis._chain import channel_noise
-
         from fsi_lab.dsp.decays import first_decay_peak
+        from fsi_lab.plugins.analysis._chain import channel_noise
         sigma, f_dom = channel_noise(context)
         fs = float(ch.sample_rate)
         i0 = first_decay_peak(data, fs, 1.0 / f_dom, 10.0 * sigma) if f_dom > 0 \
@@ -102,14 +194,14 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
         i0 = int(round(params["start_s"] * float(ch.sample_rate)))
         start_rule = "given"
     if i0 >= data.size - 32:
-        from fsi_lab.plugins.analysis._chain import where
-
         from fsi_lab.errors import AnalysisError
+        from fsi_lab.plugins.analysis._chain import where
         raise AnalysisError(f"{where('hvd', context)}: start_s = {i0 / ch.sample_rate:g} s leaves "
                             f"{max(data.size - i0, 0)} samples of a {data.size / ch.sample_rate:g}"
                             " s record; expected a start inside the record")
     with guarded("hvd", context):
-        res = hvd(data[i0:], ch.sample_rate, params["components"], params["cutoff_hz"],
+        count = params["components"] or _auto_components(data[i0:], float(ch.sample_rate))
+        res = hvd(data[i0:], ch.sample_rate, count, params["cutoff_hz"],
                   padding=params["padding"], band=params["band_hz"])
     res = dataclasses.replace(res, t0=i0 / float(ch.sample_rate))
     from fsi_lab.plugins.analysis._chain import error_entries
@@ -122,6 +214,9 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                       "cutoff_hz": float(res.cutoffs[k]),
                       "hvd_peak_envelope": float(res.envelopes[k][good].max())
                       if good.any() else None,
+                      "warnings": ["frequency_hz is HVD's envelope-weighted mean frequency, not "
+                                   "the small-amplitude natural frequency (method = 'bands' "
+                                   "gives that)"],
                       **({"hvd": {"error": errors[k]}} if k in errors else {})})
     return AnalysisResult(
         datasets={"components": res.components, "envelopes": res.envelopes,
@@ -130,8 +225,8 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
         units={"components": ch.unit, "envelopes": ch.unit, "frequencies": "Hz",
                "residual": ch.unit, "edge_mask": "", "cutoffs": "Hz"},
         # (rows start at start_s: sample j of a row is at t = start_s + j / sample_rate)
-        attrs={"n_components": res.n_components, "sample_rate": res.sample_rate,
-               "padding": params["padding"],
+        attrs={"method": "hvd", "n_components": res.n_components,
+               "sample_rate": res.sample_rate, "padding": params["padding"],
                "relative_to": relative_to if relative_to else "none (the channel as measured)",
                "start_s": res.t0, "start_rule": start_rule,
                "edge_mask_meaning": "1 where the sample is too close to a record end to be "
@@ -146,8 +241,16 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
 PLUGIN = AnalysisPlugin(
     name="hvd",
     params=(
-        Param("components", "int", "", 2, minimum=1,
-              help="Number of components to extract (largest first); no upper limit."),
+        Param("method", "str", "", "bands", choices=METHODS,
+              help="bands (default): one component per mode, a zero-phase band around each "
+                   "(they add up to the record, so a component never switches modes), each "
+                   "free decay filtered on its own from its first cycle, with the "
+                   "identification of every mode (natural frequency, damping laws); hvd: "
+                   "Feldman's Hilbert Vibration Decomposition as in the paper (its filters "
+                   "smear the first 2 / cutoff seconds of each decay)."),
+        Param("components", "int", "", None, minimum=1, maximum=64,
+              help="Number of components (the largest modes); unset or 'auto' = one per mode "
+                   "with a free decay above the noise (hvd: per significant spectral peak)."),
         Param("cutoff_hz", "float", "Hz", None, minimum=0.0, exclusive_minimum=True,
               help="Low-pass cut-off of the frequency and demodulation filters; unset = "
                    "automatic (half the smaller of each component's frequency and its distance "
@@ -170,10 +273,10 @@ PLUGIN = AnalysisPlugin(
                    "when the chain has a base acceleration reference."),
     ),
     run=_run,
-    help="Hilbert Vibration Decomposition (Feldman): splits the channel (relative to the base "
-         "when a reference acceleration is given) into quasi-harmonic components with "
-         "time-varying envelope and frequency, by decreasing amplitude. Later analyses of the "
-         "chain work per component.",
+    help="Decomposition into one component per mode (relative to the base when a reference "
+         "acceleration is given), by decreasing amplitude: mode bands with the identification "
+         "of each mode (default), or Feldman's Hilbert Vibration Decomposition. Later "
+         "analyses of the chain work per component.",
 )
 
 

@@ -5,9 +5,17 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
+from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
+from fsi_lab.dsp.components import BandComponents
+from fsi_lab.dsp.integrate import integrate
+from fsi_lab.errors import AnalysisError
+from fsi_lab.hookspecs import hookimpl
+from fsi_lab.params import Param
 from fsi_lab.plugins.analysis._chain import (
     SI_UNITS,
     ComponentSignals,
+    component_quantity,
     components,
     error_entries,
     guarded,
@@ -16,12 +24,6 @@ from fsi_lab.plugins.analysis._chain import (
     where,
 )
 
-from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
-from fsi_lab.dsp.integrate import integrate
-from fsi_lab.errors import AnalysisError
-from fsi_lab.hookspecs import hookimpl
-from fsi_lab.params import Param
-
 _ORDER = {("velocity", "displacement"): 1, ("acceleration", "velocity"): 1,
           ("acceleration", "displacement"): 2}
 
@@ -29,20 +31,26 @@ _ORDER = {("velocity", "displacement"): 1, ("acceleration", "velocity"): 1,
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     ch = context.channel
     target = params["target"]
-    if ch.quantity == target:
+    quantity = component_quantity(context)
+    if quantity == target:
         order = 0                                     # nothing to do: passed through
-    elif (ch.quantity, target) in _ORDER:
-        order = _ORDER[(ch.quantity, target)]
+    elif (quantity, target) in _ORDER:
+        order = _ORDER[(quantity, target)]
     else:
         raise AnalysisError(
             f"{where('integrate', context)}: cannot integrate a {ch.quantity!r} channel "
             f"({ch.unit}) to {target}; expected a velocity or acceleration channel (or "
             f"target = the channel's own quantity)")
     comps = components(context, order)
+    hvd = context.results.get("hvd")
+    bands = hvd.values.integrated(order) if order and hvd is not None \
+        and isinstance(hvd.values, BandComponents) else None
 
     def work(c):
         if order == 0:
             return c.signal
+        if bands is not None:                  # band by band: no high-pass needed
+            return bands.components[c.index]
         with guarded("integrate", context):
             return integrate(c.signal, c.sample_rate, order=order, highpass=params["highpass_hz"])
 

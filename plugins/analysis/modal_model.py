@@ -113,6 +113,19 @@ import math
 from typing import Any
 
 import numpy as np
+
+from fsi_lab.beam import PROJECTIONS
+from fsi_lab.contract import (
+    AnalysisContext,
+    AnalysisPlugin,
+    AnalysisResult,
+    ChannelData,
+)
+from fsi_lab.dsp.components import BandComponents
+from fsi_lab.dsp.damping import METHODS as DAMPING_METHODS
+from fsi_lab.errors import AnalysisError
+from fsi_lab.hookspecs import hookimpl
+from fsi_lab.params import Param
 from fsi_lab.plugins.analysis._chain import (
     HVD_RANGE,
     SI_UNITS,
@@ -125,18 +138,6 @@ from fsi_lab.plugins.analysis._chain import (
     stack_rows,
     where,
 )
-
-from fsi_lab.beam import PROJECTIONS
-from fsi_lab.contract import (
-    AnalysisContext,
-    AnalysisPlugin,
-    AnalysisResult,
-    ChannelData,
-)
-from fsi_lab.dsp.damping import METHODS as DAMPING_METHODS
-from fsi_lab.errors import AnalysisError
-from fsi_lab.hookspecs import hookimpl
-from fsi_lab.params import Param
 
 PLUGIN_NAME = "modal-model"
 #: A model component is paired with a measured one when their mean frequencies differ by less.
@@ -283,11 +284,10 @@ def component_curves(c: Any, smooth: int, method: str) -> tuple[Any, Any]:
     :func:`.damping.decay_peaks` with their defaults and ``smooth`` / ``method``), from a single
     zero-crossing analysis: untrusted record ends and the points outside the free decays left
     out. Times are from the channel's first sample."""
-    from fsi_lab.plugins.analysis.backbone import decay_backbone
-    from fsi_lab.plugins.analysis.damping import decay_peaks
-
     from fsi_lab.dsp.damping import damping_from_peaks
     from fsi_lab.dsp.instantaneous import instantaneous
+    from fsi_lab.plugins.analysis.backbone import decay_backbone
+    from fsi_lab.plugins.analysis.damping import decay_peaks
 
     inst = instantaneous(c.signal, c.sample_rate, offset="cycles", smooth=0,
                          min_amplitude=None, noise_floor=c.noise_floor,
@@ -407,11 +407,14 @@ def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     # What the measurement's HVD decomposed (relative to the base when it was), from start_s.
     y_m = res_m.components.sum(axis=0) + res_m.residual
 
-    # -- the measurement's HVD on the model
+    # -- the measurement's decomposition on the model
     with guarded(PLUGIN_NAME, context):
-        res_s = hvd(y_s[i0:], fs, k_total, res_m.cutoffs, padding=padding,
-                    band=getattr(res_m, "band", None))
-    res_s = dataclasses.replace(res_s, t0=float(res_m.t0))
+        if isinstance(res_m, BandComponents):
+            res_s = res_m.redo(y_s)
+        else:
+            res_s = hvd(y_s[i0:], fs, k_total, res_m.cutoffs, padding=padding,
+                        band=getattr(res_m, "band", None))
+            res_s = dataclasses.replace(res_s, t0=float(res_m.t0))
     model_ch = ChannelData(name=ch.name, data=y_s, sample_rate=fs, quantity=ch.quantity,
                            unit=ch.unit, t0=ch.t0)
     model_ctx = AnalysisContext(channel=model_ch, channels={ch.name: model_ch},

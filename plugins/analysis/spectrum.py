@@ -5,12 +5,12 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from fsi_lab.plugins.analysis._chain import guarded, jsonable
 
 from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
 from fsi_lab.dsp.spectrum import WINDOWS, amplitude_spectrum, find_peaks_interpolated
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis._chain import guarded, jsonable
 
 
 def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:

@@ -92,14 +92,15 @@ def test_default_chain_on_a_two_mode_velocity_record():
     assert eq["c_i_ci95"][0] <= q["c1"] <= eq["c_i_ci95"][1]
     assert eq["c_f_ci95"][0] <= q["c2"] <= eq["c_f_ci95"][1]
     assert eq["amplitude_convention"].startswith("measured")
+    assert eq["preferred_law"] == "quadratic"
     assert comps[1]["frequency_hz"] == pytest.approx(32.0, rel=0.01)
-    # HVD datasets are 2-D, components x samples.
+    # The weak 32 Hz mode is linear: quadratic damping is not resolved there, and says so.
+    assert comps[1]["equivalent_damping"]["preferred_law"] == "viscous"
+    assert any("linear + quadratic" in w for w in comps[1]["warnings"])
+    # One component per mode (automatic), over the whole record, components x samples.
     hvd_group = groups["tip/hvd"]
-    # Automatic start at the largest sample: the decay starts from rest (velocity 0), so its
-    # first quarter period is left out.
-    start = hvd_group["attrs"]["start_s"]
-    assert 0.0 < start < 0.3
-    assert hvd_group["datasets"]["components"].shape == (2, ch.data.size - round(start * q["fs"]))
+    assert hvd_group["attrs"]["method"] == "bands" and hvd_group["attrs"]["start_s"] == 0.0
+    assert hvd_group["datasets"]["components"].shape == (2, ch.data.size)
     assert hvd_group["units"]["frequencies"] == "Hz"
     assert groups["tip/integrate"]["units"]["signals"] == "m"
 
@@ -120,7 +121,8 @@ def test_without_hvd_the_channel_is_one_component():
     q, ch = two_mode_velocity()
     ch = ChannelData("tip", q["v"], q["fs"], "velocity", "m/s")
     _, summary = run({"tip": ch}, ("integrate", "backbone", "damping", "equivalent-damping"),
-                     mass_per_length=q["m"])
+                     mass_per_length=q["m"],
+                     params={"equivalent-damping": {"method": "regression"}})
     comps = summary["tip"]["components"]
     assert [c["index"] for c in comps] == [0]
     assert comps[0]["equivalent_damping"]["c_f"] == pytest.approx(q["c2"], rel=0.02)
@@ -167,11 +169,20 @@ def test_bad_channel_gives_a_clear_error_per_plugin_and_the_chain_goes_on():
     assert "errors" not in summary["tip"]
 
 
+def test_more_components_than_modes_is_refused_with_the_modes_found():
+    q, ch = two_mode_velocity()
+    _, summary = run({"tip": ch}, ("hvd",), params={"hvd": {"components": 3}})
+    (error,) = summary["tip"]["errors"]
+    assert "3 component(s) asked for" in error["message"] and "2 usable" in error["message"]
+    assert "components = 'auto'" in error["message"]
+
+
 def test_a_failing_component_is_recorded_and_the_others_go_on():
     q, ch = two_mode_velocity()
     # The third HVD component of a two-mode record is numerical residue.
     groups, summary = run({"tip": ch}, ("hvd", "integrate", "damping"),
-                          params={"hvd": {"components": 3}, "damping": {"method": "eq7"}})
+                          params={"hvd": {"components": 3, "method": "hvd"},
+                                  "damping": {"method": "eq7"}})
     comps = {c["index"]: c for c in summary["tip"]["components"]}
     assert "zeta" in comps[0]["damping"]
     assert groups["tip/damping"]["attrs"]["status"] == "ok"
@@ -212,23 +223,11 @@ def test_plugin_run_directly_raises_analysis_error_with_plugin_and_channel():
     from fsi_lab.plugins.analysis.hvd import PLUGIN
     ch = ChannelData("tip", np.zeros(5000), 1000.0, "velocity", "m/s")
     ctx = AnalysisContext(channel=ch, channels={"tip": ch}, results={})
-    with pytest.raises(AnalysisError, match=r"^hvd on channel 'tip': hvd: signal is constant"):
+    with pytest.raises(AnalysisError,
+                       match=r"^hvd on channel 'tip': identify: signal is constant"):
         PLUGIN.run(ctx, validate(PLUGIN.params, {}, "analysis.hvd"))
-
-
-def test_chain_on_a_10_s_record_at_10_khz_is_fast():
-    """Not a benchmark (see bench/bench_analysis.py), a guard against gross slowdowns."""
-    import time
-    fs = 10000.0
-    t = time_axis(10.0, fs)
-    v = decaying_tone(t, 0.06, 5.0, 0.01, 0.0)[0] + decaying_tone(t, 0.02, 32.0, 0.005, 0.3)[0]
-    ch = ChannelData("tip", v, fs, "velocity", "m/s")
-    registry = load_registry()
-    run({"tip": ch}, DEFAULT_CHAIN, registry=registry, mass_per_length=1.0)   # warm-up
-    started = time.perf_counter()
-    _, summary = run({"tip": ch}, DEFAULT_CHAIN, registry=registry, mass_per_length=1.0)
-    assert time.perf_counter() - started < 5.0
-    assert "errors" not in summary["tip"]
+    with pytest.raises(AnalysisError, match=r"^hvd on channel 'tip': \w+: signal is constant"):
+        PLUGIN.run(ctx, validate(PLUGIN.params, {"method": "hvd"}, "analysis.hvd"))
 
 
 def test_simulated_wet_bench_gives_back_the_model_damping(tmp_path):
@@ -251,17 +250,20 @@ def test_simulated_wet_bench_gives_back_the_model_damping(tmp_path):
     channels = read_run(out).channels
     specimen = Specimen.from_mapping({})
     chain = ("hvd", "integrate", "damping", "equivalent-damping")
-    # Default settings (automatic start at the end of the excitation), and an explicit start.
-    for method, hvd_params in (("regression", {}), ("envelope", {"components": 3,
-                                                                 "start_s": 0.25})):
+    # Default settings (the damping law fitted from the first free cycle), the paper's
+    # regression on the same components, and HVD with an explicit start.
+    for method, hvd_params in (("law", {}), ("regression", {}),
+                               ("envelope", {"components": 3, "start_s": 0.25,
+                                             "method": "hvd"})):
         groups, summary = run(channels, chain, specimen=specimen,
                               analysis={"channels": ["tip_velocity"],
                                         "reference": "base_acceleration"},
                               params={"hvd": hvd_params,
                                       "equivalent-damping": {"method": method}})
         assert groups["tip_velocity/hvd"]["attrs"]["relative_to"] == "base_acceleration"
-        c0 = summary["tip_velocity"]["components"][0]
-        assert c0["frequency_hz"] == pytest.approx(17.0, rel=0.05)      # mode 2 in water
+        # Mode 2 in water, near 17 Hz
+        (c0,) = [c for c in summary["tip_velocity"]["components"]
+                 if c.get("frequency_hz") and abs(c["frequency_hz"] / 17.0 - 1) < 0.05]
         eq = c0["equivalent_damping"]
         assert eq["amplitude_convention"].startswith("modal: q_2")
         assert eq["c_i"] == pytest.approx(0.65, rel=0.05), method

@@ -41,7 +41,8 @@ def test_hvd_automatic_start_asks_the_shared_channel_noise(monkeypatch):
         return shared(context)
 
     monkeypatch.setattr(_chain, "channel_noise", counted)
-    _, summary = run({"tip": noisy_tone()}, ("hvd",), params={"hvd": {"components": 1}})
+    _, summary = run({"tip": noisy_tone()}, ("hvd",),
+                     params={"hvd": {"components": 1, "method": "hvd"}})
     assert "errors" not in summary["tip"], summary["tip"].get("errors")
     assert "tip" in calls
 

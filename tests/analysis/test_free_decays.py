@@ -76,12 +76,15 @@ def truth_zeta(q: dict, amplitude: np.ndarray, frequency: np.ndarray) -> np.ndar
         / omega
 
 
-def chain(q: dict, v: np.ndarray, use_hvd: bool, method: str = "regression") -> tuple:
+def chain(q: dict, v: np.ndarray, use_hvd: bool, method: str = "regression",
+          decomposition: str = "hvd") -> tuple:
+    """The chain on one channel; ``decomposition`` is hvd's method (Feldman's HVD for the
+    paper's regression and envelope fits, ``bands`` for the default law fit)."""
     ch = ChannelData("tip", v, q["fs"], "velocity", "m/s")
     steps = (("hvd",) if use_hvd else ()) + ("integrate", "backbone", "damping",
                                              "equivalent-damping")
     groups, summary = run({"tip": ch}, steps, mass_per_length=q["m"],
-                          params={"hvd": {"components": 1},
+                          params={"hvd": {"components": 1, "method": decomposition},
                                   "equivalent-damping": {"method": method}})
     assert "errors" not in summary["tip"], summary["tip"].get("errors")
     return groups, summary["tip"]["components"][0]
@@ -251,6 +254,12 @@ def test_impulse_train_gives_c_i_c_f_and_damping_of_each_decay(order):
     groups, c0 = chain(q, q["v"], use_hvd=True)
     # HVD starts at the first impulse's response (also when it is the smallest).
     assert q["starts"][0] < groups["tip/hvd"]["attrs"]["start_s"] < q["starts"][0] + 0.2
+    # The default law fit, one band per mode from each decay's first free cycle: closer.
+    _, law = chain(q, q["v"], use_hvd=True, method="law", decomposition="bands")
+    check_split(law["equivalent_damping"], q["starts"])
+    assert law["equivalent_damping"]["c_i"] == pytest.approx(q["c1"], rel=0.005)
+    assert law["equivalent_damping"]["c_f"] == pytest.approx(q["c2"], rel=0.005)
+    assert law["equivalent_damping"]["preferred_law"] == "quadratic"
     for key in ("backbone", "damping", "equivalent_damping"):
         check_split(c0[key], q["starts"])
     eq = c0["equivalent_damping"]
@@ -275,6 +284,12 @@ def test_impulse_train_with_noise(order, seed):
     and inside the regression's intervals, damping ratios positive."""
     q = quadratic_train(order)
     v = noisy(q["v"], 0.01, seed=seed)
+    _, law = chain(q, v, use_hvd=True, method="law", decomposition="bands")
+    eq = law["equivalent_damping"]
+    assert eq["c_i_ci95"][0] <= q["c1"] <= eq["c_i_ci95"][1]
+    assert eq["c_f_ci95"][0] <= q["c2"] <= eq["c_f_ci95"][1]
+    assert eq["c_i"] == pytest.approx(q["c1"], rel=0.05)
+    assert eq["c_f"] == pytest.approx(q["c2"], rel=0.05)
     for method in ("envelope", "regression"):
         groups, c0 = chain(q, v, use_hvd=True, method=method)
         check_split(c0["equivalent_damping"], q["starts"])

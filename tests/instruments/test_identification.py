@@ -8,9 +8,11 @@
 - wet, impulse train: the wet profile with a descending impulse-train excitation (one record,
   several free decays) identifies C_i and C_f within 15 % too, from one free decay per impulse;
 - wet, impulse train of the excitation's default (shorter) impulses: the 47 Hz mode's envelope
-  crosses the 17 Hz one's in every decay, and HVD's components switch mode - reported as a
-  per-component error, no C_i or C_f; with ``analysis.hvd.band_hz`` around 17 Hz, that mode
-  is decomposed alone and C_i is identified within 15 %.
+  crosses the 17 Hz one's in every decay; the default mode bands separate the two (C_i and C_f
+  within 15 %), while Feldman's HVD (``analysis.hvd.method=hvd``) follows the larger and its
+  components switch mode - reported as a per-component error, no C_i or C_f; with
+  ``analysis.hvd.band_hz`` around 17 Hz, that mode is decomposed alone and C_i is identified
+  within 15 %.
 
 Both run through the ``fsi-lab`` command on the embedded simulated bench (the lab drivers over
 loopback TCP and a pseudo-terminal), fast.
@@ -77,8 +79,21 @@ def test_wet_impulse_train_identifies_c_i_and_c_f_on_the_simulated_bench(tmp_pat
 SHORT_IMPULSES = ("excitation.plugin=impulse-train", "run.duration=14")
 
 
-def test_wet_short_impulses_report_the_mode_switch_instead_of_numbers(tmp_path):
+def test_wet_short_impulses_give_both_modes_with_the_default_bands(tmp_path):
+    """With one band per mode nothing can switch: the 17 Hz mode gives C_i and C_f, the
+    47 Hz one its own."""
+    model = tomllib.loads(WET.read_text())["model"]
     summary = _run(WET, tmp_path, *SHORT_IMPULSES)
+    near = {round(c["frequency_hz"] / 10): c for c in summary["components"]}
+    assert 16.0 < near[2]["frequency_hz"] < 18.0 and 46.0 < near[5]["frequency_hz"] < 49.0
+    found = near[2]["equivalent_damping"]
+    assert found["decays"] > 1
+    assert found["c_i"] == pytest.approx(model["c_i"], rel=0.15)
+    assert found["c_f"] == pytest.approx(model["c_f"], rel=0.15)
+
+
+def test_wet_short_impulses_report_the_mode_switch_instead_of_numbers(tmp_path):
+    summary = _run(WET, tmp_path, *SHORT_IMPULSES, "analysis.hvd.method=hvd")
     assert summary["components"]
     for component in summary["components"]:
         assert "equivalent_damping" not in component, component["equivalent_damping"]
@@ -101,7 +116,7 @@ def test_wet_short_impulses_with_a_band_around_17_hz(tmp_path):
     13 Hz, against 33.0."""
     model = tomllib.loads(WET.read_text())["model"]
     summary = _run(WET, tmp_path, *SHORT_IMPULSES, "analysis.hvd.band_hz=[10,25]",
-                   "analysis.hvd.components=1")
+                   "analysis.hvd.components=1", "analysis.hvd.method=hvd")
     (component,) = summary["components"]
     assert "hvd" not in component
     assert 16.0 < component["frequency_hz"] < 18.0

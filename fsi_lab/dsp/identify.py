@@ -1,0 +1,1017 @@
+"""Identification of a record's modes from its free decays: backbones and damping laws.
+
+:func:`identify` takes one channel (a velocity, displacement or acceleration) and returns, for
+each mode with significant free-decay content, its small-amplitude natural frequency with an
+interval, its backbone (frequency against amplitude), the fits of the candidate damping laws
+(:mod:`.laws`) with the one the record prefers, and sentences saying how far to trust each
+number. The steps:
+
+1. **Free decays.** The record is split into its free decays (:func:`.decays.decay_segments`:
+   a step or ramp derivative gives one, an impulse train one per impulse); each is analysed on
+   its own window, from its largest sample (the end of the excitation; later when the caller
+   knows the excitation ends later) to just before the next build-up.
+2. **Modes.** The peaks of the decays' averaged spectrum (:func:`.spectrum.averaged_spectrum`)
+   of at least :data:`MODE_THRESHOLD` of the largest are candidate modes; those the sampling
+   cannot resolve (fewer than :data:`MIN_SAMPLES_PER_CYCLE` samples per cycle) or the windows
+   cannot hold (fewer than :data:`MIN_CYCLES` cycles) are left out with a note. A candidate
+   becomes a mode when one of its decays keeps :data:`MIN_CYCLES` cycles above the noise floor:
+   a spectral bump without a free decay is no mode (no phantom components).
+3. **Separation.** Each window is split into one band per mode (:mod:`.bands`, a partition of
+   unity: a component cannot switch to another mode), its ends extended by prediction.
+4. **Extrema.** The extrema of each mode's band signal (:func:`.instantaneous.half_cycles`),
+   from the first free one on - every cycle counts: the large first cycles carry the quadratic
+   damping - down to :data:`FLOOR` times the noise RMS in the band.
+5. **Laws.** Each candidate law is fitted to the extrema of all the mode's decays together
+   (:func:`.laws.fit_law`, errors whitened with the band's noise correlation) and the laws are
+   ranked by AICc (:func:`.laws.compare_laws`).
+6. **Correction.** What the band filters still smear at a decay's start is measured on the
+   fitted model itself: the model decays of every mode are put through the same padding,
+   filters and extremum search, and the difference from the model's exact extrema is taken
+   off the measured ones; the linear frequency is adjusted the same way from the crossings.
+   The fits are then repeated (:data:`CORRECTION_PASSES` times).
+7. **Backbone.** Frequency ``1 / (t[i+1] - t[i-1])`` at each zero crossing against the
+   displacement amplitude (the geometric mean of the two neighbouring extrema). The natural
+   frequency is the backbone's small-amplitude limit: the damping's share of each period is
+   taken off (with the fitted law), and ``w^2 = w0^2 + 3 alpha X^2 / 4`` (harmonic balance of
+   a cubic stiffness, kept only when the record resolves it) is fitted.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+import scipy.stats as sstats
+
+from fsi_lab.dsp._signal import as_record, check_rate, fail, smooth_step
+from fsi_lab.dsp.bands import ModeBands, split
+from fsi_lab.dsp.decays import decay_segments, first_decay_peak
+from fsi_lab.dsp.instantaneous import half_cycles
+from fsi_lab.dsp.laws import (
+    LAWS,
+    LawComparison,
+    LawFit,
+    Whitener,
+    compare_laws,
+    fit_law,
+    simulate_decay,
+)
+from fsi_lab.dsp.spectrum import averaged_spectrum, find_peaks_interpolated
+from fsi_lab.errors import AnalysisError
+
+QUANTITIES = ("velocity", "displacement", "acceleration")
+#: A decay's free part starts earlier than its largest sample at extrema this close to it.
+LEVEL_BACK = 0.95
+#: Spectral peaks below this fraction of the largest are not candidate modes.
+MODE_THRESHOLD = 0.01
+#: A candidate's spectral peak must stand this many times above the spectrum's noise level.
+NOISE_MARGIN = 10.0
+#: A spectral peak is a mode of its own when the spectrum around it (its col) falls below this
+#: fraction of its height.
+VALLEY = 0.5
+#: Relative smoothing of the spectrum before the peak search: peaks closer merge.
+PEAK_SMOOTHING = 0.05
+#: Fewest samples per cycle of a mode.
+MIN_SAMPLES_PER_CYCLE = 6.0
+#: Fewest cycles of a free decay above the noise floor for a mode.
+MIN_CYCLES = 3
+#: Extrema are used down to FLOOR times the noise RMS in the band ...
+FLOOR = 5.0
+#: ... judged on the fitted envelope, after a first fit on those above FIRST_FLOOR times it.
+FIRST_FLOOR = 3.0
+#: A coefficient whose 95 % interval is wider than +- this share of it gets a warning.
+POOR_PRECISION = 0.25
+#: A cubic stiffness is fitted only when it moves the frequency by this share or more.
+STIFFNESS_SHIFT = 2e-3
+#: Share of each decay's first extrema left out by the start check (:func:`_start_check`).
+LATE_SHARE = 0.2
+#: At most this share of the shortest decay's extrema is left out by the start search.
+MAX_DROP_SHARE = 0.3
+#: Moves of the coefficients beyond this many standard errors widen their intervals.
+DRIFT_Z = 2.5
+#: A filter correction larger than this share of an extremum gets a warning.
+CORRECTION_WARNING = 0.5
+#: Passes of the filter correction (step 6).
+CORRECTION_PASSES = 2
+#: Noisy model records measured in the last pass (an even number: antithetic pairs).
+NOISE_REALIZATIONS = 16
+#: Extrema at each end of a decay whose error spread is measured (the edge padding's).
+EDGE_EXTREMA = 3
+#: A mode's model decay larger than this multiple of the record's largest sample is a fit gone
+#: astray, kept out of the correction.
+MODEL_LIMIT = 3.0
+#: Relative error scale (weight 1 / WILD_SCALE^2) of an extremum the correction cannot follow.
+WILD_SCALE = 10.0
+#: Seed of the simulated noise: the same record always gives the same numbers.
+NOISE_SEED = 20261123
+#: Confidence level of the intervals.
+LEVEL = 0.95
+
+
+@dataclass(frozen=True)
+class DecayExtrema:
+    """The extrema of one mode in one free decay.
+
+    Attributes
+    ----------
+    window
+        Index range ``[start, stop)`` of the decay's window in the record.
+    times
+        Time of each extremum, s from the record's first sample.
+    values
+        Signed extremum values as measured on the band signal (unit of the analysed quantity).
+    amplitude
+        ``|values|`` corrected for the filters' smear (step 6), used by the fits.
+    crossings
+        Zero-crossing times of the band signal over the kept extrema, s.
+    """
+
+    window: tuple[int, int]
+    times: np.ndarray
+    values: np.ndarray
+    amplitude: np.ndarray
+    crossings: np.ndarray
+
+
+@dataclass(frozen=True)
+class Backbone:
+    """Frequency against amplitude of one mode.
+
+    Attributes
+    ----------
+    times
+        Crossing times, s from the record's first sample.
+    frequency
+        ``1 / (t[i+1] - t[i-1])`` at each crossing, Hz.
+    amplitude
+        Displacement amplitude there (geometric mean of the neighbouring extrema), m (unit of
+        the record integrated once for a velocity).
+    decay
+        Index of the free decay of each point.
+    """
+
+    times: np.ndarray
+    frequency: np.ndarray
+    amplitude: np.ndarray
+    decay: np.ndarray
+
+
+@dataclass(frozen=True)
+class ModeIdentification:
+    """What :func:`identify` found of one mode.
+
+    Attributes
+    ----------
+    index
+        Component number, 0 for the mode whose free decays carry the most energy.
+    frequency_hz
+        Small-amplitude (linear, undamped) natural frequency, Hz.
+    frequency_ci
+        Its 95 % interval, Hz.
+    damped_frequency_hz
+        The small-amplitude limit of the measured backbone (damped), Hz.
+    spectral_peak_hz
+        The peak of the decays' averaged spectrum the mode was found at, Hz.
+    band_hz
+        The flat part of the mode's band filter, Hz.
+    quantity
+        What the extrema are extrema of: ``"velocity"`` or ``"displacement"``.
+    decays
+        The extrema of each free decay that holds the mode.
+    backbone
+        Frequency against displacement amplitude.
+    laws
+        Fits of the candidate damping laws, ranked.
+    alpha
+        Cubic stiffness per unit mass used in the fits, 1/(m^2 s^2) (0 unless the backbone
+        resolves it).
+    noise_floor
+        Smallest extremum used (:data:`FLOOR` x the noise RMS in the band), unit of the
+        quantity.
+    correction
+        Largest filter correction applied to an extremum, relative to that extremum.
+    start_drift
+        ``dropped``: first extrema of each decay left out because the law did not hold there
+        yet (:func:`_stable_start`); ``a`` and ``beta``: how far the quadratic law's
+        coefficients still move, in standard errors, when more are left out (its covariance
+        is widened when more than chance allows).
+    warnings
+        Sentences on how far to trust the numbers; empty when every check passed.
+    """
+
+    index: int
+    frequency_hz: float
+    frequency_ci: tuple[float, float]
+    damped_frequency_hz: float
+    spectral_peak_hz: float
+    band_hz: tuple[float, float]
+    quantity: str
+    decays: list[DecayExtrema]
+    backbone: Backbone
+    laws: LawComparison
+    alpha: float
+    noise_floor: float
+    correction: float
+    start_drift: dict[str, float] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def quadratic(self) -> LawFit:
+        """The fit of the linear + quadratic law."""
+        return self.laws.fits["quadratic"]
+
+    @property
+    def extrema_count(self) -> int:
+        """Extrema used by the fits."""
+        return int(sum(d.amplitude.size for d in self.decays))
+
+
+@dataclass(frozen=True)
+class Identification:
+    """What :func:`identify` found in a record.
+
+    Attributes
+    ----------
+    modes
+        One entry per mode, by decreasing energy of its free decays.
+    windows
+        Index ranges ``[start, stop)`` of the free decays analysed.
+    free_windows
+        The same as ``(start, free, stop)``: extrema count from ``free`` (the decay's largest
+        sample, or a later end of the excitation).
+    noise_rms
+        RMS of the record's white noise, unit of the record.
+    notes
+        Spectral peaks left out and why.
+    bands
+        The band filters (one per mode, in increasing frequency).
+    band_of
+        Band index of each mode in :attr:`modes`.
+    """
+
+    modes: list[ModeIdentification]
+    windows: list[tuple[int, int]]
+    free_windows: list[tuple[int, int, int]]
+    noise_rms: float
+    notes: list[str]
+    bands: ModeBands
+    band_of: list[int]
+
+
+# ----------------------------------------------------------------------------- steps
+def _windows(x: np.ndarray, fs: float, f_dom: float, floor: float,
+             starts: Sequence[float] | None) -> list[tuple[int, int, int]]:
+    """Free-decay windows ``(start, free, stop)``: analysis starts at ``start`` (a quarter
+    period before the decay's largest sample, so an extremum there is a complete one),
+    extrema count from ``free`` (the largest sample, or a later excitation end)."""
+    n = x.size
+    period = 1.0 / f_dom
+    segments = decay_segments(x, fs, period)
+    if len(segments) == 1:
+        segments = [(first_decay_peak(x, fs, period, floor), n)]
+    out = []
+    quarter = int(0.25 * fs / f_dom)
+    for begin, stop in segments:
+        free = _walk_back(x, fs, f_dom, begin)
+        # Extrema nearly as large before the largest one: the record holds the free decay
+        # from its start (release); the window opens a quarter period earlier so that its
+        # first extremum is a whole one. Otherwise the excitation's build-up comes first,
+        # and the window opens where it ends.
+        lead = quarter if free < begin else 0
+        if starts is not None:
+            later = [int(math.ceil(s * fs)) for s in starts if begin <= s * fs < stop]
+            if later and max(later) > free:
+                free, lead = max(later), 0
+        out.append((max(0, free - lead), free, stop))
+    return [w for w in out if w[2] - w[0] >= 32]
+
+
+def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
+    """Where a free decay whose largest sample is ``peak`` starts: at ``peak``, or - when
+    ``peak`` lies within the record's first cycles and the extrema before it, back to the
+    record's first, are each within :data:`LEVEL_BACK` of the next - at the record's first
+    extremum. A decay recorded from release starts with extrema of nearly equal size; one that
+    follows an excitation inside the record starts at its largest sample."""
+    half = max(1, int(round(0.5 * fs / f_dom)))
+    reach = max(1, half // 4)
+    ax = np.abs(x)
+    here = peak
+    for _ in range(2):
+        lo, hi = here - half - reach, here - half + reach + 1
+        if lo < 0:
+            break
+        before = lo + int(np.argmax(ax[lo:hi]))
+        if not (0 < before < here) or ax[before] < LEVEL_BACK * ax[here]:
+            return peak
+        here = before
+    return here if here < half + reach else peak
+
+
+def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
+                components: Any, band: tuple[float, float] | None
+                ) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Candidate mode frequencies (Hz) and spectral amplitudes from the windows' averaged
+    spectrum, and notes on the peaks left out."""
+    notes = []
+    segs = [(a, c) for a, _, c in windows]
+    freqs, amp = averaged_spectrum(x, fs, segs)
+    shortest = min(c - a for a, c in segs) / fs
+    longest = max(c - a for a, c in segs) / fs
+    # Every local peak first (a weak mode on a strong one's tail has little prominence), then
+    # those high enough, standing out of their surroundings and above the noise.
+    peaks = find_peaks_interpolated(freqs, amp, min_relative=1e-4, smoothing=PEAK_SMOOTHING,
+                                    fmin=2.0 / shortest, _func="identify")
+    high = peaks.amplitudes >= MODE_THRESHOLD * float(np.max(peaks.amplitudes, initial=0.0))
+    f, a = peaks.frequencies[high], peaks.amplitudes[high]
+    level = float(np.median(amp[_away_from(freqs, f)]))
+    keep = np.ones(f.size, dtype=bool)
+    for i, fi in enumerate(f):
+        if not _resolved(fi, float(a[i]), f[:i][keep[:i]], freqs, amp) \
+                or a[i] < NOISE_MARGIN * level:
+            keep[i] = False                 # a flank of a larger peak, or noise
+            continue
+        if fs / fi < MIN_SAMPLES_PER_CYCLE:
+            keep[i] = False
+            notes.append(f"the spectral peak at {fi:.4g} Hz is undersampled ({fs / fi:.1f} "
+                         f"samples per cycle at {fs:g} Hz; at least {MIN_SAMPLES_PER_CYCLE:g} "
+                         "needed): left out")
+        elif fi * longest < MIN_CYCLES:
+            keep[i] = False
+            notes.append(f"the spectral peak at {fi:.4g} Hz completes fewer than {MIN_CYCLES} "
+                         f"cycles in the longest free decay ({longest:.3g} s): left out")
+    f, a = f[keep], a[keep]
+    if band is not None and not np.any((f >= band[0]) & (f <= band[1])):
+        listed = ", ".join(f"{v:.4g}" for v in np.sort(f)) or "none"
+        raise fail("identify", f"band {band[0]:g} to {band[1]:g} Hz holds none of the record's "
+                               f"modes (found at {listed} Hz); expected a band around one")
+    inside = f.size if band is None else int(np.sum((f >= band[0]) & (f <= band[1])))
+    if isinstance(components, int) and inside < components:
+        raise fail("identify", f"{components} component(s) asked for, but the record's "
+                               f"free decays show {inside} usable spectral peak(s)"
+                               + (f" ({', '.join(f'{v:.4g}' for v in f)} Hz)" if f.size
+                                  else "") + "; ask for fewer or use components = 'auto'")
+    return f, a, notes
+
+
+def _away_from(freqs: np.ndarray, peaks: np.ndarray) -> np.ndarray:
+    """Mask of the frequencies (Hz) outside an octave around each of ``peaks`` and above the
+    lowest few bins: where a record's spectrum shows its noise. Falls back to those above
+    twice the highest peak, then to every bin, when too few remain."""
+    ok = freqs > 4.0 * (freqs[1] - freqs[0])
+    for p in peaks:
+        ok &= (freqs < 0.5 * p) | (freqs > 2.0 * p)
+    if ok.sum() < 32 and peaks.size:
+        ok = freqs > 2.0 * float(np.max(peaks))
+    if ok.sum() < 32:
+        ok = np.ones(freqs.size, dtype=bool)
+    return ok
+
+
+def _noise_rms(x: np.ndarray, fs: float, peaks: np.ndarray) -> float:
+    """RMS of the white noise in a record, from the median of its amplitude spectrum (Hann
+    window) away from its spectral ``peaks`` (Hz): a Rayleigh-distributed bin's median is
+    ``sigma sqrt(ln 2) sqrt(sum w^2)``."""
+    w = np.hanning(x.size)
+    spec = np.abs(np.fft.rfft(x * w))
+    freqs = np.arange(spec.size) * (fs / x.size)
+    med = float(np.median(spec[_away_from(freqs, peaks)]))
+    return med / (math.sqrt(math.log(2.0)) * math.sqrt(float(np.sum(w * w))))
+
+
+def _resolved(f: float, amplitude: float, others: np.ndarray, freqs: np.ndarray,
+              amp: np.ndarray) -> bool:
+    """Whether the spectral peak at ``f`` (Hz, of height ``amplitude``) stands out as a mode of
+    its own: it rises at least 1 / :data:`VALLEY` times above its col - the higher of the
+    lowest points of the spectrum (smoothed over +-2 %) between it and the nearest larger peak
+    on each side, or an octave away where there is none. A bump on the flank of a heavily
+    damped mode has no such col; a weak mode on the tail of a strong one has."""
+    df = freqs[1] - freqs[0]
+    width = max(1, int(0.02 * f / df))
+    smooth = np.convolve(amp, np.ones(2 * width + 1) / (2 * width + 1), mode="same")
+    cols = []
+    for side in (-1.0, 1.0):
+        beyond = others[(others - f) * side > 0]
+        edge = float(beyond[np.argmin(np.abs(beyond - f))]) if beyond.size \
+            else (0.5 * f if side < 0 else 2.0 * f)
+        lo, hi = sorted((f, edge))
+        between = (freqs > lo) & (freqs < hi)
+        if not between.any():
+            return False
+        cols.append(float(np.min(smooth[between])))
+    return amplitude >= max(cols) / VALLEY
+
+
+def _extrema(signal: np.ndarray, fs: float, frequency: float, start: int, free: int,
+             floor: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Times (s, record), values and crossings of the extrema of a band signal of the window
+    starting at ``start``, from the first at or after sample ``free`` while above ``floor``."""
+    hc = half_cycles(signal, fs, frequency)
+    t = hc.times + start / fs
+    sel = t >= (free - 1) / fs
+    t, v = t[sel], hc.values[sel]
+    above = np.abs(v) >= floor
+    run = int(np.argmin(above)) if not above.all() else above.size
+    return t[:run], v[:run], hc.crossings + start / fs
+
+
+def _unlifted(amplitude: np.ndarray, lift: float) -> np.ndarray:
+    """Extremum amplitudes less the noise's average lift ``lift / A`` (U^2 / U)."""
+    return amplitude - lift / amplitude
+
+
+def _match(times: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Index into ``times`` of the nearest entry to each of ``reference``."""
+    j = np.clip(np.searchsorted(times, reference), 1, max(times.size - 1, 1))
+    if times.size == 1:
+        return np.zeros(reference.size, dtype=np.int64)
+    left = np.abs(times[j - 1] - reference) <= np.abs(times[j] - reference)
+    return np.where(left, j - 1, j)
+
+
+def _span_period(crossings: np.ndarray, t0: float, t1: float) -> float | None:
+    """Mean half period (s) of the crossings between t0 and t1 (least-squares slope)."""
+    c = crossings[(crossings >= t0) & (crossings <= t1)]
+    if c.size < 3:
+        return None
+    k = np.arange(c.size)
+    return float(np.polyfit(k, c, 1)[0])
+
+
+@dataclass
+class _Mode:
+    """Working state of one mode during :func:`identify`."""
+
+    band: int
+    frequency: float
+    floor: float
+    correlation: Any
+    decays: list[dict] = field(default_factory=list)
+    w0: float = 0.0
+    alpha: float = 0.0
+    fits: dict[str, LawFit] = field(default_factory=dict)
+    correction: float = 0.0
+    w0_se: float = 0.0
+    w0_dof: int = 1
+    lift: float = 0.0
+    noise: float = 0.0
+    wild: int = 0
+    drift: dict[str, float] = field(default_factory=dict)
+
+
+def _fit_all(mode: _Mode, quantity: str, laws: Sequence[str]) -> None:
+    """Fit every law to the mode's corrected extrema (starting from earlier fits)."""
+    amps = [d["amplitude"] for d in mode.decays]
+    whiteners = [Whitener(d["times"], np.sign(d["values"]), mode.correlation,
+                          d.get("scale", np.ones(d["amplitude"].size))) for d in mode.decays]
+    fits = {}
+    for law in laws:
+        prior = mode.fits.get(law)
+        fits[law] = fit_law(law, amps, mode.w0, alpha=mode.alpha, quantity=quantity,
+                            whiteners=whiteners, start=None if prior is None else prior.params)
+    mode.fits = fits
+
+
+def _preferred(mode: _Mode) -> LawFit:
+    return compare_laws(list(mode.fits.values())).fits[
+        compare_laws(list(mode.fits.values())).preferred]
+
+
+def _model_record(modes: list[_Mode], window: tuple[int, int, int], fs: float, follow: str,
+                  output: str, w_index: int, limit: float) -> np.ndarray:
+    """The fitted decays of every mode in one window, summed, as ``output`` (the record's
+    quantity). A mode whose model leaves ``limit`` (a fit gone astray: a growing decay) is
+    left out, so it cannot spoil the correction of the others."""
+    start, _, stop = window
+    times = np.arange(start, stop) / fs
+    out = np.zeros(stop - start)
+    for mode in modes:
+        fit = _preferred(mode)
+        for j, d in enumerate(mode.decays):
+            if d["w"] != w_index:
+                continue
+            start_value = math.copysign(float(fit.starts[j]), float(d["values"][0]))
+            anchor = d.get("anchor", float(d["times"][0]))
+            decay = simulate_decay(fit.law, fit.params, mode.w0, start_value, anchor, times,
+                                   alpha=mode.alpha, quantity=follow, output=output)
+            # Before its first free extremum the model runs backwards in time and grows; past
+            # a period it describes nothing the record holds (the excitation): faded out.
+            lead = np.clip((times - anchor) * mode.frequency + 2.0, 0.0, 1.0)
+            decay = decay * smooth_step(lead)
+            if np.all(np.isfinite(decay)) and float(np.max(np.abs(decay))) <= limit:
+                out += decay
+    return out
+
+
+def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeBands,
+             record: np.ndarray, fs: float, follow: str, quantity: str,
+             noise: float = 0.0) -> None:
+    """Step 6: put the fitted model through the same padding, filters and extremum search as
+    the record, and take the difference from the model's exact extrema off the measured ones;
+    anchor the model's first extremum where the filters put the measured one; step the linear
+    frequency (:func:`_frequency_step`).
+
+    With ``noise`` (the record's white-noise RMS), the model is measured again with
+    :data:`NOISE_REALIZATIONS` records of that noise added (in antithetic pairs, so the noise's
+    first-order effects cancel in the mean): the mean error then includes what the noise adds
+    on average (an extremum is found where the noise lifts it), and the spread of the first
+    and last :data:`EDGE_EXTREMA` extrema of a decay, which the edge padding makes noisier
+    than the others, sets their weights in the fit (``scale``).
+    """
+    integrate = quantity == "acceleration"
+    rng = np.random.default_rng(NOISE_SEED)
+    for w, window in enumerate(windows):
+        if not any(d["w"] == w for m in modes for d in m.decays):
+            continue
+        model = _model_record(modes, window, fs, follow, quantity, w,
+                              MODEL_LIMIT * float(np.max(np.abs(record[window[0]:window[2]]))))
+        clean = split(model, fs, bands, integrate=integrate)
+        noisy = []
+        for _ in range(NOISE_REALIZATIONS // 2 if noise > 0 else 0):
+            extra = rng.normal(0.0, noise, model.size)
+            noisy += [split(model + extra, fs, bands, integrate=integrate),
+                      split(model - extra, fs, bands, integrate=integrate)]
+        for mode in modes:
+            fit = _preferred(mode)
+            for j, d in enumerate(mode.decays):
+                if d["w"] != w:
+                    continue
+                measured = np.abs(d["values"])
+                hc = half_cycles(clean[mode.band], fs, mode.frequency)
+                t_model = hc.times + window[0] / fs
+                if t_model.size < 2:
+                    continue
+                idx = _match(t_model, d["times"])
+                exact = fit.model[j]
+                if noisy:
+                    errors = np.array([_errors(parts[mode.band], fs, mode.frequency,
+                                               window[0], d["times"], exact)
+                                       for parts in noisy])
+                    smear = errors.mean(axis=0)
+                    spread = errors.std(axis=0, ddof=1) / max(mode.noise, 1e-300)
+                    scale = np.ones(measured.size)
+                    edge = np.r_[0:min(EDGE_EXTREMA, scale.size),
+                                 max(scale.size - EDGE_EXTREMA, 0):scale.size]
+                    scale[edge] = np.maximum(1.0, spread[edge])
+                    corrected = measured - smear
+                else:
+                    smear = np.abs(hc.values[idx]) - exact
+                    corrected = _unlifted(measured, mode.lift) - smear
+                    scale = d.get("scale", np.ones(measured.size)).copy()
+                # A correction this large means the model does not describe that extremum
+                # (another mode's onset, a glitch): keep it as measured, with little weight.
+                wild = ~((corrected > 0.5 * measured) & (corrected < 2.0 * measured))
+                corrected[wild] = measured[wild]
+                scale[wild] = np.maximum(scale[wild], WILD_SCALE)
+                d["amplitude"], d["scale"] = corrected, scale
+                if (~wild).any():
+                    mode.correction = max(mode.correction, float(np.max(
+                        np.abs(smear[~wild]) / measured[~wild])))
+                mode.wild += int(wild.sum())
+                d["model_crossings"] = hc.crossings + window[0] / fs
+                # The model's first extremum sits at its anchor; the filters move it by as
+                # much as they move the measured one: anchor the model that much earlier.
+                anchor = d.get("anchor", float(d["times"][0]))
+                d["anchor"] = anchor - (float(t_model[idx[0]]) - float(d["times"][0]))
+    for mode in modes:
+        _frequency_step(mode, follow)
+
+
+def _errors(band_signal: np.ndarray, fs: float, frequency: float, start: int,
+            times: np.ndarray, exact: np.ndarray) -> np.ndarray:
+    """Measured minus exact extremum amplitudes of a model band signal, at the extrema
+    nearest ``times`` (s, record)."""
+    hc = half_cycles(band_signal, fs, frequency)
+    if hc.times.size == 0:
+        return np.zeros(exact.size)
+    idx = _match(hc.times + start / fs, times)
+    return np.abs(hc.values[idx]) - exact
+
+
+def _half_periods(d: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Half periods (s) of the data and of the filtered model between the crossings of the
+    decay's kept extrema, and the extremum amplitude of each half cycle."""
+    t = d["times"]
+    c = d["crossings"]
+    c = c[(c > t[0]) & (c < t[-1])]
+    mc = d.get("model_crossings")
+    if mc is None or c.size < 3 or mc.size < 3:
+        return None
+    m = mc[_match(mc, c)]
+    p_data, p_model = np.diff(c), np.diff(m)
+    ok = (p_model > 0) & (np.abs(p_model / p_data - 1.0) < 0.2)
+    k = np.clip(np.searchsorted(t, 0.5 * (c[1:] + c[:-1])), 0, t.size - 1)
+    return p_data[ok], p_model[ok], np.abs(d["amplitude"][k])[ok]
+
+
+def _frequency_step(mode: _Mode, quantity: str) -> None:
+    """Gauss-Newton step on the linear natural frequency (and the cubic stiffness when the
+    record resolves it) from the half periods of the data and of the filtered model: both went
+    through the same filters, so their difference is the model's error alone."""
+    parts = [h for h in (_half_periods(d) for d in mode.decays) if h is not None]
+    if not parts:
+        return
+    p_data = np.concatenate([p[0] for p in parts])
+    p_model = np.concatenate([p[1] for p in parts])
+    amp = np.concatenate([p[2] for p in parts])
+    if p_data.size < 3:
+        return
+    x_amp = amp / mode.w0 if quantity == "velocity" else amp
+    weight = x_amp / np.max(x_amp)          # a crossing's time error ~ 1 / amplitude
+    r = (p_data - p_model) * weight
+    jac = np.stack((-p_model / mode.w0, -0.375 * p_model * x_amp ** 2 / mode.w0 ** 2), axis=1)
+    jac *= weight[:, None]
+    n = r.size
+    use_alpha = n >= 8 and np.ptp(x_amp) > 0
+    cols = 2 if use_alpha else 1
+    step, *_ = np.linalg.lstsq(jac[:, :cols], r, rcond=None)
+    resid = r - jac[:, :cols] @ step
+    s2 = float(resid @ resid) / max(n - cols, 1)
+    cov = np.linalg.pinv(jac[:, :cols].T @ jac[:, :cols]) * s2
+    if use_alpha:
+        alpha_new = mode.alpha + float(step[1])
+        se_alpha = math.sqrt(max(cov[1, 1], 0.0))
+        # Kept only when clearly resolved and large enough to matter: the frequency it moves
+        # at the largest amplitude (harmonic balance) at least STIFFNESS_SHIFT.
+        shift = 0.375 * abs(alpha_new) * float(np.max(x_amp)) ** 2 / mode.w0 ** 2
+        if abs(alpha_new) <= 5.0 * se_alpha or shift < STIFFNESS_SHIFT:
+            step, *_ = np.linalg.lstsq(jac[:, :1], r, rcond=None)
+            resid = r - jac[:, :1] @ step
+            s2 = float(resid @ resid) / max(n - 1, 1)
+            cov = np.linalg.pinv(jac[:, :1].T @ jac[:, :1]) * s2
+            mode.alpha = 0.0
+        else:
+            mode.alpha = alpha_new
+    mode.w0 += float(step[0])
+    mode.w0_se = math.sqrt(max(cov[0, 0], 0.0))
+    mode.w0_dof = max(n - cols, 1)
+
+
+def _backbone(mode: _Mode, quantity: str) -> Backbone:
+    """The measured backbone of a mode (step 7), displacement amplitudes."""
+    times, freq, amp, decay = [], [], [], []
+    for j, d in enumerate(mode.decays):
+        c = d["crossings"]
+        t = d["times"]
+        a = np.abs(d["values"])
+        inner = c[(c > t[0]) & (c < t[-1])]
+        if inner.size < 3:
+            continue
+        f = 1.0 / (inner[2:] - inner[:-2])
+        tc = inner[1:-1]
+        k = np.searchsorted(t, tc)
+        k = np.clip(k, 1, t.size - 1)
+        amp_c = np.sqrt(a[k - 1] * a[k])
+        if quantity == "velocity":
+            amp_c = amp_c / (2.0 * math.pi * f)
+        times.append(tc)
+        freq.append(f)
+        amp.append(amp_c)
+        decay.append(np.full(tc.size, j))
+    if not times:
+        empty = np.empty(0)
+        return Backbone(empty, empty, empty, np.empty(0, dtype=np.int64))
+    return Backbone(np.concatenate(times), np.concatenate(freq), np.concatenate(amp),
+                    np.concatenate(decay))
+
+
+def _natural_frequency(mode: _Mode) -> tuple[float, tuple[float, float], float]:
+    """Small-amplitude natural frequency (Hz) with its interval and the damped one (Hz)."""
+    q = float(sstats.t.ppf(0.5 + 0.5 * LEVEL, mode.w0_dof))
+    half = q * mode.w0_se
+    a = _preferred(mode).value("a")
+    damped = math.sqrt(max(mode.w0 ** 2 - a * a, 1e-300))
+    two_pi = 2.0 * math.pi
+    return (mode.w0 / two_pi, ((mode.w0 - half) / two_pi, (mode.w0 + half) / two_pi),
+            damped / two_pi)
+
+
+def _drop_first(decays: list[dict], count: int) -> list[dict] | None:
+    """The decays without their first ``count`` extrema (None if one gets too short)."""
+    out = []
+    for d in decays:
+        if d["amplitude"].size - count < 2 * MIN_CYCLES:
+            return None
+        out.append({key: (val[count:] if key in ("times", "values", "amplitude", "scale")
+                          else val) for key, val in d.items()})
+    return out
+
+
+def _drift(mode: _Mode, decays: list[dict], follow: str) -> tuple[LawFit, dict[str, float]]:
+    """The quadratic law fitted to ``decays`` and how far its coefficients move, in standard
+    errors, when the first :data:`LATE_SHARE` of each decay's extrema are left out: a free
+    decay obeys its law from any point on, so they may move only as much as the extrema left
+    out allow (the later fit's variance minus the full one's)."""
+    trial = dataclasses.replace(mode, decays=decays, fits={})
+    _fit_all(trial, follow, ("quadratic",))
+    full = trial.fits["quadratic"]
+    drop = max(2, int(LATE_SHARE * min(d["amplitude"].size for d in decays)))
+    late_decays = _drop_first(decays, drop)
+    if late_decays is None:
+        return full, {}
+    late = dataclasses.replace(mode, decays=late_decays, fits={})
+    _fit_all(late, follow, ("quadratic",))
+    fit = late.fits["quadratic"]
+    # Both on the later fit's noise scale: misfitting first extrema inflate the full fit's.
+    s2 = fit.rss / max(fit.dof, 1)
+    unscaled_full = full.cov / max(full.rss / max(full.dof, 1), 1e-300)
+    unscaled_late = fit.cov / max(s2, 1e-300)
+    z = {}
+    for i, name in enumerate(full.names):
+        spread = math.sqrt(s2 * max(float(unscaled_late[i, i] - unscaled_full[i, i]),
+                                    1e-3 * float(unscaled_late[i, i])) + 1e-300)
+        z[name] = float(fit.params[i] - full.params[i]) / spread
+    return full, z
+
+
+def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, float]:
+    """Step 8: where each decay's law starts to hold. The first extrema of a decay may still
+    be forced (a base that still moves) or smeared: the quadratic law is refitted leaving out
+    0, 1, 2, 3, 5, 8, ... first extrema of every decay until its coefficients no longer move
+    when more are left out (:func:`_drift` within :data:`DRIFT_Z` standard errors); the
+    decays then lose those extrema and every law is refitted. When no start is stable, the
+    covariance of the quadratic fit is widened by the square of the excess. Returns the z of
+    the start kept (``dropped``: extrema left out per decay)."""
+    shortest = min(d["amplitude"].size for d in mode.decays)
+    tried = 0
+    for count in (0, 1, 2, 3, 5, 8, 13, 21, 34):
+        if count > MAX_DROP_SHARE * shortest:
+            break
+        decays = _drop_first(mode.decays, count) if count else mode.decays
+        if decays is None:
+            break
+        try:
+            full, z = _drift(mode, decays, follow)
+        except AnalysisError:
+            break
+        tried = count
+        if not z or max(abs(v) for v in z.values()) <= DRIFT_Z:
+            break
+    if tried:
+        mode.decays = _drop_first(mode.decays, tried)
+        mode.fits = {}
+        _fit_all(mode, follow, laws)
+    full, z = _drift(mode, mode.decays, follow)
+    worst = max((abs(v) for v in z.values()), default=0.0)
+    if worst > DRIFT_Z:
+        mode.fits["quadratic"] = dataclasses.replace(
+            mode.fits["quadratic"], cov=mode.fits["quadratic"].cov * (worst / DRIFT_Z) ** 2)
+    return {**z, "dropped": float(tried)}
+
+
+def _warnings(m: ModeIdentification) -> list[str]:
+    """Sentences on how far to trust the mode's numbers."""
+    out = []
+    cmp = m.laws
+    if "quadratic" in cmp.fits and cmp.preferred != "quadratic":
+        other = {"viscous": "viscous (linear) damping alone",
+                 "coulomb": "viscous + Coulomb (dry friction) damping"}[cmp.preferred]
+        gap = cmp.delta["quadratic"] - cmp.delta[cmp.preferred]
+        out.append(f"the record supports {other} at least as well as linear + quadratic "
+                   f"damping (AICc {'lower' if gap > 0 else 'higher'} by {abs(gap):.1f}): C_i and "
+                   "C_f assume a law the record does not call for")
+    quad = cmp.fits.get("quadratic")
+    if quad is not None:
+        for name, label in (("a", "C_i"), ("beta", "C_f")):
+            value = quad.value(name)
+            lo, hi = quad.interval(name, LEVEL)
+            if hi < 0:
+                out.append(f"{label} is negative ({label} < 0 is no physical damping: the law "
+                           "misfits or the decay is too short)")
+            elif lo <= 0.0:
+                out.append(f"{label} is not resolved: its 95 % interval includes 0 (the "
+                           "record holds too little of that damping to measure it)")
+            elif hi - lo > 2.0 * POOR_PRECISION * value:
+                out.append(f"{label} is poorly determined: its 95 % interval is "
+                           f"+-{50.0 * (hi - lo) / value:.0f} % of the value")
+    low, high = m.band_hz
+    if not low <= m.frequency_hz <= high:
+        out.append(f"the natural frequency {m.frequency_hz:.4g} Hz lies outside the mode's band "
+                   f"({low:.4g} to {high:.4g} Hz, spectral peak {m.spectral_peak_hz:.4g} Hz): "
+                   "it is not determined by this record")
+    cycles = m.extrema_count / 2.0
+    if cycles < 5:
+        out.append(f"only {cycles:.1f} cycles above the noise floor: too few for a reliable "
+                   "damping law")
+    drift = max((abs(v) for k, v in m.start_drift.items() if k != "dropped"), default=0.0)
+    if drift > DRIFT_Z:
+        out.append(f"C_i and C_f move by up to {drift:.1f} standard errors when the first "
+                   "cycles of each decay are left out: the decay's start is not a free decay "
+                   "with this law (a base still moving, a law that misfits the large cycles); "
+                   f"their intervals are widened {drift / DRIFT_Z:.1f}-fold")
+    if m.correction > CORRECTION_WARNING:
+        out.append(f"the band filters smear this mode's first cycles by up to "
+                   f"{100 * m.correction:.0f} % (modes close together or heavily damped); "
+                   "corrected with the fitted model, so the result leans on that model")
+    best = cmp.fits[cmp.preferred]
+    resid = np.concatenate(best.residuals)
+    if resid.size >= 8:
+        r = resid - resid.mean()
+        rho = float(r[1:] @ r[:-1]) / max(float(r @ r), 1e-300)
+        if rho > 0.6:
+            out.append(f"the fitted law leaves correlated residuals (lag-1 correlation "
+                       f"{rho:.2f}): the decay is not that of one mode with this law "
+                       "(beating with a close mode, a drifting frequency or a missing term)")
+    return out
+
+
+# ----------------------------------------------------------------------------- main
+def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any = "auto",
+             band: Sequence[float] | None = None, decay_starts: Sequence[float] | None = None,
+             laws: Sequence[str] = tuple(LAWS)) -> Identification:
+    """Identify the modes of a record from its free decays (see the module notes).
+
+    Parameters
+    ----------
+    x
+        Samples of one channel: velocity (m/s), displacement (m) or acceleration (m/s^2), or
+        the same in any consistent unit U.
+    fs
+        Sample rate, Hz.
+    quantity
+        ``"velocity"``, ``"displacement"`` or ``"acceleration"`` (integrated to a velocity
+        band by band).
+    components
+        ``"auto"`` (one per mode found) or the number of modes to report (those whose free
+        decays carry the most energy; every mode found keeps its own band either way).
+    band
+        ``(low, high)``, Hz: only the modes inside are reported (all keep their bands).
+    decay_starts
+        Times (s) at which the excitation is known to have stopped: a decay's extrema count
+        from the later of its largest sample and such a time.
+    laws
+        Damping laws to fit (:data:`.laws.LAWS`); ``"quadratic"`` is always among them.
+
+    Returns
+    -------
+    Identification
+
+    Raises
+    ------
+    AnalysisError
+        A record that cannot be read (see :func:`._signal.as_record`), an unknown quantity or
+        law, no oscillation, or no mode with a free decay above the noise.
+
+    Examples
+    --------
+    A decay with linear and quadratic damping, recorded from release:
+
+    >>> import numpy as np
+    >>> from fsi_lab.dsp.identify import identify
+    >>> from fsi_lab.dsp.laws import simulate_decay
+    >>> fs, w0 = 5000.0, 2 * np.pi * 20.0
+    >>> t = np.arange(int(3 * fs)) / fs
+    >>> v = simulate_decay("quadratic", [2.0, 150.0], w0, -0.05, 1 / 80.0, t)
+    >>> mode = identify(v, fs).modes[0]
+    >>> a, beta = mode.quadratic.params
+    >>> print(f"{mode.frequency_hz:.3f} Hz, a = {a:.3f} 1/s, beta = {beta:.1f} 1/m")
+    20.000 Hz, a = 2.000 1/s, beta = 150.0 1/m
+    """
+    func = "identify"
+    fs = check_rate(fs, func)
+    record = as_record(x, func, min_samples=64)
+    if quantity not in QUANTITIES:
+        raise fail(func, f"quantity = {quantity!r}; expected one of {', '.join(QUANTITIES)}")
+    laws = tuple(dict.fromkeys(["quadratic", *laws]))
+    for law in laws:
+        if law not in LAWS:
+            raise fail(func, f"law {law!r} is unknown; expected some of {', '.join(LAWS)}")
+    if components != "auto" and not (isinstance(components, (int, np.integer))
+                                     and not isinstance(components, bool) and components >= 1):
+        raise fail(func, f"components = {components!r}; expected 'auto' or an integer >= 1")
+    band_t = None
+    if band is not None:
+        band_t = (float(band[0]), float(band[1]))
+        if not 0.0 < band_t[0] < band_t[1]:
+            raise fail(func, f"band = {band!r}; expected (low, high) in Hz with 0 < low < high")
+    follow = "displacement" if quantity == "displacement" else "velocity"
+    record = record - float(np.mean(record))
+    # Dominant oscillation and the noise: the spectrum of the whole record.
+    freqs, amp = averaged_spectrum(record, fs, [(0, record.size)])
+    top = find_peaks_interpolated(freqs, amp, min_relative=0.05, max_peaks=1,
+                                  smoothing=PEAK_SMOOTHING, fmin=2.0 * fs / record.size,
+                                  _func=func)
+    if top.frequencies.size == 0:
+        raise fail(func, "found no spectral peak: the record holds no oscillation above "
+                         f"{2.0 * fs / record.size:.3g} Hz")
+    f_dom = float(top.frequencies[0])
+    sigma = _noise_rms(record, fs, top.frequencies)
+    windows = _windows(record, fs, f_dom, 10.0 * sigma, decay_starts)
+    if not windows:
+        raise fail(func, "found no free decay of at least 32 samples")
+    cand_f, cand_a, notes = _candidates(record, fs, windows, int(components)
+                                        if components != "auto" else "auto", band_t)
+    if cand_f.size == 0:
+        where = f" inside {band_t[0]:g} to {band_t[1]:g} Hz" if band_t else ""
+        raise fail(func, f"found no usable spectral peak{where}; "
+                         + ("; ".join(notes) if notes else "the record holds no free decay"))
+    sigma = _noise_rms(record, fs, cand_f)
+    order = np.argsort(cand_f)
+    bands = ModeBands.around(cand_f[order], fs)
+    integrate = quantity == "acceleration"
+    modes = []
+    for k in range(bands.count):
+        f_k = float(bands.centres[k])
+        noise_k = sigma * math.sqrt(bands.noise_fraction(k, fs, integrate))
+        # An extremum of signal + band-limited noise is found where the noise's slope moves
+        # it: on average noise^2 <w_n^2> / (2 A w^2) too large (<w_n^2>: the noise's mean
+        # square angular frequency). Taken off each extremum (``lift``).
+        lift = noise_k ** 2 * bands.mean_square_frequency(k, integrate) \
+            / (2.0 * (2.0 * math.pi * f_k) ** 2)
+        modes.append(_Mode(band=k, frequency=f_k, floor=max(FLOOR * noise_k, 1e-300),
+                           correlation=bands.correlation(k), lift=lift, noise=noise_k))
+    # Steps 3 and 4: extrema of each mode in each window.
+    for w, (start, free, stop) in enumerate(windows):
+        parts = split(record[start:stop], fs, bands, integrate=integrate)
+        for mode in modes:
+            t, v, c = _extrema(parts[mode.band], fs, mode.frequency, start - start, free - start,
+                               FIRST_FLOOR / FLOOR * mode.floor)
+            t = t + start / fs
+            c = c + start / fs
+            if t.size >= 2 * MIN_CYCLES:
+                mode.decays.append({"w": w, "times": t, "values": v,
+                                    "amplitude": _unlifted(np.abs(v), mode.lift),
+                                    "crossings": c})
+    dropped = [m for m in modes if not m.decays]
+    for m in dropped:
+        notes.append(f"the spectral peak at {m.frequency:.4g} Hz has no free decay of "
+                     f"{MIN_CYCLES} cycles above the noise floor: not a mode of the record")
+    modes = [m for m in modes if m.decays]
+    if not modes:
+        raise fail(func, "no spectral peak has a free decay of "
+                         f"{MIN_CYCLES} cycles above the noise floor; " + "; ".join(notes))
+    # Step 5: first fits, then the floor judged on the fitted envelope.
+    for mode in modes:
+        half = [_span_period(d["crossings"], d["times"][0], d["times"][-1]) for d in mode.decays]
+        half = [h for h in half if h]
+        mode.w0 = math.pi / float(np.median(half)) if half else 2.0 * math.pi * mode.frequency
+        _fit_all(mode, follow, laws)
+        fit = mode.fits["quadratic"]
+        a = max(fit.value("a"), 0.0)
+        mode.w0 = math.sqrt(mode.w0 ** 2 + a * a)
+        kept = []
+        for j, d in enumerate(mode.decays):
+            n_keep = int(np.sum(fit.model[j] >= mode.floor))
+            if n_keep >= 2 * MIN_CYCLES:
+                kept.append({key: (val[:n_keep] if key in ("times", "values", "amplitude")
+                                   else val) for key, val in d.items()})
+        mode.decays = kept
+    lost = [m for m in modes if not m.decays]
+    for m in lost:
+        notes.append(f"the spectral peak at {m.frequency:.4g} Hz has no free decay of "
+                     f"{MIN_CYCLES} cycles above the noise floor: not a mode of the record")
+    modes = [m for m in modes if m.decays]
+    if not modes:
+        raise fail(func, "no spectral peak has a free decay of "
+                         f"{MIN_CYCLES} cycles above the noise floor; " + "; ".join(notes))
+    for mode in modes:
+        mode.fits = {}
+        _fit_all(mode, follow, laws)
+    # Step 6: filter correction, the last pass with the record's noise.
+    for n_pass in range(CORRECTION_PASSES):
+        last = n_pass == CORRECTION_PASSES - 1
+        _correct(modes, windows, bands, record, fs, follow, quantity, sigma if last else 0.0)
+        for mode in modes:
+            _fit_all(mode, follow, laws)
+    # Steps 7 and 8: where the laws start to hold; backbones and natural frequencies.
+    results = []
+    for mode in modes:
+        mode.drift = _stable_start(mode, follow, laws)
+        bb = _backbone(mode, follow)
+        f0, f0_ci, fd = _natural_frequency(mode)
+        comparison = compare_laws([mode.fits[law] for law in laws])
+        decays = [DecayExtrema(window=(windows[d["w"]][0], windows[d["w"]][2]),
+                               times=d["times"], values=d["values"], amplitude=d["amplitude"],
+                               crossings=d["crossings"][(d["crossings"] >= d["times"][0])
+                                                        & (d["crossings"] <= d["times"][-1])])
+                  for d in mode.decays]
+        flat = bands.flat(mode.band)
+        results.append(ModeIdentification(
+            index=0, frequency_hz=f0, frequency_ci=f0_ci, damped_frequency_hz=fd,
+            spectral_peak_hz=mode.frequency, band_hz=flat, quantity=follow, decays=decays,
+            backbone=bb, laws=comparison, alpha=mode.alpha, noise_floor=mode.floor,
+            correction=mode.correction, start_drift=mode.drift))
+    # By decreasing energy in the free decays (the sum of the squared extrema), as HVD ranks
+    # its components by RMS envelope: the mode that carries the record first.
+    ranked = sorted(range(len(results)),
+                    key=lambda i: -sum(float(d.amplitude @ d.amplitude)
+                                       for d in results[i].decays))
+    # Every mode found has its own band (so none leaks into another's); those asked for are
+    # reported: inside ``band``, the largest ``components``.
+    if band_t is not None:
+        ranked = [i for i in ranked if band_t[0] <= results[i].spectral_peak_hz <= band_t[1]]
+    if components != "auto":
+        ranked = ranked[:int(components)]
+    if not ranked:
+        raise fail(func, f"no mode with a free decay above the noise inside {band_t[0]:g} to "
+                         f"{band_t[1]:g} Hz; " + "; ".join(notes))
+    final = []
+    for index, i in enumerate(ranked):
+        m = results[i]
+        m = ModeIdentification(**{**m.__dict__, "index": index})
+        final.append(ModeIdentification(**{**m.__dict__, "warnings": _warnings(m)}))
+    return Identification(modes=final, windows=[(a, c) for a, _, c in windows],
+                          free_windows=list(windows), noise_rms=sigma, notes=notes, bands=bands,
+                          band_of=[modes[i].band for i in ranked])
