@@ -48,7 +48,7 @@ import scipy.stats as sstats
 
 from fsi_lab.dsp._signal import as_record, check_rate, fail, smooth_step
 from fsi_lab.dsp.bands import ModeBands, split
-from fsi_lab.dsp.decays import decay_segments, first_decay_peak
+from fsi_lab.dsp.decays import decay_segments, first_decay_peak, quiet_times
 from fsi_lab.dsp.instantaneous import half_cycles
 from fsi_lab.dsp.laws import (
     LAWS,
@@ -86,6 +86,8 @@ FIRST_FLOOR = 3.0
 POOR_PRECISION = 0.25
 #: A cubic stiffness is fitted only when it moves the frequency by this share or more.
 STIFFNESS_SHIFT = 2e-3
+#: A mode is free once the base motion in its band has fallen below this share of its peak.
+BAND_QUIET_LEVEL = 0.01
 #: Share of each decay's first extrema left out by the start check (:func:`_start_check`).
 LATE_SHARE = 0.2
 #: At most this share of the shortest decay's extrema is left out by the start search.
@@ -417,6 +419,16 @@ def _extrema(signal: np.ndarray, fs: float, frequency: float, start: int, free: 
     return t[:run], v[:run], hc.crossings + start / fs
 
 
+def _band_quiet(reference: np.ndarray, fs: float, bands: ModeBands) -> list[np.ndarray]:
+    """Per band, the samples at which the reference (the base acceleration) has calmed down in
+    that band after each of its bursts (:func:`.decays.quiet_times` at
+    :data:`BAND_QUIET_LEVEL`): a mode is forced at resonance by the base motion in its own band,
+    however small the base's total motion."""
+    parts = split(np.asarray(reference, dtype=np.float64), fs, bands)
+    return [np.rint(quiet_times(row, fs, level=BAND_QUIET_LEVEL) * fs).astype(np.int64)
+            for row in parts]
+
+
 def _unlifted(amplitude: np.ndarray, lift: float) -> np.ndarray:
     """Extremum amplitudes less the noise's average lift ``lift / A`` (U^2 / U)."""
     return amplitude - lift / amplitude
@@ -602,8 +614,22 @@ def _half_periods(d: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     m = mc[_match(mc, c)]
     p_data, p_model = np.diff(c), np.diff(m)
     ok = (p_model > 0) & (np.abs(p_model / p_data - 1.0) < 0.2)
+    ok[:EDGE_EXTREMA] = False                    # the window's edge: the filters' smear
     k = np.clip(np.searchsorted(t, 0.5 * (c[1:] + c[:-1])), 0, t.size - 1)
     return p_data[ok], p_model[ok], np.abs(d["amplitude"][k])[ok]
+
+
+def _data_stiffening(p_data: np.ndarray, x_amp: np.ndarray, weight: np.ndarray
+                     ) -> tuple[float, float]:
+    """Relative change of the measured frequency from zero to the largest amplitude, from a
+    weighted straight line of frequency^2 against amplitude^2, and its standard error."""
+    w2 = (math.pi / p_data) ** 2
+    design = np.stack((np.ones_like(x_amp), x_amp ** 2), axis=1) * weight[:, None]
+    coef, *_ = np.linalg.lstsq(design, w2 * weight, rcond=None)
+    resid = w2 * weight - design @ coef
+    cov = np.linalg.pinv(design.T @ design) * float(resid @ resid) / max(w2.size - 2, 1)
+    top = float(np.max(x_amp)) ** 2 / max(float(coef[0]), 1e-300)
+    return 0.5 * float(coef[1]) * top, 0.5 * math.sqrt(max(float(cov[1, 1]), 0.0)) * top
 
 
 def _frequency_step(mode: _Mode, quantity: str) -> None:
@@ -635,8 +661,12 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
         se_alpha = math.sqrt(max(cov[1, 1], 0.0))
         # Kept only when clearly resolved and large enough to matter: the frequency it moves
         # at the largest amplitude (harmonic balance) at least STIFFNESS_SHIFT.
-        shift = 0.375 * abs(alpha_new) * float(np.max(x_amp)) ** 2 / mode.w0 ** 2
-        if abs(alpha_new) <= 5.0 * se_alpha or shift < STIFFNESS_SHIFT:
+        shift = 0.375 * alpha_new * float(np.max(x_amp)) ** 2 / mode.w0 ** 2
+        # ... and only when the measured frequencies themselves move that way with amplitude
+        # (a model with a misfitting damping law can ask for a stiffness the data do not show)
+        seen, seen_se = _data_stiffening(p_data, x_amp, weight)
+        visible = abs(seen) > 5.0 * seen_se and seen * shift > 0 and abs(seen) >= 0.5 * abs(shift)
+        if abs(alpha_new) <= 5.0 * se_alpha or abs(shift) < STIFFNESS_SHIFT or not visible:
             step, *_ = np.linalg.lstsq(jac[:, :1], r, rcond=None)
             resid = r - jac[:, :1] @ step
             s2 = float(resid @ resid) / max(n - 1, 1)
@@ -720,8 +750,9 @@ def _drift(mode: _Mode, decays: list[dict], follow: str) -> tuple[LawFit, dict[s
     unscaled_late = fit.cov / max(s2, 1e-300)
     z = {}
     for i, name in enumerate(full.names):
-        spread = math.sqrt(s2 * max(float(unscaled_late[i, i] - unscaled_full[i, i]),
-                                    1e-3 * float(unscaled_late[i, i])) + 1e-300)
+        allowed = max(float(unscaled_late[i, i] - unscaled_full[i, i]),
+                      1e-3 * abs(float(unscaled_late[i, i])), 0.0)
+        spread = math.sqrt(max(s2, 0.0) * allowed + 1e-300)
         z[name] = float(fit.params[i] - full.params[i]) / spread
     return full, z
 
@@ -820,7 +851,7 @@ def _warnings(m: ModeIdentification) -> list[str]:
 # ----------------------------------------------------------------------------- main
 def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any = "auto",
              band: Sequence[float] | None = None, decay_starts: Sequence[float] | None = None,
-             laws: Sequence[str] = tuple(LAWS)) -> Identification:
+             reference: Any = None, laws: Sequence[str] = tuple(LAWS)) -> Identification:
     """Identify the modes of a record from its free decays (see the module notes).
 
     Parameters
@@ -841,6 +872,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     decay_starts
         Times (s) at which the excitation is known to have stopped: a decay's extrema count
         from the later of its largest sample and such a time.
+    reference
+        The base acceleration on the same samples, or None: each mode's extrema then count
+        from when the base's motion in that mode's band has calmed down as well.
     laws
         Damping laws to fit (:data:`.laws.LAWS`); ``"quadratic"`` is always among them.
 
@@ -872,6 +906,12 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     func = "identify"
     fs = check_rate(fs, func)
     record = as_record(x, func, min_samples=64)
+    if reference is not None:
+        reference = as_record(reference, func, min_samples=64, name="reference",
+                              check_clipping=False, allow_constant=True)
+        if reference.size != record.size:
+            raise fail(func, f"reference has {reference.size} samples, the record "
+                             f"{record.size}; expected the base acceleration on the same samples")
     if quantity not in QUANTITIES:
         raise fail(func, f"quantity = {quantity!r}; expected one of {', '.join(QUANTITIES)}")
     laws = tuple(dict.fromkeys(["quadratic", *laws]))
@@ -922,11 +962,18 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             / (2.0 * (2.0 * math.pi * f_k) ** 2)
         modes.append(_Mode(band=k, frequency=f_k, floor=max(FLOOR * noise_k, 1e-300),
                            correlation=bands.correlation(k), lift=lift, noise=noise_k))
-    # Steps 3 and 4: extrema of each mode in each window.
+    # Steps 3 and 4: extrema of each mode in each window, from where the mode is free (its
+    # band of the base acceleration has calmed down too, when the reference is given).
+    base_free = _band_quiet(reference, fs, bands) if reference is not None else None
     for w, (start, free, stop) in enumerate(windows):
         parts = split(record[start:stop], fs, bands, integrate=integrate)
         for mode in modes:
-            t, v, c = _extrema(parts[mode.band], fs, mode.frequency, start - start, free - start,
+            first = free
+            if base_free is not None:
+                later = base_free[mode.band][(base_free[mode.band] >= start)
+                                             & (base_free[mode.band] < stop)]
+                first = max(first, int(later.max())) if later.size else first
+            t, v, c = _extrema(parts[mode.band], fs, mode.frequency, 0, first - start,
                                FIRST_FLOOR / FLOOR * mode.floor)
             t = t + start / fs
             c = c + start / fs

@@ -116,7 +116,8 @@ def _run_bands(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResu
     with guarded("hvd", context):
         ident = identify(data, fs, quantity=quantity,
                          components=params["components"] or "auto", band=params["band_hz"],
-                         decay_starts=(starts + list(quiet)) or None)
+                         decay_starts=(starts + list(quiet)) or None,
+                         reference=base_on_channel_clock(context))
         res = band_components(data, fs, ident, integrate=int(quantity == "acceleration"))
     comps = []
     for k, mode in enumerate(ident.modes):
@@ -154,6 +155,23 @@ def _run_bands(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResu
                "order": "components by decreasing energy of their free decays; row k = index k",
                "noise_rms": ident.noise_rms, "notes": notes},
         summary={"components": comps, **({"notes": notes} if notes else {})}, values=res)
+
+
+def base_on_channel_clock(context: AnalysisContext) -> np.ndarray | None:
+    """The base acceleration (the chain's reference) at the channel's sample times, or None
+    without a usable reference."""
+    ch = context.channel
+    ref = context.channels.get(context.reference) if context.reference else None
+    if ref is None or ref.name == ch.name or ref.quantity != "acceleration" \
+            or ref.data.size != ch.data.size or not np.all(np.isfinite(ref.data)) \
+            or abs(float(ref.sample_rate) - float(ch.sample_rate)) > 1e-9 * float(ch.sample_rate):
+        return None
+    data = np.asarray(ref.data, dtype=np.float64)
+    shift = float(ch.t0) - float(ref.t0)
+    if shift:
+        t = np.arange(data.size) / float(ch.sample_rate)
+        data = np.interp(t + shift, t, data)
+    return data
 
 
 def base_quiet(context: AnalysisContext) -> np.ndarray:
