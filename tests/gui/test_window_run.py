@@ -171,7 +171,7 @@ def test_instrument_lost_mid_run_shows_message_and_app_keeps_running(qtbot, make
     run = read_run(outcome.path)
     assert run.attrs["exit_status"] == "failed"
     assert run.instruments["amplifier"]["final_state"]["output_enabled"] is False
-    assert run.channels["tip_velocity"].data.size > 0
+    assert run.channels["tip_velocity"].data.size == 1200   # 0.6 s of record at 2000 Hz
     # the bench panel marks the digitiser that stopped answering, and not the safe amplifier
     lost = window.bench.boxes["acquisition"].state
     assert "no answer" in lost.text() and "#b00020" in lost.styleSheet()
@@ -182,7 +182,9 @@ def test_instrument_lost_mid_run_shows_message_and_app_keeps_running(qtbot, make
     window.designer.run_form.fields["duration"].editor.setValue(0.3)
     wait_checked(qtbot, window)
     assert window.run_control.start()
-    assert wait_finished(qtbot, window).exit_status == "completed"  # shorter than the fault
+    # the fault counts record time, so a record shorter than 0.6 s never meets it, however
+    # long the run takes on a busy machine
+    assert wait_finished(qtbot, window).exit_status == "completed"
     assert window.isVisible()
 
 
