@@ -406,6 +406,19 @@ def cmd_gui(args) -> int:
     return gui_main(args)
 
 
+def _window_size(text: str) -> tuple[int, int]:
+    """``WxH`` (e.g. ``1366x768``) for ``fsi-lab gui --size``."""
+    try:
+        width, height = (int(part) for part in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected WIDTHxHEIGHT in pixels, "
+                                         "e.g. 1366x768") from None
+    if not (320 <= width <= 16384 and 240 <= height <= 16384):
+        raise argparse.ArgumentTypeError(f"{text!r}: width 320 to 16384 and height 240 to "
+                                         "16384 pixels")
+    return width, height
+
+
 def _interval(bounds) -> str:
     """``[lo, hi]`` with four significant digits (95 % interval), or nothing."""
     if not bounds or any(b is None for b in bounds):
@@ -575,7 +588,11 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     p.add_argument("paths", type=Path, nargs="*", metavar="PROFILE|RUN.h5",
                    help="a profile to run, or run files to open")
     p.add_argument("--screenshot", type=Path, metavar="OUT.png",
-                   help="render the window with the given run's analysis, save it and exit")
+                   help="render the window with the given run's analysis, save it and exit "
+                        "(offscreen: no display needed)")
+    p.add_argument("--size", type=_window_size, metavar="WxH",
+                   help="window size in pixels (default: what fits the screen, up to "
+                        "1680x1050; 1366x768 for --screenshot)")
     p.set_defaults(func=cmd_gui)
 
     _add_plugin_commands(sub)

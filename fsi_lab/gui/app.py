@@ -27,6 +27,7 @@ from fsi_lab.events import LogRecord
 from fsi_lab.gui.analysis.tab import AnalysisViews
 from fsi_lab.gui.bench_panel import BenchPanel
 from fsi_lab.gui.excitation_designer import ExcitationDesigner
+from fsi_lab.gui.figure import Figure
 from fsi_lab.gui.live_plots import LivePlots
 from fsi_lab.gui.results import RunResults
 from fsi_lab.gui.run_control import LogPanel, RunControl
@@ -36,6 +37,14 @@ from fsi_lab.gui.worker import EventForwarder, TaskPool
 from fsi_lab.registry import Registry, load_registry
 
 RUN_SUFFIXES = (".h5", ".hdf5", ".hdf")
+#: Initial width of the left column (bench, and the log under it) and height of the log, in
+#: pixels (both can be dragged).
+BENCH_DOCK_WIDTH = 300
+LOG_DOCK_HEIGHT = 190
+#: The window's size when the screen has room for it; a smaller screen gets a window that fits.
+PREFERRED_SIZE = (1680, 1050)
+#: The size ``--screenshot`` renders at unless ``--size`` says otherwise: a common laptop screen.
+SCREENSHOT_SIZE = (1366, 768)
 BAR_STYLES = {
     "ERROR": "background: #fde7ea; color: #b00020; border: 1px solid #f3b6bf;",
     "WARNING": "background: #fff4e0; color: #8a4b00; border: 1px solid #f5cf8f;",
@@ -113,7 +122,7 @@ class MainWindow(QMainWindow):
         scroll = QScrollArea()
         scroll.setWidgetResizable(True)
         scroll.setWidget(design)
-        scroll.setMinimumWidth(380)
+        scroll.setMinimumWidth(340)
         experiment = QSplitter(Qt.Orientation.Horizontal)
         experiment.addWidget(scroll)
         experiment.addWidget(self.live)
@@ -140,9 +149,11 @@ class MainWindow(QMainWindow):
         log_dock = QDockWidget("Log", self)
         log_dock.setObjectName("log-dock")
         log_dock.setWidget(self.log)
-        self.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, log_dock)
-        self.resizeDocks([bench_dock], [370], Qt.Orientation.Horizontal)
-        self.resizeDocks([log_dock], [140], Qt.Orientation.Vertical)
+        # the log under the bench, in the left column: the figures get the window's full height
+        self.addDockWidget(Qt.DockWidgetArea.LeftDockWidgetArea, log_dock)
+        self.splitDockWidget(bench_dock, log_dock, Qt.Orientation.Vertical)
+        self.resizeDocks([bench_dock], [BENCH_DOCK_WIDTH], Qt.Orientation.Horizontal)
+        self.resizeDocks([log_dock], [LOG_DOCK_HEIGHT], Qt.Orientation.Vertical)
         self.status_label = QLabel(f"{sum(len(v) for v in self.registry.descriptors.values())} "
                                    "plugins loaded")
         self.statusBar().addPermanentWidget(self.status_label)
@@ -320,6 +331,19 @@ class MainWindow(QMainWindow):
         self.pool.wait_all()
         super().closeEvent(event)
 
+    def dispose(self) -> None:
+        """Close the window (it must not be running a run) and delete it, in order: timers and
+        drawings stopped, threads finished, then every figure's items (linked axes first, then
+        the scene), then the widgets. Nothing is left to signal a deleted plot item."""
+        self.close()
+        for figure in self.findChildren(pg.GraphicsView):
+            if isinstance(figure, Figure):
+                figure.release()
+            else:
+                figure.close()  # pyqtgraph clears its scene
+        self.deleteLater()
+        QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+
 
 def freeze_startup_objects() -> None:
     """Keep the objects built so far (the window, its plots, the plugins) out of the garbage
@@ -362,21 +386,30 @@ def take_screenshot(window: MainWindow, path: Path) -> bool:
 
 def _dispose(window: MainWindow) -> None:
     """Delete the window before the interpreter exits (pyqtgraph items must go first)."""
-    window.close()
-    window.deleteLater()
-    QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+    window.dispose()
     QApplication.instance().processEvents()
 
 
+def fitting_size(app: QApplication) -> tuple[int, int]:
+    """:data:`PREFERRED_SIZE`, or less where the screen's free area is smaller."""
+    screen = app.primaryScreen()
+    if screen is None:
+        return PREFERRED_SIZE
+    free = screen.availableGeometry()
+    return min(PREFERRED_SIZE[0], free.width()), min(PREFERRED_SIZE[1], free.height())
+
+
 def main(args: Any) -> int:
-    """``fsi-lab gui [PROFILE | RUN.h5 ...] [--screenshot OUT.png]``."""
+    """``fsi-lab gui [PROFILE | RUN.h5 ...] [--screenshot OUT.png] [--size WxH]``."""
+    screenshot = getattr(args, "screenshot", None)
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("fsi-lab")
     _configure_pyqtgraph()
     paths = list(getattr(args, "paths", None) or [])
-    screenshot = getattr(args, "screenshot", None)
     window = MainWindow(out_dir=getattr(args, "out", None) or "runs")
-    window.resize(1680, 1050)
+    size = getattr(args, "size", None) or (SCREENSHOT_SIZE if screenshot is not None
+                                           else fitting_size(app))
+    window.resize(*size)
     window.show()
     freeze_startup_objects()
     window.open_paths(paths)

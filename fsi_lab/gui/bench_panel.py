@@ -148,7 +148,7 @@ class BenchPanel(QWidget):
         scroll = QScrollArea()
         scroll.setWidgetResizable(True)
         scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
-        self.setMinimumWidth(330)
+        self.setMinimumWidth(260)
         scroll.setWidget(self.boxes_widget)
         layout = QVBoxLayout(self)
         layout.addWidget(self.safe_button)

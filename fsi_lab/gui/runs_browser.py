@@ -24,11 +24,16 @@ from fsi_lab.gui.analysis.datasets import finite_pairs, per_component, summary_s
 from fsi_lab.gui.analysis.names import CQ, CQ_AMPLITUDE, DISPLACEMENT_AMPLITUDE, FREQUENCY, ZETA
 from fsi_lab.gui.analysis.plotting import COLOURS
 from fsi_lab.gui.export import export_figure, write_csv
+from fsi_lab.gui.figure import Figure, Legend, scrolled
 from fsi_lab.gui.results import RunResults, load_results
 from fsi_lab.gui.worker import TaskPool
 from fsi_lab.registry import Registry
 
+#: Markers of the runs compared (run r in ``SYMBOLS[r % len(SYMBOLS)]``); every curve of the
+#: comparison (a component of a run) has a colour of its own.
 SYMBOLS = ("o", "t", "s", "d", "+", "x")
+#: Components of a run compared at most.
+MAX_COMPARED_COMPONENTS = 6
 SUMMARY_COLUMNS = ("run", "file", "exit_status", "start_time", "channel", "component",
                    "frequency_hz", "c_i", "c_i_ci95_low", "c_i_ci95_high", "c_f", "c_f_ci95_low",
                    "c_f_ci95_high", "r2", "errors")
@@ -101,8 +106,10 @@ class RunsBrowser(QWidget):
         fig_button.clicked.connect(self._export_figure_dialog)
         csv_button = QPushButton("Export CSV ...")
         csv_button.clicked.connect(self._export_csv_dialog)
-        self.graphics = pg.GraphicsLayoutWidget()
+        self.graphics = Figure()
         self.graphics.setObjectName("compare-plots")
+        self.legend = Legend()
+        self.legend.setVisible(False)
         self.table = QTableWidget()
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
         self.note = QLabel("Open run files and tick them to compare them.")
@@ -124,7 +131,8 @@ class RunsBrowser(QWidget):
         right_layout = QVBoxLayout(right)
         right_layout.addLayout(exports)
         right_layout.addWidget(self.note)
-        right_layout.addWidget(self.graphics, 3)
+        right_layout.addWidget(self.legend)
+        right_layout.addWidget(scrolled(self.graphics), 3)
         right_layout.addWidget(self.table, 1)
         splitter = QSplitter(Qt.Orientation.Horizontal)
         splitter.addWidget(left)
@@ -287,21 +295,33 @@ class RunsBrowser(QWidget):
             plot.setLabel("left", ylabel, units=yunits)
             plot.setTitle(name.replace("_", " "))
             plot.showGrid(x=True, y=True, alpha=0.2)
-            plot.addLegend(offset=(-10, 10))
             plots[name] = plot
         drawn = 0
+        entries = []
+        series = 0  # a colour for every component of every run
         for r, results in enumerate(runs):
             channel = self._channel_of(results)
             if channel is None:
                 continue
-            colour = COLOURS[r % len(COLOURS)]
-            for name, pairs in curves_of(results, channel).items():
-                for k, (x, y) in enumerate(pairs[:len(SYMBOLS)]):
-                    label = f"{results.name} #{k + 1}" if name == "backbone" else None
-                    plots[name].plot(x, y, pen=pg.mkPen(colour, width=1) if x.size > 400 else None,
-                                     symbol=None if x.size > 400 else SYMBOLS[k],
-                                     symbolSize=5, symbolBrush=colour, symbolPen=None, name=label)
+            symbol = SYMBOLS[r % len(SYMBOLS)]
+            curves = curves_of(results, channel)
+            count = min(MAX_COMPARED_COMPONENTS, max(len(p) for p in curves.values()))
+            for k in range(count):
+                colour = COLOURS[(series + k) % len(COLOURS)]
+                label = f"{results.name}, component {k}"
+                entries.append((label, Legend.look(symbol=symbol, symbol_colour=colour)))
+                for name, pairs in curves.items():
+                    if k >= len(pairs):
+                        continue
+                    x, y = pairs[k]
+                    line = x.size > 400
+                    plots[name].plot(x, y, pen=pg.mkPen(colour, width=1.2) if line else None,
+                                     symbol=None if line else symbol, symbolSize=6,
+                                     symbolBrush=colour, symbolPen=None, name=label)
                     drawn += 1
+            series += count
+        self.legend.show_entries(entries if drawn else [])
+        self.graphics.fit_minimum()
         self._fill_table(runs)
         if not runs:
             self.note.setText("Open run files and tick them to compare them.")

@@ -30,9 +30,13 @@ def test_views_fill_from_the_plugins_layout(qtbot, make_window, registry, tmp_pa
     hvd = views.view(HVDView)
     assert "2 of 2 component(s)" in hvd.note.text() and "4, 1 Hz" in hvd.note.text()
     eq = views.view(EquivalentDampingView)
-    labels = [item for item in eq.graphics.ci.items if hasattr(item, "text")]
-    text = " ".join(item.text for item in labels)
+    text = eq.values.text()
+    assert eq.values.isVisibleTo(eq)
     assert "0.65" in text and "33" in text and "R² = 0.914" in text and "[0.55, 0.75]" in text
+    # the legends, outside the plots, name every curve once
+    assert eq.legend.entries == ["C_q, component 0", "fit, component 0"]
+    assert hvd.legend.entries[:3] == ["decomposed record", "sum of components", "component 0"]
+    assert hvd.legend.entries.count("envelope") == 1
     table = views.views[-2].table
     assert table.rowCount() == 2 and table.item(0, 2).text() == "0.65"
 
@@ -163,11 +167,11 @@ def test_a_run_is_drawn_over_turns_of_the_event_loop(qtbot, make_window, registr
     assert views.parameters.isEnabled() and views.parameters.chain_form is not None
     # the record is drawn decimated (two points per pixel at most), its peaks kept
     hvd = overview.parts[0]
-    curve = hvd._plots[(0, 0)].listDataItems()[0]
+    curve = hvd._plots[(1, 0)].listDataItems()[0]  # component 0 (the Overview has no record)
     x, y = curve.getData()
     width = max(v.width() for v in hvd.graphics.scene().views())
     assert len(x) <= max(MIN_DRAW_POINTS, 2 * width) + 2 < measured_size(views)
-    measured = views.results.result("tip_velocity", "hvd").datasets["components"].sum(axis=0)
+    measured = views.results.result("tip_velocity", "hvd").datasets["components"][0]
     assert np.max(y) >= 0.999 * np.max(measured)   # what was drawn includes the peak
 
 

@@ -19,7 +19,7 @@ def test_screenshot_in_process(qapp, tmp_path):
     out = tmp_path / "shot.png"
     code = main(argparse.Namespace(paths=[write_run(tmp_path / "run.h5")], screenshot=out))
     assert code == 0
-    assert _png(out) == (1680, 1050)
+    assert _png(out) == (1366, 768)
     assert out.stat().st_size > 50_000                  # plots, not an empty window
 
 
@@ -40,4 +40,4 @@ def test_screenshot_through_the_command(tmp_path):
          "--screenshot", str(out)], capture_output=True, text=True, timeout=120,
         env={**os.environ, "QT_QPA_PLATFORM": "offscreen"})
     assert proc.returncode == 0, proc.stderr
-    assert _png(out) == (1680, 1050)
+    assert _png(out) == (1366, 768)
