@@ -91,6 +91,7 @@ class MainWindow(QMainWindow):
         self._closing = False
         self._run_profile: Any = None
         self._show_when_loaded: set[Path] = set()
+        self._front_when_loaded: set[Path] = set()  # shown on the Analysis tab once loaded
         self.last_run: Path | None = None
 
         self.messages = MessageBar()
@@ -214,16 +215,22 @@ class MainWindow(QMainWindow):
 
     # ------------------------------------------------------------------ opening
     def open_paths(self, paths: list[str | Path]) -> None:
-        """Open profiles (TOML) and run files (HDF5) given on the command line."""
-        runs = []
+        """Open profiles (TOML) and run files (HDF5) given on the command line. The first run
+        file is shown in the Analysis tab, which comes to the front unless a profile was given
+        too (then the Experiment tab stays); the others are listed in the Runs tab."""
+        runs, profiles = [], 0
         for path in paths:
             path = Path(path)
             if path.suffix.lower() in RUN_SUFFIXES or self._looks_like_hdf5(path):
                 runs.append(path)
             else:
+                profiles += 1
                 self.open_profile(path)
         if runs:
-            self.open_runs(runs)
+            if not profiles:
+                self._front_when_loaded.add(Path(runs[0]).resolve())
+            self.open_runs(runs[:1], show=True)
+            self.open_runs(runs[1:], show=False)
 
     @staticmethod
     def _looks_like_hdf5(path: Path) -> bool:
@@ -298,11 +305,15 @@ class MainWindow(QMainWindow):
         if path in self._show_when_loaded:
             self._show_when_loaded.discard(path)
             self._show_run(results)
-            if path == self.last_run and results.exit_status == "completed" and results.analysis:
+            if path in self._front_when_loaded or (
+                    path == self.last_run and results.exit_status == "completed"
+                    and results.analysis):
                 self.tabs.setCurrentWidget(self.analysis)
+        self._front_when_loaded.discard(path)
 
     def _run_failed(self, path: Path, text: str) -> None:
         self._show_when_loaded.discard(Path(path).resolve())
+        self._front_when_loaded.discard(Path(path).resolve())
         self.notify("ERROR", text)
 
     def _show_run(self, results: RunResults) -> None:
@@ -357,29 +368,65 @@ def _configure_pyqtgraph() -> None:
     pg.setConfigOptions(background="w", foreground="k", antialias=True)
 
 
+def _wait_events(app: QApplication, ms: int) -> None:
+    """Run the event loop for up to ``ms`` milliseconds (it wakes for every event)."""
+    loop = QEventLoop()
+    QTimer.singleShot(ms, loop.quit)
+    loop.exec()
+
+
 def wait_until_idle(window: MainWindow, timeout_s: float = 120.0) -> bool:
     """Process events until nothing is loading or checking (for screenshots)."""
     deadline = time.monotonic() + timeout_s
     app = QApplication.instance()
     while time.monotonic() < deadline:
-        app.processEvents(QEventLoop.ProcessEventsFlag.AllEvents, 50)
         pending = window.runs.pending or window._show_when_loaded
         checking = window.session.loaded and window.session.current is None
         if not window.busy() and not pending and not checking:
             app.processEvents()
             return True
-        time.sleep(0.01)
+        _wait_events(app, 20)
+    return False
+
+
+def figure_geometry(window: QWidget) -> list[tuple]:
+    """Where every figure on screen and each of its plots are (to tell when layouts settle)."""
+    out = []
+    for view in window.findChildren(pg.GraphicsView):
+        if not view.isVisible():
+            continue
+        origin = view.mapTo(window, view.rect().topLeft())
+        out.append((origin.x(), origin.y(), view.width(), view.height()))
+        scene = view.scene()
+        for item in scene.items() if scene is not None else ():
+            if isinstance(item, pg.PlotItem) and item.isVisible():
+                out.append(item.geometry().getRect())
+    return out
+
+
+def settle(window: QWidget, passes: int = 500) -> bool:
+    """Deliver pending layout, resize and paint events until no figure moves any more (two
+    passes in a row leave every figure and plot where it was); False if they never settle."""
+    app = QApplication.instance()
+    last, stable = None, 0
+    for _ in range(passes):
+        QCoreApplication.sendPostedEvents()
+        app.processEvents()
+        now = figure_geometry(window)
+        stable = stable + 1 if now == last else 0
+        if stable >= 2:
+            return True
+        last = now
     return False
 
 
 def take_screenshot(window: MainWindow, path: Path) -> bool:
-    """Render the whole window into ``path`` (PNG)."""
+    """Render the whole window into ``path`` (PNG), once its layouts have settled: the same
+    file gives the same picture."""
     if window.analysis.results is not None:
         window.tabs.setCurrentWidget(window.analysis)
         window.analysis.filled()  # every view drawn now
-    app = QApplication.instance()
-    for _ in range(5):
-        app.processEvents()
+    settle(window)
     path.parent.mkdir(parents=True, exist_ok=True)
     return window.grab().save(str(path))
 

@@ -18,7 +18,7 @@ pytest.importorskip("pyqtgraph")
 
 from PySide6.QtCore import QCoreApplication, QEvent  # noqa: E402
 
-from fsi_lab.gui.app import MainWindow, _configure_pyqtgraph  # noqa: E402
+from fsi_lab.gui.app import MainWindow, _configure_pyqtgraph, settle  # noqa: E402
 from fsi_lab.runfile import RunFileWriter, write_analysis  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -122,7 +122,7 @@ def make_window(qtbot, tmp_path):
 
     def make(registry=None, **kwargs) -> MainWindow:
         window = MainWindow(registry=registry, out_dir=kwargs.pop("out_dir", tmp_path / "runs"))
-        window.resize(1400, 900)
+        window.resize(1366, 768)  # a common laptop screen
         window.show()
         qtbot.waitExposed(window)
         windows.append(window)
@@ -140,6 +140,36 @@ def make_window(qtbot, tmp_path):
         window.dispose()
     QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
     gc.collect()  # wrappers of deleted Qt objects go before the next test builds plots
+
+
+#: The smallest plot area (the view box inside the axes) a person can read, in pixels.
+MIN_PLOT_AREA = (100, 80)
+
+
+def plot_areas(root):
+    """(where, width, height) of the data area of every plot shown under ``root``."""
+    import pyqtgraph as pg
+
+    areas = []
+    for figure in root.findChildren(pg.GraphicsView):
+        if not figure.isVisible():
+            continue
+        for item in figure.scene().items():
+            if isinstance(item, pg.PlotItem) and item.isVisible():
+                box = item.getViewBox().sceneBoundingRect()
+                where = f"{type(figure.parent()).__name__}/{figure.objectName() or 'figure'}"
+                areas.append((where, round(box.width()), round(box.height())))
+    return areas
+
+
+def assert_readable(window, what):
+    """Once the layouts have settled, every plot shown has at least MIN_PLOT_AREA."""
+    assert settle(window), f"{what}: the layout did not settle"
+    areas = plot_areas(window)
+    assert areas, f"{what}: no plot shown"
+    small = [a for a in areas if a[1] < MIN_PLOT_AREA[0] or a[2] < MIN_PLOT_AREA[1]]
+    assert not small, f"{what}: plots below {MIN_PLOT_AREA} px: {small}"
+    return areas
 
 
 def wait_checked(qtbot, window, ok: bool | None = True):
@@ -160,13 +190,16 @@ def wait_finished(qtbot, window):
 
 def write_run(path: Path, rate: float = 1000.0, seconds: float = 4.0, analysis: bool = True,
               failed: str | None = None, c_i: float = 0.65, c_f: float = 33.0,
-              name: str = "synthetic") -> Path:
+              name: str = "synthetic", hvd_components: int = 2) -> Path:
     """A run file with a decaying two-mode velocity and analysis groups laid out as the
-    analysis plugins store them (``/analysis/<channel>/<plugin>/``)."""
+    analysis plugins store them (``/analysis/<channel>/<plugin>/``); HVD finds
+    ``hvd_components`` components (beyond two, weak ones at higher frequencies)."""
     n = int(rate * seconds)
     t = np.arange(n) / rate
-    env = np.vstack([0.05 * np.exp(-0.8 * t), 0.01 * np.exp(-2.0 * t)])
-    freq = np.vstack([17.0 - 0.3 * np.exp(-0.8 * t), 2.0 + 0 * t])
+    env = np.vstack([0.05 * np.exp(-0.8 * t), 0.01 * np.exp(-2.0 * t)]
+                    + [0.002 / k * np.exp(-3.0 * t) for k in range(1, hvd_components - 1)])
+    freq = np.vstack([17.0 - 0.3 * np.exp(-0.8 * t), 2.0 + 0 * t]
+                     + [40.0 * k + 0 * t for k in range(1, hvd_components - 1)])
     comps = env * np.cos(2 * np.pi * np.cumsum(freq, axis=1) / rate)
     velocity = comps.sum(axis=0)
     profile = '[analysis]\nchain = []\nchannels = ["tip_velocity"]\n'
@@ -204,10 +237,12 @@ def write_run(path: Path, rate: float = 1000.0, seconds: float = 4.0, analysis: 
         "tip_velocity/hvd": {"datasets": {"components": comps, "envelopes": env,
                                           "frequencies": freq, "residual": velocity * 0,
                                           "edge_mask": np.zeros_like(comps, dtype=np.uint8),
-                                          "cutoffs": np.array([4.0, 1.0])},
+                                          "cutoffs": np.array([4.0, 1.0, *range(
+                                              30, 30 + 40 * (hvd_components - 2), 40)])},
                              "units": {"components": "m/s", "envelopes": "m/s",
                                        "frequencies": "Hz", "cutoffs": "Hz"},
-                             "attrs": {"n_components": 2}, "params": {"components": 2}},
+                             "attrs": {"n_components": hvd_components},
+                             "params": {"components": hvd_components}},
         "tip_velocity/instantaneous": {
             "datasets": {"frequency_times": two_rows(zc_t, zc_t),
                          "frequency": two_rows(17 + 0 * zc_t, 2 + 0 * zc_t)}, "params": {}},

@@ -89,6 +89,9 @@ def test_cli_paths_open_profiles_and_runs(qtbot, make_window, registry, tmp_path
                     timeout=10000)
     assert window.session.loaded and "x.h5" in window.analysis.title.text()
     assert any("y.hdf5" in text for _, text in window.messages.messages)
+    # a profile was given: the Experiment tab stays in front (with run files alone, the
+    # Analysis tab comes to the front: tests/gui/test_layout.py)
+    assert window.tabs.currentIndex() == 0
 
 
 def test_a_bad_profile_is_reported(qtbot, make_window, registry, tmp_path):

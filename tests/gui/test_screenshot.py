@@ -23,6 +23,19 @@ def test_screenshot_in_process(qapp, tmp_path):
     assert out.stat().st_size > 50_000                  # plots, not an empty window
 
 
+def test_screenshot_is_the_same_picture_every_time(qapp, tmp_path):
+    from PySide6.QtGui import QImage
+
+    run = write_run(tmp_path / "run.h5", hvd_components=3)
+    pictures = []
+    for k in range(2):
+        out = tmp_path / f"shot{k}.png"
+        assert main(argparse.Namespace(paths=[run], screenshot=out)) == 0
+        pictures.append(QImage(str(out)))
+    assert pictures[0].size().toTuple() == (1366, 768)
+    assert pictures[0] == pictures[1]
+
+
 def test_screenshot_of_a_corrupt_file_reports_and_exits(qapp, tmp_path, capsys):
     out = tmp_path / "bad.png"
     code = main(argparse.Namespace(paths=[write_corrupt(tmp_path / "bad.h5")], screenshot=out))

@@ -3,7 +3,9 @@
 import h5py
 import numpy as np
 import pytest
-from conftest import RUN_TIMEOUT_MS, wait_checked, wait_finished, wet_inprocess_profile
+from conftest import (
+    RUN_TIMEOUT_MS, assert_readable, wait_checked, wait_finished, wet_inprocess_profile,
+)
 from PySide6.QtCore import Qt
 
 from fsi_lab.chain import DEFAULT_CHAIN
@@ -58,6 +60,7 @@ def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_pa
     if "modal-model" in chain:
         assert filled["Modal model"]
     assert window.tabs.currentWidget() is window.analysis
+    assert_readable(window, "the analysis after the run")
     assert set(window.analysis.parameters.forms) == set(chain)
     # the bench panel shows the state read back after the safe state
     amplifier = window.bench.boxes["amplifier"]
