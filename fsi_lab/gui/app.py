@@ -10,6 +10,7 @@ the tabs and in the log; the application keeps running.
 from __future__ import annotations
 
 import gc
+import os
 import sys
 import time
 from pathlib import Path
@@ -26,6 +27,7 @@ from PySide6.QtWidgets import (
 from fsi_lab.events import LogRecord
 from fsi_lab.gui.analysis.tab import AnalysisViews
 from fsi_lab.gui.bench_panel import BenchPanel
+from fsi_lab.gui.display import window_problem
 from fsi_lab.gui.excitation_designer import ExcitationDesigner
 from fsi_lab.gui.figure import Figure
 from fsi_lab.gui.live_plots import LivePlots
@@ -449,6 +451,15 @@ def fitting_size(app: QApplication) -> tuple[int, int]:
 def main(args: Any) -> int:
     """``fsi-lab gui [PROFILE | RUN.h5 ...] [--screenshot OUT.png] [--size WxH]``."""
     screenshot = getattr(args, "screenshot", None)
+    if QApplication.instance() is None:
+        if screenshot is not None:
+            # a picture needs no display: Qt draws it offscreen (unless told otherwise)
+            os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+        else:
+            problem = window_problem()
+            if problem is not None:  # Qt would abort the process; say why instead
+                print(f"fsi-lab gui: {problem}", file=sys.stderr)
+                return 2
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("fsi-lab")
     _configure_pyqtgraph()
