@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 export QT_QPA_PLATFORM ?= offscreen
 
-.PHONY: demo gui qt-libs test bench clean h5dump-tool
+.PHONY: demo gui qt-libs screenshots test bench clean h5dump-tool
 
 # A venv with the package (editable) and the given extras; rebuilt when pyproject.toml changes.
 $(VENV)/.installed-%: pyproject.toml
@@ -40,6 +40,10 @@ qt-libs: $(VENV)/.installed-gui
 gui: $(VENV)/.installed-gui qt-libs
 	$(if $(filter environment% command%,$(origin QT_QPA_PLATFORM)),,env -u QT_QPA_PLATFORM) \
 	  $(BIN)/fsi-lab gui profiles/wet-beam-sim.toml
+
+# The README's pictures of each tab at 1366x768 (offscreen; about a minute).
+screenshots: $(VENV)/.installed-gui
+	$(BIN)/python docs/screenshots.py
 
 test: $(VENV)/.installed-dev,gui h5dump-tool
 	$(BIN)/python -m pytest

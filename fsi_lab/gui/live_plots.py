@@ -27,6 +27,8 @@ COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e
 #: Smallest plot of a channel (axes included); the last row also carries the time axis.
 MIN_ROW_PLOT = (180, 110)
 MIN_LAST_ROW_HEIGHT = 150
+#: Fewest decades a spectrum's amplitude axis spans.
+MIN_DECADES = 2.0
 
 
 class RingBuffer:
@@ -172,7 +174,8 @@ class LivePlots(QWidget):
                 if row != last_row:
                     item.hideAxis("bottom")
             plot.setLabel("left", name, units=None if not unit else unit)
-            spec.setLabel("left", f"|{name}|")
+            spec.setLabel("left", f"|{name}|", units=unit or None)
+            spec.getAxis("left").enableAutoSIPrefix(False)  # decades read as they are
             spec.setLogMode(x=True, y=True)  # beam modes sit at a few hertz to a few hundred
             spec.setXRange(np.log10(self.sample_rate / self.spectrum_samples),
                            np.log10(self.sample_rate / 2), padding=0)
@@ -275,6 +278,9 @@ def _sticky(plot: pg.PlotItem, current: tuple[float, float] | None, lo: float, h
         return current or (0.0, 1.0)
     if hi <= lo:
         hi = lo + (1.0 if log else max(abs(lo) * 1e-3, 1e-12))
+    if log and hi - lo < MIN_DECADES:  # at least a few decades: labelled decades, no clutter
+        middle = (hi + lo) / 2
+        lo, hi = middle - MIN_DECADES / 2, middle + MIN_DECADES / 2
     if current is not None:
         c_lo, c_hi = current
         inside = c_lo <= lo and hi <= c_hi
