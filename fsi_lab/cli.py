@@ -456,9 +456,14 @@ def format_summary(summary: dict[str, Any]) -> str:
             lines.extend(f"    not analysed: {message}" for message in seen)
             model = component.get("modal_model")
             if model and model.get("envelope_rms_error") is not None:
+                # one beam model for every component, its C_i and C_f from where c_source says
+                # (a component's own fit only for that component)
+                source = (info.get("modal_model") or {}).get("c_source")
+                origin = f" from {source}" if isinstance(source, str) and source else ""
                 lines.append(
-                    f"    modal model (C_i = {model['c_i']:.4g}, C_f = {model['c_f']:.4g}) vs "
-                    f"measurement: envelope RMS error {100 * model['envelope_rms_error']:.1f} %, "
+                    f"    modal model (C_i = {model['c_i']:.4g}, C_f = {model['c_f']:.4g}"
+                    f"{origin}) vs measurement: envelope RMS error "
+                    f"{100 * model['envelope_rms_error']:.1f} %, "
                     f"frequency error {model['frequency_error_pct']:+.2f} %")
         for error in info.get("errors", []):
             lines.append(f"  failed {error['plugin']}: {error['message']}")
