@@ -44,7 +44,7 @@ def _without_display():
 
 def test_the_window_without_a_display_is_refused_with_a_message(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "fsi_lab.cli", "gui"], capture_output=True,
-                          text=True, timeout=120, env=_without_display(), cwd=tmp_path)
+                          text=True, timeout=600, env=_without_display(), cwd=tmp_path)
     assert proc.returncode == 2, (proc.returncode, proc.stderr)
     assert "no display" in proc.stderr and "Traceback" not in proc.stderr
 
@@ -54,7 +54,7 @@ def test_screenshot_without_a_display_renders_offscreen(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "fsi_lab.cli", "gui", str(write_run(tmp_path / "r.h5")),
          "--screenshot", str(out), "--size", "1024x700"],
-        capture_output=True, text=True, timeout=120, env=_without_display())
+        capture_output=True, text=True, timeout=600, env=_without_display())
     assert proc.returncode == 0, proc.stderr
     data = out.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
@@ -68,6 +68,6 @@ def test_a_bad_window_size_is_refused():
 
 def test_the_packages_to_install_are_listed_for_make(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "fsi_lab.gui.display", "--missing-packages"],
-                          capture_output=True, text=True, timeout=60)
+                          capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr
     assert set(proc.stdout.split()) <= set(XCB_LIBRARIES.values())

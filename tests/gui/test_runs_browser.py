@@ -12,7 +12,7 @@ def test_compare_two_runs_and_export(qtbot, make_window, registry, tmp_path):
     b = write_run(tmp_path / "b.h5", c_i=0.7, c_f=36.0, name="run B")
     window.runs.open([a, b, write_foreign(tmp_path / "foreign.h5")])
     qtbot.waitUntil(lambda: len(window.runs.runs) == 2 and not window.runs.pending,
-                    timeout=10000)
+                    timeout=LOAD_TIMEOUT_MS)
     assert any("foreign.h5" in text for _, text in window.messages.messages)
     window.tabs.setCurrentWidget(window.runs)
     window.runs.set_checked([a, b])
@@ -51,7 +51,7 @@ def test_export_figure_of_an_analysis_view(qtbot, make_window, registry, tmp_pat
 
     window = make_window(registry)
     window.open_runs([write_run(tmp_path / "v.h5")])
-    qtbot.waitUntil(lambda: window.analysis.results is not None, timeout=10000)
+    qtbot.waitUntil(lambda: window.analysis.results is not None, timeout=LOAD_TIMEOUT_MS)
     backbone = window.analysis.views[3]
     out = export_figure(backbone.graphics, tmp_path / "backbone.svg")
     assert out.stat().st_size > 1000

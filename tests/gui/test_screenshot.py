@@ -50,7 +50,7 @@ def test_screenshot_through_the_command(tmp_path):
     out = tmp_path / "cli.png"
     proc = subprocess.run(
         [sys.executable, "-m", "fsi_lab.cli", "gui", str(write_run(tmp_path / "c.h5")),
-         "--screenshot", str(out)], capture_output=True, text=True, timeout=120,
+         "--screenshot", str(out)], capture_output=True, text=True, timeout=600,
         env={**os.environ, "QT_QPA_PLATFORM": "offscreen"})
     assert proc.returncode == 0, proc.stderr
     assert _png(out) == (1366, 768)
