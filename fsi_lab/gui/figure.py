@@ -161,15 +161,21 @@ class Legend(QWidget):
         self._samples: dict[tuple, str] = {}
 
     def show_items(self, items: Iterable[pg.PlotDataItem]) -> None:
-        """List the named ``items``, once per name and look, in their order."""
-        seen: dict[tuple, str] = {}
+        """List the named ``items`` in their order, once per name and colour: a curve drawn as
+        a line in one plot and as markers in another (a component's envelope and its
+        backbone) is one entry whose sample shows both."""
+        merged: dict[tuple, list] = {}
         for item in items:
             name = item.name() if hasattr(item, "name") else None
             if not name:
                 continue
-            key = (name, *self._look(item))
-            seen.setdefault(key, name)
-        self.show_entries([(name, key[1:]) for key, name in seen.items()])
+            colour, width, style, symbol, symbol_colour = self._look(item)
+            entry = merged.setdefault((name, colour or symbol_colour), [None, 1.2, 1, None, None])
+            if colour is not None and entry[0] is None:
+                entry[0:3] = [colour, width, style]
+            if symbol is not None and entry[3] is None:
+                entry[3:5] = [symbol, symbol_colour]
+        self.show_entries([(name, tuple(look)) for (name, _), look in merged.items()])
 
     def show_entries(self, entries: Sequence[tuple[str, tuple]]) -> None:
         """``entries``: (text, look) pairs, a look as made by :meth:`look`."""
