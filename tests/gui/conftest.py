@@ -12,14 +12,10 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+from PySide6.QtCore import QCoreApplication, QEvent  # the gui extra: make test installs it
 
-pytest.importorskip("PySide6")
-pytest.importorskip("pyqtgraph")
-
-from PySide6.QtCore import QCoreApplication, QEvent  # noqa: E402
-
-from fsi_lab.gui.app import MainWindow, _configure_pyqtgraph, settle  # noqa: E402
-from fsi_lab.runfile import RunFileWriter, write_analysis  # noqa: E402
+from fsi_lab.gui.app import MainWindow, _configure_pyqtgraph, settle
+from fsi_lab.runfile import RunFileWriter, write_analysis
 
 ROOT = Path(__file__).resolve().parents[2]
 # Generous limits for waits on conditions: they only matter when something is broken, and the
