@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 export QT_QPA_PLATFORM ?= offscreen
 
-.PHONY: demo test bench clean h5dump-tool
+.PHONY: demo gui qt-libs screenshots test bench clean h5dump-tool
 
 # A venv with the package (editable) and the given extras; rebuilt when pyproject.toml changes.
 $(VENV)/.installed-%: pyproject.toml
@@ -22,6 +22,28 @@ h5dump-tool:
 
 demo: $(VENV)/.installed-gui
 	$(BIN)/fsi-lab run profiles/wet-beam-sim.toml --out runs
+
+# The X11 libraries Qt's xcb platform plugin loads and PySide6's wheels do not carry
+# (libxcb-cursor0, libxcb-icccm4, libxcb-keysyms1, ...: the list is in fsi_lab/gui/display.py);
+# installed where we may, as for hdf5-tools, named otherwise. --screenshot needs none of them.
+qt-libs: $(VENV)/.installed-gui
+	@missing="$$($(BIN)/python -m fsi_lab.gui.display --missing-packages)" || exit 1; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    echo "installing the Qt system libraries: $$missing" >&2; \
+	    (apt-get update -qq && apt-get install -y -qq --no-install-recommends $$missing) >/dev/null; \
+	  else echo "the GUI needs these system packages (Debian/Ubuntu names): $$missing" >&2; \
+	    exit 1; fi; fi
+
+# The desktop application on the demo profile, on this machine's display (not offscreen,
+# unless QT_QPA_PLATFORM was set by the caller).
+gui: $(VENV)/.installed-gui qt-libs
+	$(if $(filter environment% command%,$(origin QT_QPA_PLATFORM)),,env -u QT_QPA_PLATFORM) \
+	  $(BIN)/fsi-lab gui profiles/wet-beam-sim.toml
+
+# The README's pictures of each tab at 1366x768 (offscreen; about a minute).
+screenshots: $(VENV)/.installed-gui
+	$(BIN)/python docs/screenshots.py
 
 test: $(VENV)/.installed-dev,gui h5dump-tool
 	$(BIN)/python -m pytest

@@ -172,7 +172,7 @@ def _profile(folder: Path) -> Path:
 def _longest_stall() -> tuple[float, float, str]:
     """Longest UI-thread stall while the run goes (start to safe state and file closed) and
     afterwards while its analysis runs and the views are drawn (ms), and the exit status."""
-    from PySide6.QtCore import QCoreApplication, QEvent, QTimer
+    from PySide6.QtCore import QTimer
 
     from fsi_lab.gui.app import MainWindow, freeze_startup_objects
 
@@ -231,8 +231,7 @@ def _longest_stall() -> tuple[float, float, str]:
         status = window.run_control.outcome.exit_status if window.run_control.outcome else "none"
         window.close()
         window.pool.wait_all()
-        window.deleteLater()
-        QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+        window.dispose()
         app.processEvents()
         gc.unfreeze()
     return gaps["acquire"] * 1e3, gaps["end"] * 1e3, status

@@ -443,6 +443,19 @@ def _strict_exit(summary: dict[str, Any], code: int) -> int:
     return EXIT_STRICT
 
 
+def _window_size(text: str) -> tuple[int, int]:
+    """``WxH`` (e.g. ``1366x768``) for ``fsi-lab gui --size``."""
+    try:
+        width, height = (int(part) for part in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected WIDTHxHEIGHT in pixels, "
+                                         "e.g. 1366x768") from None
+    if not (320 <= width <= 16384 and 240 <= height <= 16384):
+        raise argparse.ArgumentTypeError(f"{text!r}: width 320 to 16384 and height 240 to "
+                                         "16384 pixels")
+    return width, height
+
+
 def _interval(bounds) -> str:
     """``[lo, hi]`` with four significant digits (95 % interval), or nothing."""
     if not bounds or any(b is None for b in bounds):
@@ -489,9 +502,14 @@ def format_summary(summary: dict[str, Any]) -> str:
             lines.extend(f"    not analysed: {message}" for message in seen)
             model = component.get("modal_model")
             if model and model.get("envelope_rms_error") is not None:
+                # one beam model for every component, its C_i and C_f from where c_source says
+                # (a component's own fit only for that component)
+                source = (info.get("modal_model") or {}).get("c_source")
+                origin = f" from {source}" if isinstance(source, str) and source else ""
                 lines.append(
-                    f"    modal model (C_i = {model['c_i']:.4g}, C_f = {model['c_f']:.4g}) vs "
-                    f"measurement: envelope RMS error {100 * model['envelope_rms_error']:.1f} %, "
+                    f"    modal model (C_i = {model['c_i']:.4g}, C_f = {model['c_f']:.4g}"
+                    f"{origin}) vs measurement: envelope RMS error "
+                    f"{100 * model['envelope_rms_error']:.1f} %, "
                     f"frequency error {model['frequency_error_pct']:+.2f} %")
         for error in info.get("errors", []):
             lines.append(f"  failed {error['plugin']}: {error['message']}")
@@ -625,7 +643,11 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     p.add_argument("paths", type=Path, nargs="*", metavar="PROFILE|RUN.h5",
                    help="a profile to run, or run files to open")
     p.add_argument("--screenshot", type=Path, metavar="OUT.png",
-                   help="render the window with the given run's analysis, save it and exit")
+                   help="render the window with the given run's analysis, save it and exit "
+                        "(offscreen: no display needed)")
+    p.add_argument("--size", type=_window_size, metavar="WxH",
+                   help="window size in pixels (default: what fits the screen, up to "
+                        "1680x1050; 1366x768 for --screenshot)")
     p.set_defaults(func=cmd_gui)
 
     _add_plugin_commands(sub)

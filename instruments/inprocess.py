@@ -7,7 +7,10 @@ shaker armature on its suspension (``[shaker]``) -> base acceleration -> the bea
 (``[specimen]`` and ``[model]``) -> tip velocity; every input gets Gaussian noise.
 
 Fault settings (``fail_after_s``, ``interlock_after_s``) make an instrument die or trip an
-interlock mid-run, for tests of the safe state.
+interlock mid-run, for tests of the safe state. They count record time, the samples the digitiser
+has delivered divided by the sample rate, never the wall clock: a fault set at 0.6 s strikes after
+exactly 0.6 s of data, however slowly the machine opens the instruments or computes the physics,
+and a run shorter than that never sees it.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ def _bench(context: dict[str, Any]) -> dict[str, Any]:
         "waveform": np.zeros(0), "waveform_rate": 1.0, "source_on": False, "start_time": None,
         "gain": 0.0, "output_enabled": False, "interlocks": dict.fromkeys(INTERLOCKS, False),
         "velocity_sensitivity": 8.0, "source_level_v": 0.0,
+        "record_s": 0.0,  # record time: samples delivered by the digitiser / sample rate
     })
 
 
@@ -44,7 +48,6 @@ class _Base:
         self._settings = dict(settings)
         self._bench = _bench(context)
         self._open = True
-        self._opened_at = time.monotonic()
 
     def identify(self) -> str:
         self._alive()
@@ -56,11 +59,16 @@ class _Base:
     def close(self) -> None:
         self._open = False
 
+    def _due(self, setting: str) -> bool:
+        """Whether the simulated fault ``setting`` (a record time, s) has struck."""
+        after = self._settings.get(setting)
+        return after is not None and self._bench["record_s"] >= after
+
     def _alive(self) -> None:
         if not self._open:
             raise InstrumentError(f"{self._name}: connection closed")
-        fail_after = self._settings.get("fail_after_s")
-        if fail_after is not None and time.monotonic() - self._opened_at > fail_after:
+        if self._due("fail_after_s"):
+            fail_after = self._settings["fail_after_s"]
             raise InstrumentError(
                 f"{self._name} at {self._address or 'in-process'}: no answer (simulated "
                 f"failure after {fail_after:g} s)"
@@ -99,8 +107,7 @@ class InProcessAmplifier(_Base, Amplifier):
 
     def interlocks(self) -> dict[str, bool]:
         self._alive()
-        trip_after = self._settings.get("interlock_after_s")
-        if trip_after is not None and time.monotonic() - self._opened_at > trip_after:
+        if self._due("interlock_after_s"):
             self._bench["interlocks"]["over_travel"] = True
             self._bench["output_enabled"] = False
         return dict(self._bench["interlocks"])
@@ -207,6 +214,7 @@ class InProcessAcquisition(_Base, Acquisition):
             "spare": np.zeros(n),
         }
         self._sent += n
+        bench["record_s"] = self._sent / self._rate
         noise = self._settings["noise_v"]
         return {name: volts[self.SIGNALS[i]] + noise * self._rng.standard_normal(n)
                 for name, i in self._inputs.items()}
@@ -220,7 +228,8 @@ class InProcessAcquisition(_Base, Acquisition):
 
 
 FAIL = Param("fail_after_s", "float", "s", None, minimum=0.0,
-             help="Simulated fault: stop answering this long after opening.")
+             help="Simulated fault: stop answering once the record is this long (record time, "
+                  "not wall-clock time).")
 
 PLUGINS = [
     InstrumentPlugin(
@@ -234,7 +243,8 @@ PLUGINS = [
         (Param("gain", "float", "V/V", 1.0, minimum=0.0, maximum=100.0,
                help="Voltage gain of the amplifier."),
          Param("interlock_after_s", "float", "s", None, minimum=0.0,
-               help="Simulated fault: trip the over-travel interlock this long after opening."),
+               help="Simulated fault: trip the over-travel interlock once the record is this "
+                    "long (record time, not wall-clock time)."),
          FAIL),
         lambda address, settings, ctx: InProcessAmplifier("amplifier", address, settings, ctx),
         help="Simulated shaker amplifier with interlocks."),

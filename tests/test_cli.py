@@ -120,6 +120,31 @@ def test_summary_text_flags_coefficients_whose_interval_contains_zero():
     assert "not resolved" not in format_summary(summary([1.0, 5.0]))
 
 
+def test_summary_text_says_whose_coefficients_the_modal_model_ran_with():
+    """The model is one beam with one C_i and C_f (here component 0's fit): the line under
+    component 1 must not pass them off as component 1's."""
+    from fsi_lab.cli import format_summary
+
+    def model(error):
+        return {"c_i": 0.6543, "c_f": 30.55, "envelope_rms_error": error,
+                "frequency_error_pct": 0.5}
+
+    text = format_summary({"channels": {"tip_velocity": {
+        "modal_model": {"c_i": 0.6543, "c_f": 30.55,
+                        "c_source": "equivalent-damping component 0 (mode 2)"},
+        "components": [
+            {"index": 0, "frequency_hz": 17.0, "modal_model": model(0.07),
+             "equivalent_damping": {"c_i": 0.6543, "c_f": 30.55, "r2": 0.8}},
+            {"index": 1, "frequency_hz": 47.1, "modal_model": model(0.04),
+             "equivalent_damping": {"c_i": 0.6895, "c_f": -3.73, "r2": 0.0}}]}}})
+    lines = [line for line in text.splitlines() if "modal model" in line]
+    assert len(lines) == 2
+    for line in lines:
+        assert ("modal model (C_i = 0.6543, C_f = 30.55 from equivalent-damping component 0 "
+                "(mode 2)) vs measurement") in line
+    assert "0.6895" not in lines[1]
+
+
 def test_analyze_keeps_the_runs_own_overrides(sim_profile, tmp_path):
     analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
     data, proc = cli_json("run", str(sim_profile(analysis=analysis)), "--out", str(tmp_path),

@@ -69,7 +69,7 @@ def test_completed_run_writes_everything(sim_profile, registry, tmp_path):
 
 
 def test_dead_instrument_ends_failed_in_safe_state_with_data_kept(sim_profile, registry, tmp_path):
-    path = sim_profile(duration=5.0, realtime="true", acquisition_extra="fail_after_s = 0.6")
+    path = sim_profile(duration=5.0, acquisition_extra="fail_after_s = 0.6")
     _, run, events = _run(path, registry, tmp_path)
     outcome = run()
     assert outcome.exit_status == "failed"
@@ -79,12 +79,13 @@ def test_dead_instrument_ends_failed_in_safe_state_with_data_kept(sim_profile, r
     assert "InstrumentError" in record.attrs["traceback"]
     # the dead digitiser's state could not be read back, and the file says so
     assert "no answer" in record.instruments["acquisition"]["final_state"]["error"]
+    # the fault counts record time: exactly 0.6 s of data at 2000 Hz came in before it
     kept = read_run(outcome.path).channels["tip_velocity"].data
-    assert 0 < kept.size < 10000
+    assert kept.size == 1200
 
 
 def test_interlock_trip_ends_failed_and_safe(sim_profile, registry, tmp_path):
-    path = sim_profile(duration=5.0, realtime="true", amplifier_extra="interlock_after_s = 0.4")
+    path = sim_profile(duration=5.0, amplifier_extra="interlock_after_s = 0.4")
     _, run, _ = _run(path, registry, tmp_path)
     outcome = run()
     assert outcome.exit_status == "failed"
@@ -94,11 +95,36 @@ def test_interlock_trip_ends_failed_and_safe(sim_profile, registry, tmp_path):
 
 
 def test_dead_amplifier_is_still_recorded(sim_profile, registry, tmp_path):
-    path = sim_profile(duration=5.0, realtime="true", amplifier_extra="fail_after_s = 0.4")
+    path = sim_profile(duration=5.0, amplifier_extra="fail_after_s = 0.4")
     _, run, _ = _run(path, registry, tmp_path)
     outcome = run()
     assert outcome.exit_status == "failed" and "amplifier" in outcome.error
     _assert_safe(outcome.path)
+
+
+def test_simulated_faults_count_record_time_not_the_wall_clock(sim_profile, registry, tmp_path,
+                                                              monkeypatch):
+    """A fault set beyond the end of the record never strikes, however long the run takes on
+    the wall clock: here every block is delivered as if the machine had stalled for 2 s."""
+    from fsi_lab.instruments import inprocess
+
+    read_block = inprocess.InProcessAcquisition.read_block
+    stalled = []
+
+    def slow_read_block(self, timeout):
+        stalled.append(2.0)  # seconds a slow, loaded machine might lose here
+        return read_block(self, timeout)
+
+    monkeypatch.setattr(inprocess.time, "monotonic",
+                        lambda base=inprocess.time.monotonic: base() + sum(stalled))
+    monkeypatch.setattr(inprocess.InProcessAcquisition, "read_block", slow_read_block)
+    path = sim_profile(duration=0.5, acquisition_extra="fail_after_s = 0.6",
+                       amplifier_extra="fail_after_s = 0.6\ninterlock_after_s = 0.6")
+    _, run, _ = _run(path, registry, tmp_path)
+    outcome = run()
+    assert outcome.exit_status == "completed", outcome.error
+    assert sum(stalled) > 0.6                          # the wall clock went well past the fault
+    assert read_run(outcome.path).channels["tip_velocity"].data.size == 1000
 
 
 def test_abort_from_another_thread(sim_profile, registry, tmp_path):

@@ -10,6 +10,7 @@ the tabs and in the log; the application keeps running.
 from __future__ import annotations
 
 import gc
+import os
 import sys
 import time
 from pathlib import Path
@@ -26,7 +27,9 @@ from PySide6.QtWidgets import (
 from fsi_lab.events import LogRecord
 from fsi_lab.gui.analysis.tab import AnalysisViews
 from fsi_lab.gui.bench_panel import BenchPanel
+from fsi_lab.gui.display import window_problem
 from fsi_lab.gui.excitation_designer import ExcitationDesigner
+from fsi_lab.gui.figure import Figure
 from fsi_lab.gui.live_plots import LivePlots
 from fsi_lab.gui.results import RunResults
 from fsi_lab.gui.run_control import LogPanel, RunControl
@@ -36,6 +39,14 @@ from fsi_lab.gui.worker import EventForwarder, TaskPool
 from fsi_lab.registry import Registry, load_registry
 
 RUN_SUFFIXES = (".h5", ".hdf5", ".hdf")
+#: Initial width of the left column (bench, and the log under it) and height of the log, in
+#: pixels (both can be dragged).
+BENCH_DOCK_WIDTH = 300
+LOG_DOCK_HEIGHT = 190
+#: The window's size when the screen has room for it; a smaller screen gets a window that fits.
+PREFERRED_SIZE = (1680, 1050)
+#: The size ``--screenshot`` renders at unless ``--size`` says otherwise: a common laptop screen.
+SCREENSHOT_SIZE = (1366, 768)
 BAR_STYLES = {
     "ERROR": "background: #fde7ea; color: #b00020; border: 1px solid #f3b6bf;",
     "WARNING": "background: #fff4e0; color: #8a4b00; border: 1px solid #f5cf8f;",
@@ -82,6 +93,7 @@ class MainWindow(QMainWindow):
         self._closing = False
         self._run_profile: Any = None
         self._show_when_loaded: set[Path] = set()
+        self._front_when_loaded: set[Path] = set()  # shown on the Analysis tab once loaded
         self.last_run: Path | None = None
 
         self.messages = MessageBar()
@@ -113,7 +125,7 @@ class MainWindow(QMainWindow):
         scroll = QScrollArea()
         scroll.setWidgetResizable(True)
         scroll.setWidget(design)
-        scroll.setMinimumWidth(380)
+        scroll.setMinimumWidth(340)
         experiment = QSplitter(Qt.Orientation.Horizontal)
         experiment.addWidget(scroll)
         experiment.addWidget(self.live)
@@ -140,9 +152,11 @@ class MainWindow(QMainWindow):
         log_dock = QDockWidget("Log", self)
         log_dock.setObjectName("log-dock")
         log_dock.setWidget(self.log)
-        self.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, log_dock)
-        self.resizeDocks([bench_dock], [370], Qt.Orientation.Horizontal)
-        self.resizeDocks([log_dock], [140], Qt.Orientation.Vertical)
+        # the log under the bench, in the left column: the figures get the window's full height
+        self.addDockWidget(Qt.DockWidgetArea.LeftDockWidgetArea, log_dock)
+        self.splitDockWidget(bench_dock, log_dock, Qt.Orientation.Vertical)
+        self.resizeDocks([bench_dock], [BENCH_DOCK_WIDTH], Qt.Orientation.Horizontal)
+        self.resizeDocks([log_dock], [LOG_DOCK_HEIGHT], Qt.Orientation.Vertical)
         self.status_label = QLabel(f"{sum(len(v) for v in self.registry.descriptors.values())} "
                                    "plugins loaded")
         self.statusBar().addPermanentWidget(self.status_label)
@@ -203,16 +217,22 @@ class MainWindow(QMainWindow):
 
     # ------------------------------------------------------------------ opening
     def open_paths(self, paths: list[str | Path]) -> None:
-        """Open profiles (TOML) and run files (HDF5) given on the command line."""
-        runs = []
+        """Open profiles (TOML) and run files (HDF5) given on the command line. The first run
+        file is shown in the Analysis tab, which comes to the front unless a profile was given
+        too (then the Experiment tab stays); the others are listed in the Runs tab."""
+        runs, profiles = [], 0
         for path in paths:
             path = Path(path)
             if path.suffix.lower() in RUN_SUFFIXES or self._looks_like_hdf5(path):
                 runs.append(path)
             else:
+                profiles += 1
                 self.open_profile(path)
         if runs:
-            self.open_runs(runs)
+            if not profiles:
+                self._front_when_loaded.add(Path(runs[0]).resolve())
+            self.open_runs(runs[:1], show=True)
+            self.open_runs(runs[1:], show=False)
 
     @staticmethod
     def _looks_like_hdf5(path: Path) -> bool:
@@ -287,11 +307,15 @@ class MainWindow(QMainWindow):
         if path in self._show_when_loaded:
             self._show_when_loaded.discard(path)
             self._show_run(results)
-            if path == self.last_run and results.exit_status == "completed" and results.analysis:
+            if path in self._front_when_loaded or (
+                    path == self.last_run and results.exit_status == "completed"
+                    and results.analysis):
                 self.tabs.setCurrentWidget(self.analysis)
+        self._front_when_loaded.discard(path)
 
     def _run_failed(self, path: Path, text: str) -> None:
         self._show_when_loaded.discard(Path(path).resolve())
+        self._front_when_loaded.discard(Path(path).resolve())
         self.notify("ERROR", text)
 
     def _show_run(self, results: RunResults) -> None:
@@ -320,6 +344,19 @@ class MainWindow(QMainWindow):
         self.pool.wait_all()
         super().closeEvent(event)
 
+    def dispose(self) -> None:
+        """Close the window (it must not be running a run) and delete it, in order: timers and
+        drawings stopped, threads finished, then every figure's items (linked axes first, then
+        the scene), then the widgets. Nothing is left to signal a deleted plot item."""
+        self.close()
+        for figure in self.findChildren(pg.GraphicsView):
+            if isinstance(figure, Figure):
+                figure.release()
+            else:
+                figure.close()  # pyqtgraph clears its scene
+        self.deleteLater()
+        QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+
 
 def freeze_startup_objects() -> None:
     """Keep the objects built so far (the window, its plots, the plugins) out of the garbage
@@ -333,50 +370,104 @@ def _configure_pyqtgraph() -> None:
     pg.setConfigOptions(background="w", foreground="k", antialias=True)
 
 
+def _wait_events(app: QApplication, ms: int) -> None:
+    """Run the event loop for up to ``ms`` milliseconds (it wakes for every event)."""
+    loop = QEventLoop()
+    QTimer.singleShot(ms, loop.quit)
+    loop.exec()
+
+
 def wait_until_idle(window: MainWindow, timeout_s: float = 120.0) -> bool:
     """Process events until nothing is loading or checking (for screenshots)."""
     deadline = time.monotonic() + timeout_s
     app = QApplication.instance()
     while time.monotonic() < deadline:
-        app.processEvents(QEventLoop.ProcessEventsFlag.AllEvents, 50)
         pending = window.runs.pending or window._show_when_loaded
         checking = window.session.loaded and window.session.current is None
         if not window.busy() and not pending and not checking:
             app.processEvents()
             return True
-        time.sleep(0.01)
+        _wait_events(app, 20)
+    return False
+
+
+def figure_geometry(window: QWidget) -> list[tuple]:
+    """Where every figure on screen and each of its plots are (to tell when layouts settle)."""
+    out = []
+    for view in window.findChildren(pg.GraphicsView):
+        if not view.isVisible():
+            continue
+        origin = view.mapTo(window, view.rect().topLeft())
+        out.append((origin.x(), origin.y(), view.width(), view.height()))
+        scene = view.scene()
+        for item in scene.items() if scene is not None else ():
+            if isinstance(item, pg.PlotItem) and item.isVisible():
+                out.append(item.geometry().getRect())
+    return out
+
+
+def settle(window: QWidget, passes: int = 500) -> bool:
+    """Deliver pending layout, resize and paint events until no figure moves any more (two
+    passes in a row leave every figure and plot where it was); False if they never settle."""
+    app = QApplication.instance()
+    last, stable = None, 0
+    for _ in range(passes):
+        QCoreApplication.sendPostedEvents()
+        app.processEvents()
+        now = figure_geometry(window)
+        stable = stable + 1 if now == last else 0
+        if stable >= 2:
+            return True
+        last = now
     return False
 
 
 def take_screenshot(window: MainWindow, path: Path) -> bool:
-    """Render the whole window into ``path`` (PNG)."""
+    """Render the whole window into ``path`` (PNG), once its layouts have settled: the same
+    file gives the same picture."""
     if window.analysis.results is not None:
         window.tabs.setCurrentWidget(window.analysis)
         window.analysis.filled()  # every view drawn now
-    app = QApplication.instance()
-    for _ in range(5):
-        app.processEvents()
+    settle(window)
     path.parent.mkdir(parents=True, exist_ok=True)
     return window.grab().save(str(path))
 
 
 def _dispose(window: MainWindow) -> None:
     """Delete the window before the interpreter exits (pyqtgraph items must go first)."""
-    window.close()
-    window.deleteLater()
-    QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+    window.dispose()
     QApplication.instance().processEvents()
 
 
+def fitting_size(app: QApplication) -> tuple[int, int]:
+    """:data:`PREFERRED_SIZE`, or less where the screen's free area is smaller."""
+    screen = app.primaryScreen()
+    if screen is None:
+        return PREFERRED_SIZE
+    free = screen.availableGeometry()
+    return min(PREFERRED_SIZE[0], free.width()), min(PREFERRED_SIZE[1], free.height())
+
+
 def main(args: Any) -> int:
-    """``fsi-lab gui [PROFILE | RUN.h5 ...] [--screenshot OUT.png]``."""
+    """``fsi-lab gui [PROFILE | RUN.h5 ...] [--screenshot OUT.png] [--size WxH]``."""
+    screenshot = getattr(args, "screenshot", None)
+    if QApplication.instance() is None:
+        if screenshot is not None:
+            # a picture needs no display: Qt draws it offscreen (unless told otherwise)
+            os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+        else:
+            problem = window_problem()
+            if problem is not None:  # Qt would abort the process; say why instead
+                print(f"fsi-lab gui: {problem}", file=sys.stderr)
+                return 2
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("fsi-lab")
     _configure_pyqtgraph()
     paths = list(getattr(args, "paths", None) or [])
-    screenshot = getattr(args, "screenshot", None)
     window = MainWindow(out_dir=getattr(args, "out", None) or "runs")
-    window.resize(1680, 1050)
+    size = getattr(args, "size", None) or (SCREENSHOT_SIZE if screenshot is not None
+                                           else fitting_size(app))
+    window.resize(*size)
     window.show()
     freeze_startup_objects()
     window.open_paths(paths)

@@ -22,6 +22,7 @@ from PySide6.QtWidgets import (
 from fsi_lab.bench_access import OPEN_ORDER, probe_bench, problems, safe_bench
 from fsi_lab.events import StateChanged
 from fsi_lab.gui.excitation_designer import changed_overrides
+from fsi_lab.gui.figure import FlowLayout
 from fsi_lab.gui.forms import ParamForm
 from fsi_lab.gui.session import ProfileSession
 from fsi_lab.gui.worker import TaskPool
@@ -55,12 +56,16 @@ class InstrumentBox(QGroupBox):
         self.state = QLabel("not connected")
         self.state.setWordWrap(True)
         self.state.setObjectName(f"state:{role}")
-        self.interlock_row = QHBoxLayout()
+        self.interlock_row = FlowLayout(spacing=4, line_spacing=3)  # wraps in a narrow column
         self.interlocks: dict[str, QLabel] = {}
         self.form = ParamForm(descriptor.params, config.settings, f"bench.{role}")
         self.base_settings = dict(config.settings)
         form = QFormLayout(self)
-        form.addRow("address", QLabel(config.address or "(default)"))
+        form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)  # narrow: value below
+        address = QLabel(config.address or "(default)")
+        address.setWordWrap(True)
+        address.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        form.addRow("address", address)
         form.addRow("identity", self.identity)
         form.addRow("state", self.state)
         if role == "amplifier":
@@ -148,7 +153,7 @@ class BenchPanel(QWidget):
         scroll = QScrollArea()
         scroll.setWidgetResizable(True)
         scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
-        self.setMinimumWidth(330)
+        self.setMinimumWidth(260)
         scroll.setWidget(self.boxes_widget)
         layout = QVBoxLayout(self)
         layout.addWidget(self.safe_button)

@@ -2,7 +2,8 @@
 
 One widget per parameter: a spin box with the unit as suffix for numbers, a combo box for
 choices, a check box for booleans, a line edit for strings and lists; an "auto" box for optional
-parameters (default ``None``). The help text and the accepted values are the tooltip. Every
+parameters (default ``None``), whose editor then reads "auto" rather than a number the plugin
+will not use. The help text and the accepted values are the tooltip. Every
 edit is checked by the parameter's own :meth:`~fsi_lab.params.Param.check`: a refused value is
 shown in red under the field with the schema's message, and the form keeps the last accepted
 value, so nothing outside the bounds ever leaves the form.
@@ -26,6 +27,8 @@ from fsi_lab.params import Param
 WIDE = 1e300
 INT_WIDE = 2**31 - 1
 ERROR_STYLE = "color: #b00020;"
+#: What the editor of an optional parameter left unset reads.
+AUTO_TEXT = "auto"
 FIELD_ERROR_STYLE = "background: #fde7ea;"
 
 
@@ -155,6 +158,9 @@ class ParamField(QWidget):
             self.auto.setToolTip("Leave unset: the plugin chooses (default).")
             self.auto.toggled.connect(self._auto_toggled)
             row.addWidget(self.auto)
+            if isinstance(self.editor, (QDoubleSpinBox, QSpinBox)):
+                # shown at the spin box's minimum, which no schema accepts as a value
+                self.editor.setSpecialValueText(AUTO_TEXT)
         self.message = QLabel()
         self.message.setStyleSheet(ERROR_STYLE)
         self.message.setWordWrap(True)
@@ -224,14 +230,19 @@ class ParamField(QWidget):
             elif isinstance(e, QCheckBox):
                 e.setChecked(bool(value))
             elif isinstance(e, QDoubleSpinBox):
-                e.setValue(float(value) if value is not None else self._placeholder())
+                e.setValue(float(value) if value is not None else self._unset(e))
             elif isinstance(e, QSpinBox):
-                e.setValue(int(value) if value is not None else int(self._placeholder()))
+                e.setValue(int(value) if value is not None else int(self._unset(e)))
             else:
                 e.setText("" if value is None else value_text(self.param, value)
                           if self.param.type in ("floats", "strs") else str(value))
         finally:
             e.blockSignals(False)
+
+    def _unset(self, editor: QAbstractSpinBox) -> float:
+        """What a spin box shows for no value: "auto" (its minimum) when the parameter is
+        optional, else a value within the bounds."""
+        return editor.minimum() if self.auto is not None else self._placeholder()
 
     def _placeholder(self) -> float:
         lo, hi = self.param.minimum, self.param.maximum
@@ -261,7 +272,15 @@ class ParamField(QWidget):
             self._set_error(str(exc))
 
     def _auto_toggled(self, checked: bool) -> None:
-        self.editor.setEnabled(not checked)
+        e = self.editor
+        e.setEnabled(not checked)
+        if isinstance(e, (QDoubleSpinBox, QSpinBox)):
+            e.blockSignals(True)
+            if checked:
+                e.setValue(e.minimum())                 # reads "auto"
+            elif e.value() == e.minimum():
+                e.setValue(type(e.value())(self._placeholder()))  # a value to start from
+            e.blockSignals(False)
         self._edited()
 
     def _edited(self, *args: Any) -> None:
@@ -297,6 +316,8 @@ class ParamForm(QWidget):
         layout = QFormLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.setFieldGrowthPolicy(QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
+        # in a narrow column the editor goes under its label rather than out of sight
+        layout.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)
         values = dict(values or {})
         for param in self.params:
             value = values.get(param.name, None if param.required else param.default)

@@ -20,9 +20,15 @@ from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from fsi_lab.events import DataBlock
 from fsi_lab.gui.decimate import min_max_decimate
+from fsi_lab.gui.figure import Figure, scrolled
 
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2",
            "#17becf")
+#: Smallest plot of a channel (axes included); the last row also carries the time axis.
+MIN_ROW_PLOT = (180, 110)
+MIN_LAST_ROW_HEIGHT = 150
+#: Fewest decades a spectrum's amplitude axis spans.
+MIN_DECADES = 2.0
 
 
 class RingBuffer:
@@ -99,12 +105,14 @@ class LivePlots(QWidget):
         self.last_frame_s = 0.0
         self._dirty = False
         self._frame_counter = 0
-        self.graphics = pg.GraphicsLayoutWidget()
+        self.graphics = Figure(min_plot=MIN_ROW_PLOT)
         self.status = QLabel("No run yet: the channels appear here while a run acquires.")
+        self.status.setWordWrap(True)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.status)
-        layout.addWidget(self.graphics, 1)
+        # many channels scroll rather than squeeze
+        layout.addWidget(scrolled(self.graphics), 1)
         self.paints = 0
         self.graphics.viewport().installEventFilter(self)
         self.timer = QTimer(self)
@@ -166,13 +174,16 @@ class LivePlots(QWidget):
                 if row != last_row:
                     item.hideAxis("bottom")
             plot.setLabel("left", name, units=None if not unit else unit)
-            spec.setLabel("left", f"|{name}|")
+            spec.setLabel("left", f"|{name}|", units=unit or None)
+            spec.getAxis("left").enableAutoSIPrefix(False)  # decades read as they are
             spec.setLogMode(x=True, y=True)  # beam modes sit at a few hertz to a few hundred
             spec.setXRange(np.log10(self.sample_rate / self.spectrum_samples),
                            np.log10(self.sample_rate / 2), padding=0)
             if row == last_row:
                 plot.setLabel("bottom", "time", units="s")
                 spec.setLabel("bottom", "frequency", units="Hz")
+                for item in (plot, spec):
+                    item.setMinimumHeight(MIN_LAST_ROW_HEIGHT)
             if first is None:
                 first = plot
             else:
@@ -185,6 +196,7 @@ class LivePlots(QWidget):
             self._s_ranges[name] = None
         self.graphics.ci.layout.setColumnStretchFactor(0, 3)
         self.graphics.ci.layout.setColumnStretchFactor(1, 2)
+        self.graphics.fit_minimum()
         self.status.setText(
             f"{len(self.units)} channels at {self.sample_rate:g} Hz; window {self.window_s:g} s "
             "(display decimated; the run file keeps every sample)")
@@ -266,6 +278,9 @@ def _sticky(plot: pg.PlotItem, current: tuple[float, float] | None, lo: float, h
         return current or (0.0, 1.0)
     if hi <= lo:
         hi = lo + (1.0 if log else max(abs(lo) * 1e-3, 1e-12))
+    if log and hi - lo < MIN_DECADES:  # at least a few decades: labelled decades, no clutter
+        middle = (hi + lo) / 2
+        lo, hi = middle - MIN_DECADES / 2, middle + MIN_DECADES / 2
     if current is not None:
         c_lo, c_hi = current
         inside = c_lo <= lo and hi <= c_hi

@@ -22,13 +22,20 @@ from PySide6.QtWidgets import (
 from fsi_lab.errors import FsiLabError
 from fsi_lab.gui.analysis.datasets import finite_pairs, per_component, summary_series, table_rows
 from fsi_lab.gui.analysis.names import CQ, CQ_AMPLITUDE, DISPLACEMENT_AMPLITUDE, FREQUENCY, ZETA
-from fsi_lab.gui.analysis.plotting import COLOURS
+from fsi_lab.gui.analysis.plotting import COLOURS, robust_range
 from fsi_lab.gui.export import export_figure, write_csv
+from fsi_lab.gui.figure import Figure, FlowLayout, Legend, scrolled
 from fsi_lab.gui.results import RunResults, load_results
 from fsi_lab.gui.worker import TaskPool
 from fsi_lab.registry import Registry
 
+#: Markers of the runs compared (run r in ``SYMBOLS[r % len(SYMBOLS)]``); every curve of the
+#: comparison (a component of a run) has a colour of its own.
 SYMBOLS = ("o", "t", "s", "d", "+", "x")
+#: Components of a run compared at most.
+MAX_COMPARED_COMPONENTS = 6
+#: Initial width of the list of open runs, in pixels.
+LIST_WIDTH = 240
 SUMMARY_COLUMNS = ("run", "file", "exit_status", "start_time", "channel", "component",
                    "frequency_hz", "c_i", "c_i_ci95_low", "c_i_ci95_high", "c_f", "c_f_ci95_low",
                    "c_f_ci95_high", "r2", "errors")
@@ -80,7 +87,8 @@ class RunsBrowser(QWidget):
         super().__init__(parent)
         self.registry = registry
         self.pool = pool
-        self.runs: dict[Path, RunResults] = {}
+        self.runs: dict[Path, RunResults] = {}  # in the order the files were opened
+        self._order: list[Path] = []
         self.pending: set[Path] = set()
         self._again: set[Path] = set()
         self._stale = False
@@ -101,19 +109,23 @@ class RunsBrowser(QWidget):
         fig_button.clicked.connect(self._export_figure_dialog)
         csv_button = QPushButton("Export CSV ...")
         csv_button.clicked.connect(self._export_csv_dialog)
-        self.graphics = pg.GraphicsLayoutWidget()
+        self.graphics = Figure()
         self.graphics.setObjectName("compare-plots")
+        self.legend = Legend()
+        self.legend.setVisible(False)
         self.table = QTableWidget()
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
         self.note = QLabel("Open run files and tick them to compare them.")
         self.note.setWordWrap(True)
 
-        buttons = QHBoxLayout()
+        buttons = QWidget()
+        flow = FlowLayout(buttons, spacing=6, line_spacing=4)  # wrap in a narrow list
         for button in (open_button, close_button, show_button):
-            buttons.addWidget(button)
+            flow.addWidget(button)
         left = QWidget()
         left_layout = QVBoxLayout(left)
-        left_layout.addLayout(buttons)
+        left_layout.setContentsMargins(0, 0, 0, 0)
+        left_layout.addWidget(buttons)
         left_layout.addWidget(self.list, 1)
         exports = QHBoxLayout()
         exports.addWidget(QLabel("Channel"))
@@ -124,12 +136,15 @@ class RunsBrowser(QWidget):
         right_layout = QVBoxLayout(right)
         right_layout.addLayout(exports)
         right_layout.addWidget(self.note)
-        right_layout.addWidget(self.graphics, 3)
+        right_layout.addWidget(self.legend)
+        right_layout.addWidget(scrolled(self.graphics), 3)
         right_layout.addWidget(self.table, 1)
         splitter = QSplitter(Qt.Orientation.Horizontal)
         splitter.addWidget(left)
         splitter.addWidget(right)
-        splitter.setStretchFactor(1, 3)
+        splitter.setStretchFactor(0, 0)
+        splitter.setStretchFactor(1, 1)
+        splitter.setSizes([LIST_WIDTH, 4 * LIST_WIDTH])  # the comparison gets the room
         layout = QVBoxLayout(self)
         layout.addWidget(splitter)
 
@@ -138,6 +153,8 @@ class RunsBrowser(QWidget):
         """Read each file off the UI thread; ``loaded`` or ``failed`` follows for each."""
         for path in paths:
             path = Path(path).resolve()
+            if path not in self._order:
+                self._order.append(path)
             if path in self.pending:  # read again once the current reading is done
                 self._again.add(path)
                 continue
@@ -162,6 +179,9 @@ class RunsBrowser(QWidget):
         if self._read_again(path):
             return
         self.runs[path] = results
+        # listed in the order opened, whichever file was read first
+        rank = {p: i for i, p in enumerate(self._order)}
+        self.runs = dict(sorted(self.runs.items(), key=lambda item: rank.get(item[0], 0)))
         self._refresh_list(path)
         self.compare()
         self.loaded.emit(results)
@@ -287,21 +307,38 @@ class RunsBrowser(QWidget):
             plot.setLabel("left", ylabel, units=yunits)
             plot.setTitle(name.replace("_", " "))
             plot.showGrid(x=True, y=True, alpha=0.2)
-            plot.addLegend(offset=(-10, 10))
             plots[name] = plot
         drawn = 0
+        entries = []
+        shown: dict[str, list[np.ndarray]] = {name: [] for name in plots}
+        series = 0  # a colour for every component of every run
+        names = [results.name for results in runs]
         for r, results in enumerate(runs):
             channel = self._channel_of(results)
             if channel is None:
                 continue
-            colour = COLOURS[r % len(COLOURS)]
-            for name, pairs in curves_of(results, channel).items():
-                for k, (x, y) in enumerate(pairs[:len(SYMBOLS)]):
-                    label = f"{results.name} #{k + 1}" if name == "backbone" else None
-                    plots[name].plot(x, y, pen=pg.mkPen(colour, width=1) if x.size > 400 else None,
-                                     symbol=None if x.size > 400 else SYMBOLS[k],
-                                     symbolSize=5, symbolBrush=colour, symbolPen=None, name=label)
+            symbol = SYMBOLS[r % len(SYMBOLS)]
+            curves = curves_of(results, channel)
+            count = min(MAX_COMPARED_COMPONENTS, max(len(p) for p in curves.values()))
+            for k in range(count):
+                colour = COLOURS[(series + k) % len(COLOURS)]
+                label = f"{self._label(results, names)}, component {k}"
+                entries.append((label, Legend.look(symbol=symbol, symbol_colour=colour)))
+                for name, pairs in curves.items():
+                    if k >= len(pairs):
+                        continue
+                    x, y = pairs[k]
+                    line = x.size > 400
+                    plots[name].plot(x, y, pen=pg.mkPen(colour, width=1.2) if line else None,
+                                     symbol=None if line else symbol, symbolSize=6,
+                                     symbolBrush=colour, symbolPen=None, name=label)
+                    shown[name].append(y)
                     drawn += 1
+            series += count
+        for name, values in shown.items():
+            robust_range(plots[name], values)  # the bulk; outliers are a zoom-out away
+        self.legend.show_entries(entries if drawn else [])
+        self.graphics.fit_minimum()
         self._fill_table(runs)
         if not runs:
             self.note.setText("Open run files and tick them to compare them.")
@@ -310,6 +347,14 @@ class RunsBrowser(QWidget):
                               "results (not computed).")
         else:
             self.note.setText(f"{len(runs)} run(s) compared")
+
+    @staticmethod
+    def _label(results: RunResults, names: list[str]) -> str:
+        """The run's name, with its start time (or file) when another compared run shares it."""
+        if names.count(results.name) < 2:
+            return results.name
+        started = str(results.attrs.get("start_time", ""))
+        return f"{results.name} ({started[11:19] if len(started) >= 19 else results.path.name})"
 
     def summary_rows(self, runs: list[RunResults] | None = None) -> list[dict[str, Any]]:
         """One row per run, channel and component (a run without components gives one row)."""

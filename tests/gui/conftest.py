@@ -12,17 +12,20 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+from PySide6.QtCore import QCoreApplication, QEvent  # the gui extra: make test installs it
 
-pytest.importorskip("PySide6")
-pytest.importorskip("pyqtgraph")
-
-from PySide6.QtCore import QCoreApplication, QEvent  # noqa: E402
-
-from fsi_lab.gui.app import MainWindow, _configure_pyqtgraph  # noqa: E402
-from fsi_lab.runfile import RunFileWriter, write_analysis  # noqa: E402
+from fsi_lab.gui.app import MainWindow, _configure_pyqtgraph, settle
+from fsi_lab.runfile import RunFileWriter, write_analysis
 
 ROOT = Path(__file__).resolve().parents[2]
-CHECK_TIMEOUT_MS = 15000
+# Generous limits for waits on conditions: they only matter when something is broken, and the
+# suite must pass on a slow shared machine busy with other work.
+#: the safety check of a profile (a worker thread; the first one imports the beam model)
+CHECK_TIMEOUT_MS = 60000
+#: reading a run file on a worker thread and drawing it
+LOAD_TIMEOUT_MS = 60000
+#: a widget's state following a signal (a button enabled, a label updated)
+UI_TIMEOUT_MS = 30000
 
 #: The paper's wet experiment on the in-process simulated bench paced in real time; the
 #: excitation and the analysis chain are those of profiles/wet-beam-sim.toml.
@@ -103,7 +106,8 @@ def wet_inprocess_profile(folder: Path, duration: float = 3.0, sample_rate: floa
     path.write_text(WET_INPROCESS.format(duration=duration, sample_rate=sample_rate,
                                          extra_channels=extra_channels) + "\n" + tail)
     return path
-RUN_TIMEOUT_MS = 60000
+#: a run in a child process (spawned: it imports fsi-lab afresh), or its analysis
+RUN_TIMEOUT_MS = 180000
 
 
 @pytest.fixture
@@ -114,7 +118,7 @@ def make_window(qtbot, tmp_path):
 
     def make(registry=None, **kwargs) -> MainWindow:
         window = MainWindow(registry=registry, out_dir=kwargs.pop("out_dir", tmp_path / "runs"))
-        window.resize(1400, 900)
+        window.resize(1366, 768)  # a common laptop screen
         window.show()
         qtbot.waitExposed(window)
         windows.append(window)
@@ -129,9 +133,39 @@ def make_window(qtbot, tmp_path):
         window.close()
         assert not window.isVisible()
         window.pool.wait_all()
-        window.deleteLater()
+        window.dispose()
     QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
     gc.collect()  # wrappers of deleted Qt objects go before the next test builds plots
+
+
+#: The smallest plot area (the view box inside the axes) a person can read, in pixels.
+MIN_PLOT_AREA = (100, 80)
+
+
+def plot_areas(root):
+    """(where, width, height) of the data area of every plot shown under ``root``."""
+    import pyqtgraph as pg
+
+    areas = []
+    for figure in root.findChildren(pg.GraphicsView):
+        if not figure.isVisible():
+            continue
+        for item in figure.scene().items():
+            if isinstance(item, pg.PlotItem) and item.isVisible():
+                box = item.getViewBox().sceneBoundingRect()
+                where = f"{type(figure.parent()).__name__}/{figure.objectName() or 'figure'}"
+                areas.append((where, round(box.width()), round(box.height())))
+    return areas
+
+
+def assert_readable(window, what):
+    """Once the layouts have settled, every plot shown has at least MIN_PLOT_AREA."""
+    assert settle(window), f"{what}: the layout did not settle"
+    areas = plot_areas(window)
+    assert areas, f"{what}: no plot shown"
+    small = [a for a in areas if a[1] < MIN_PLOT_AREA[0] or a[2] < MIN_PLOT_AREA[1]]
+    assert not small, f"{what}: plots below {MIN_PLOT_AREA} px: {small}"
+    return areas
 
 
 def wait_checked(qtbot, window, ok: bool | None = True):
@@ -152,13 +186,16 @@ def wait_finished(qtbot, window):
 
 def write_run(path: Path, rate: float = 1000.0, seconds: float = 4.0, analysis: bool = True,
               failed: str | None = None, c_i: float = 0.65, c_f: float = 33.0,
-              name: str = "synthetic") -> Path:
+              name: str = "synthetic", hvd_components: int = 2) -> Path:
     """A run file with a decaying two-mode velocity and analysis groups laid out as the
-    analysis plugins store them (``/analysis/<channel>/<plugin>/``)."""
+    analysis plugins store them (``/analysis/<channel>/<plugin>/``); HVD finds
+    ``hvd_components`` components (beyond two, weak ones at higher frequencies)."""
     n = int(rate * seconds)
     t = np.arange(n) / rate
-    env = np.vstack([0.05 * np.exp(-0.8 * t), 0.01 * np.exp(-2.0 * t)])
-    freq = np.vstack([17.0 - 0.3 * np.exp(-0.8 * t), 2.0 + 0 * t])
+    env = np.vstack([0.05 * np.exp(-0.8 * t), 0.01 * np.exp(-2.0 * t)]
+                    + [0.002 / k * np.exp(-3.0 * t) for k in range(1, hvd_components - 1)])
+    freq = np.vstack([17.0 - 0.3 * np.exp(-0.8 * t), 2.0 + 0 * t]
+                     + [40.0 * k + 0 * t for k in range(1, hvd_components - 1)])
     comps = env * np.cos(2 * np.pi * np.cumsum(freq, axis=1) / rate)
     velocity = comps.sum(axis=0)
     profile = '[analysis]\nchain = []\nchannels = ["tip_velocity"]\n'
@@ -196,10 +233,12 @@ def write_run(path: Path, rate: float = 1000.0, seconds: float = 4.0, analysis: 
         "tip_velocity/hvd": {"datasets": {"components": comps, "envelopes": env,
                                           "frequencies": freq, "residual": velocity * 0,
                                           "edge_mask": np.zeros_like(comps, dtype=np.uint8),
-                                          "cutoffs": np.array([4.0, 1.0])},
+                                          "cutoffs": np.array([4.0, 1.0, *range(
+                                              30, 30 + 40 * (hvd_components - 2), 40)])},
                              "units": {"components": "m/s", "envelopes": "m/s",
                                        "frequencies": "Hz", "cutoffs": "Hz"},
-                             "attrs": {"n_components": 2}, "params": {"components": 2}},
+                             "attrs": {"n_components": hvd_components},
+                             "params": {"components": hvd_components}},
         "tip_velocity/instantaneous": {
             "datasets": {"frequency_times": two_rows(zc_t, zc_t),
                          "frequency": two_rows(17 + 0 * zc_t, 2 + 0 * zc_t)}, "params": {}},

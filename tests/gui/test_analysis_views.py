@@ -1,7 +1,9 @@
 """Analysis views read /analysis/<channel>/<plugin>/ of run files, tolerant of what is missing."""
 
 import numpy as np
-from conftest import write_corrupt, write_foreign, write_run
+from conftest import (
+    LOAD_TIMEOUT_MS, RUN_TIMEOUT_MS, UI_TIMEOUT_MS, write_corrupt, write_foreign, write_run,
+)
 
 from fsi_lab.gui.analysis.amplitude_views import BackboneView, DampingView
 from fsi_lab.gui.analysis.equivalent_damping_view import EquivalentDampingView
@@ -13,9 +15,10 @@ from fsi_lab.gui.results import load_results
 def _open(qtbot, window, path):
     window.open_runs([path])
     qtbot.waitUntil(lambda: window.analysis.results is not None
-                    and window.analysis.results.path == path.resolve(), timeout=10000)
+                    and window.analysis.results.path == path.resolve(),
+                    timeout=LOAD_TIMEOUT_MS)
     # the figures are drawn a slice per turn of the event loop, then the parameter forms built
-    qtbot.waitUntil(lambda: not window.analysis.pending, timeout=10000)
+    qtbot.waitUntil(lambda: not window.analysis.pending, timeout=LOAD_TIMEOUT_MS)
     return window.analysis
 
 
@@ -30,9 +33,13 @@ def test_views_fill_from_the_plugins_layout(qtbot, make_window, registry, tmp_pa
     hvd = views.view(HVDView)
     assert "2 of 2 component(s)" in hvd.note.text() and "4, 1 Hz" in hvd.note.text()
     eq = views.view(EquivalentDampingView)
-    labels = [item for item in eq.graphics.ci.items if hasattr(item, "text")]
-    text = " ".join(item.text for item in labels)
+    text = eq.values.text()
+    assert eq.values.isVisibleTo(eq)
     assert "0.65" in text and "33" in text and "R² = 0.914" in text and "[0.55, 0.75]" in text
+    # the legends, outside the plots, name every curve once
+    assert eq.legend.entries == ["C_q, component 0", "fit, component 0"]
+    assert hvd.legend.entries[:3] == ["decomposed record", "sum of components", "component 0"]
+    assert hvd.legend.entries.count("envelope") == 1
     table = views.views[-2].table
     assert table.rowCount() == 2 and table.item(0, 2).text() == "0.65"
 
@@ -67,7 +74,8 @@ def test_corrupt_and_foreign_files_show_a_message(qtbot, make_window, registry, 
                         (tmp_path / "missing.h5", "no such file")):
         count = len(window.messages.messages)
         window.open_runs([path])
-        qtbot.waitUntil(lambda c=count: len(window.messages.messages) > c, timeout=10000)
+        qtbot.waitUntil(lambda c=count: len(window.messages.messages) > c,
+                        timeout=LOAD_TIMEOUT_MS)
         level, text = window.messages.messages[-1]
         assert level == "ERROR" and words in text and path.name in text
         assert window.messages.isVisible()
@@ -82,9 +90,12 @@ def test_cli_paths_open_profiles_and_runs(qtbot, make_window, registry, tmp_path
     window.open_paths([sim_profile(), write_run(tmp_path / "x.h5"),
                        write_corrupt(tmp_path / "y.hdf5")])
     qtbot.waitUntil(lambda: window.session.current is not None and not window.busy(),
-                    timeout=10000)
+                    timeout=LOAD_TIMEOUT_MS)
     assert window.session.loaded and "x.h5" in window.analysis.title.text()
     assert any("y.hdf5" in text for _, text in window.messages.messages)
+    # a profile was given: the Experiment tab stays in front (with run files alone, the
+    # Analysis tab comes to the front: tests/gui/test_layout.py)
+    assert window.tabs.currentIndex() == 0
 
 
 def test_a_bad_profile_is_reported(qtbot, make_window, registry, tmp_path):
@@ -109,13 +120,14 @@ def test_changing_an_analysis_parameter_reruns_it_off_the_ui_thread(
     chain.editor.editingFinished.emit()
     assert "rms" in views.parameters.forms
     qtbot.waitUntil(lambda: "rms" in views.results.analysis.get("tip_velocity", {}),
-                    timeout=20000)
-    qtbot.waitUntil(lambda: not views.pending, timeout=10000)  # the forms of the new results
+                    timeout=RUN_TIMEOUT_MS)
+    # the forms of the new results
+    qtbot.waitUntil(lambda: not views.pending, timeout=LOAD_TIMEOUT_MS)
     first = views.results.result("tip_velocity", "rms").attrs["rms"]
     scale = views.parameters.forms["rms"].fields["scale"]
     scale.editor.setValue(2.0)
     qtbot.waitUntil(lambda: views.results.result("tip_velocity", "rms").params.get("scale")
-                    == 2.0, timeout=20000)
+                    == 2.0, timeout=RUN_TIMEOUT_MS)
     assert np.isclose(views.results.result("tip_velocity", "rms").attrs["rms"], 2 * first)
     assert views.filled()["All datasets"]
 
@@ -153,36 +165,39 @@ def test_a_run_is_drawn_over_turns_of_the_event_loop(qtbot, make_window, registr
     monkeypatch.setattr(views, "show_results", show_results)
     path = write_run(tmp_path / "turns.h5", rate=10000.0, seconds=10.0)
     window.open_runs([path])
-    qtbot.waitUntil(lambda: bool(on_return), timeout=10000)
+    qtbot.waitUntil(lambda: bool(on_return), timeout=LOAD_TIMEOUT_MS)
     # nothing is drawn in that slot: the figures and then the forms come in later turns of the
     # event loop
     pending, filled = on_return[0]
     assert pending and not any(filled), on_return
-    qtbot.waitUntil(lambda: not views.pending, timeout=10000)
+    qtbot.waitUntil(lambda: not views.pending, timeout=LOAD_TIMEOUT_MS)
     assert overview.filled and all(part.filled for part in overview.parts)
     assert views.parameters.isEnabled() and views.parameters.chain_form is not None
     # the record is drawn decimated (two points per pixel at most), its peaks kept
     hvd = overview.parts[0]
-    curve = hvd._plots[(0, 0)].listDataItems()[0]
+    curve = hvd._plots[(1, 0)].listDataItems()[0]  # component 0 (the Overview has no record)
     x, y = curve.getData()
     width = max(v.width() for v in hvd.graphics.scene().views())
     assert len(x) <= max(MIN_DRAW_POINTS, 2 * width) + 2 < measured_size(views)
-    measured = views.results.result("tip_velocity", "hvd").datasets["components"].sum(axis=0)
+    measured = views.results.result("tip_velocity", "hvd").datasets["components"][0]
     assert np.max(y) >= 0.999 * np.max(measured)   # what was drawn includes the peak
 
 
 def test_stepper_gives_the_event_loop_back_between_slices(qtbot):
     import math
-    import time
 
     from fsi_lab.gui.analysis.stepper import SLICE_S, Stepper
 
     stepper = Stepper()
+    # each step of a drawing takes 5 ms of the stepper's clock (a simulated clock: the test
+    # counts steps, whatever the machine's speed)
+    now = [0.0]
+    stepper.clock = lambda: now[0]
     slices, steps = [], []
 
     def drawing(name, n):
         for k in range(n):
-            time.sleep(0.004)
+            now[0] += 0.005
             steps.append((name, k))
             yield
 
@@ -200,15 +215,16 @@ def test_stepper_gives_the_event_loop_back_between_slices(qtbot):
     stepper.add(drawing("c", 3), owner="c")
     stepper.cancel("c")
     assert stepper.pending_for("a") and not stepper.pending_for("c")
-    qtbot.waitUntil(lambda: not stepper.pending, timeout=5000)
+    qtbot.waitUntil(lambda: not stepper.pending, timeout=UI_TIMEOUT_MS)
     assert [s for s in steps if s[0] == "a"] == [("a", k) for k in range(6)]
     assert len([s for s in steps if s[0] == "b"]) == 3 and not any(s[0] == "c" for s in steps)
-    # a slice ends once it has used SLICE_S or completed a drawing: each step takes at least
-    # 4 ms, so no slice holds more than ceil(SLICE_S / 4 ms) steps, and a drawing never shares
-    # its last slice with the next one
-    most = math.ceil(SLICE_S / 0.004)
+    # a slice ends once it has used SLICE_S or completed a drawing: each step takes 5 ms, so a
+    # slice holds ceil(SLICE_S / 5 ms) steps at most, and a drawing never shares its last slice
+    # with the next one
+    most = math.ceil(SLICE_S / 0.005)
     assert max(slices) <= most, slices
-    assert len([n for n in slices if n]) >= math.ceil(6 / most) + math.ceil(3 / most), slices
+    assert [n for n in slices if n] == [most] * (6 // most) + ([6 % most] if 6 % most else []) \
+        + [most] * (3 // most) + ([3 % most] if 3 % most else []), slices
 
 
 def test_time_and_model_curves_land_where_the_plugins_put_them(qtbot, tmp_path):

@@ -88,6 +88,29 @@ def test_optional_parameter_auto_and_lists(qtbot):
     assert form.is_valid() and form.values()["levels"] == [0.5, 3.0]
 
 
+def test_an_unset_optional_number_reads_auto(qtbot):
+    # as a signal source's sample rate: unset means "the run's sample rate", and no number
+    # (such as its lower bound, 1e-06 Hz) is shown for it
+    schema = (Param("sample_rate", "float", "Hz", None, minimum=1e-6, maximum=160e6),
+              Param("points", "int", "", None, minimum=8))
+    form = ParamForm(schema, {}, "bench.source")
+    qtbot.addWidget(form)
+    rate, points = form.fields["sample_rate"], form.fields["points"]
+    for field in (rate, points):
+        assert field.auto.isChecked() and not field.editor.isEnabled()
+        assert field.editor.text() == "auto" and field.value is None and not field.error
+    rate.auto.setChecked(False)                  # a number to start from, within the bounds
+    assert rate.editor.isEnabled() and rate.editor.text() == "1e-06 Hz"
+    assert rate.value == 1e-6 and not rate.error
+    rate.editor.setValue(10000.0)
+    assert form.values()["sample_rate"] == 10000.0
+    rate.auto.setChecked(True)
+    assert rate.editor.text() == "auto" and form.values()["sample_rate"] is None
+    assert "bench.source.sample_rate=auto" in form.overrides("bench.source")
+    points.auto.setChecked(False)
+    assert points.editor.text() == "8" and points.value == 8
+
+
 def test_choices_and_missing_required(qtbot):
     schema = (Param("mode", "str", "", "a", choices=("a", "b")),
               Param("gain", "float", "V/V", help="Required."))

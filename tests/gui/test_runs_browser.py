@@ -2,7 +2,8 @@
 
 import csv
 
-from conftest import write_foreign, write_run
+import h5py
+from conftest import LOAD_TIMEOUT_MS, write_foreign, write_run
 
 
 def test_compare_two_runs_and_export(qtbot, make_window, registry, tmp_path):
@@ -11,7 +12,7 @@ def test_compare_two_runs_and_export(qtbot, make_window, registry, tmp_path):
     b = write_run(tmp_path / "b.h5", c_i=0.7, c_f=36.0, name="run B")
     window.runs.open([a, b, write_foreign(tmp_path / "foreign.h5")])
     qtbot.waitUntil(lambda: len(window.runs.runs) == 2 and not window.runs.pending,
-                    timeout=10000)
+                    timeout=LOAD_TIMEOUT_MS)
     assert any("foreign.h5" in text for _, text in window.messages.messages)
     window.tabs.setCurrentWidget(window.runs)
     window.runs.set_checked([a, b])
@@ -50,7 +51,35 @@ def test_export_figure_of_an_analysis_view(qtbot, make_window, registry, tmp_pat
 
     window = make_window(registry)
     window.open_runs([write_run(tmp_path / "v.h5")])
-    qtbot.waitUntil(lambda: window.analysis.results is not None, timeout=10000)
+    qtbot.waitUntil(lambda: window.analysis.results is not None, timeout=LOAD_TIMEOUT_MS)
     backbone = window.analysis.views[3]
     out = export_figure(backbone.graphics, tmp_path / "backbone.svg")
     assert out.stat().st_size > 1000
+
+
+def test_every_compared_curve_has_its_own_colour_and_legend_entry(qtbot, make_window, registry,
+                                                                 tmp_path):
+    from pyqtgraph import functions as fn
+
+    window = make_window(registry)
+    # two runs of the same name (the same profile run twice), two components each
+    runs = [write_run(tmp_path / "first.h5"), write_run(tmp_path / "second.h5")]
+    with h5py.File(runs[1], "r+") as handle:
+        handle.attrs["start_time"] = "2026-01-01T00:10:00"
+    window.runs.open(runs)
+    qtbot.waitUntil(lambda: len(window.runs.runs) == 2 and not window.runs.pending,
+                    timeout=LOAD_TIMEOUT_MS)
+    window.tabs.setCurrentWidget(window.runs)
+    window.runs.set_checked(runs)
+    entries = window.runs.legend.entries
+    assert entries == ["synthetic (00:00:00), component 0", "synthetic (00:00:00), component 1",
+                       "synthetic (00:10:00), component 0", "synthetic (00:10:00), component 1"]
+    backbone = window.runs.graphics.ci.getItem(0, 0)
+    colours = {fn.mkBrush(item.opts["symbolBrush"]).color().name()
+               for item in backbone.listDataItems()}
+    assert len(colours) == 4
+    symbols = [item.opts["symbol"] for item in backbone.listDataItems()]
+    assert symbols[0] == symbols[1] != symbols[2] == symbols[3]   # a marker per run
+    # the legend is outside the plots: a widget above them, not an item in a plot
+    assert window.runs.legend.isVisible()
+    assert backbone.legend is None

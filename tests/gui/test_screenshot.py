@@ -19,8 +19,21 @@ def test_screenshot_in_process(qapp, tmp_path):
     out = tmp_path / "shot.png"
     code = main(argparse.Namespace(paths=[write_run(tmp_path / "run.h5")], screenshot=out))
     assert code == 0
-    assert _png(out) == (1680, 1050)
+    assert _png(out) == (1366, 768)
     assert out.stat().st_size > 50_000                  # plots, not an empty window
+
+
+def test_screenshot_is_the_same_picture_every_time(qapp, tmp_path):
+    from PySide6.QtGui import QImage
+
+    run = write_run(tmp_path / "run.h5", hvd_components=3)
+    pictures = []
+    for k in range(2):
+        out = tmp_path / f"shot{k}.png"
+        assert main(argparse.Namespace(paths=[run], screenshot=out)) == 0
+        pictures.append(QImage(str(out)))
+    assert pictures[0].size().toTuple() == (1366, 768)
+    assert pictures[0] == pictures[1]
 
 
 def test_screenshot_of_a_corrupt_file_reports_and_exits(qapp, tmp_path, capsys):
@@ -37,7 +50,7 @@ def test_screenshot_through_the_command(tmp_path):
     out = tmp_path / "cli.png"
     proc = subprocess.run(
         [sys.executable, "-m", "fsi_lab.cli", "gui", str(write_run(tmp_path / "c.h5")),
-         "--screenshot", str(out)], capture_output=True, text=True, timeout=120,
+         "--screenshot", str(out)], capture_output=True, text=True, timeout=600,
         env={**os.environ, "QT_QPA_PLATFORM": "offscreen"})
     assert proc.returncode == 0, proc.stderr
-    assert _png(out) == (1680, 1050)
+    assert _png(out) == (1366, 768)

@@ -90,10 +90,11 @@ def origin(results: RunResults, channel: str, result: PluginResult | None = None
     return t0
 
 
-def format_ci(value: Any) -> str:
-    """A 95 % interval ``[low, high]`` as text; anything else as it is (None as nothing)."""
+def format_ci(value: Any, digits: int = 4) -> str:
+    """A 95 % interval ``[low, high]`` as text (``digits`` significant digits); anything else as
+    it is (None as nothing)."""
     if isinstance(value, (list, tuple)) and len(value) == 2:
-        return f"[{value[0]:.4g}, {value[1]:.4g}]"
+        return f"[{value[0]:.{digits}g}, {value[1]:.{digits}g}]"
     return "" if value is None else str(value)
 
 

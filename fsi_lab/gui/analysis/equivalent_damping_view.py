@@ -6,6 +6,7 @@ from typing import Any, Iterator
 
 import numpy as np
 from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QLabel, QWidget
 
 from fsi_lab.gui.analysis.datasets import finite_pairs, format_ci, per_component
 from fsi_lab.gui.analysis.names import CQ, CQ_AMPLITUDE
@@ -15,8 +16,26 @@ from fsi_lab.gui.results import PluginResult, RunResults
 
 
 class EquivalentDampingView(View):
+    """C_q points and fit lines per component; below them C_i, C_f, their 95 % intervals and
+    R^2 of each component (``compact``, as in the Overview: three significant digits)."""
+
     title = "Cq fit"
     plugins = ("equivalent-damping",)
+
+    def __init__(self, compact: bool = False, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.compact = compact
+        self.values = QLabel()
+        self.values.setObjectName("cq-values")
+        self.values.setWordWrap(True)
+        self.values.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.values.setVisible(False)
+        self.column.addWidget(self.values)
+
+    def clear(self) -> None:
+        super().clear()
+        self.values.setText("")
+        self.values.setVisible(False)
 
     def draw(self, results: RunResults, channel: str) -> Iterator[None]:
         result = results.result(channel, "equivalent-damping")
@@ -49,38 +68,45 @@ class EquivalentDampingView(View):
                 omega = 2 * np.pi * float(frequencies[k])
                 span = np.array([0.0, float(np.max(w))])
                 line = summary["c_i"] + 8 * summary["c_f"] * omega * span / (3 * np.pi)
-                draw_line(plot, span, line, colour,
-                          f"fit: C_i + 8 C_f ω W / 3π (component {k})", 1.8,
+                draw_line(plot, span, line, colour, f"fit, component {k}", 1.8,
                           Qt.PenStyle.DashLine)
                 yield
-            values = self._values(result, summary, k)
+            values = self._values(result, summary, k, self.compact)
             if values:
-                lines.append(f"component {k} (95 % intervals):<br>&nbsp;&nbsp;{values}")
+                lines.append(f"<b>component {k}</b>: {values}")
         if not lines:
             return False
         robust_range(plot, [finite_pairs([(w, c)])[0][1] for w, c in zip(rows_w, rows_cq)
                             if finite_pairs([(w, c)])])
-        self.add_label(1, 0, "<br>".join(lines))
+        if not self.compact:
+            lines.append("<span style='color:#555'>in brackets: 95 % intervals</span>")
+        self.values.setText("<br>".join(lines))
+        self.values.setVisible(True)
         convention = result.scalar("amplitude_convention")
-        self.set_note("C_q = 2 ζ (μ + M) 2π f against displacement amplitude W, and its "
+        self.set_note("C_q against displacement amplitude W, its fit C_q = C_i + 8 C_f ω W / 3π "
+                      "(Eq. 24) and 95 % intervals" if self.compact else
+                      "C_q = 2 ζ (μ + M) 2π f against displacement amplitude W, and its "
                       "first-order fit C_q = C_i + 8 C_f ω W / 3π (Eq. 24)")
         if convention:
             self.note.setToolTip(f"amplitudes: {convention}")
         return True
 
     @staticmethod
-    def _values(result: PluginResult, summary: dict[str, Any], k: int) -> str:
+    def _values(result: PluginResult, summary: dict[str, Any], k: int,
+                compact: bool = False) -> str:
         source = dict(summary)
+        digits = 3 if compact else 4
+        ci_units, cf_units = " kg/(m s)", " kg/m²"
         for key in ("c_i", "c_f", "r2"):
             if source.get(key) is None:
                 source[key] = result.scalar(f"component_{k}_{key}")
         if not isinstance(source.get("c_i"), (int, float)):
             return ""
-        parts = [f"C<sub>i</sub> = {source['c_i']:.4g} {format_ci(source.get('c_i_ci95'))} "
-                 "kg/(m s)"]
+        parts = [f"C<sub>i</sub> = {source['c_i']:.{digits}g} "
+                 f"{format_ci(source.get('c_i_ci95'), digits)}{ci_units}"]
         if isinstance(source.get("c_f"), (int, float)):
-            parts.append(f"C<sub>f</sub> = {source['c_f']:.4g} "
-                         f"{format_ci(source.get('c_f_ci95'))} kg/m²")
+            parts.append(f"C<sub>f</sub> = {source['c_f']:.{digits}g} "
+                         f"{format_ci(source.get('c_f_ci95'), digits)}{cf_units}")
         if isinstance(source.get("r2"), (int, float)):
-            parts.append(f"R² = {source['r2']:.3f}")
-        return "<br>&nbsp;&nbsp;".join(parts)
+            parts.append(f"R² = {source['r2']:.{digits - 1}f}")
+        return (", " if compact else " &nbsp;·&nbsp; ").join(parts)

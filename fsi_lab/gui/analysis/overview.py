@@ -13,6 +13,9 @@ from fsi_lab.gui.analysis.time_views import FrequencyView, HVDView
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults
 
+#: Smallest plot of an Overview figure (axes included), in pixels.
+OVERVIEW_MIN_PLOT = (240, 140)
+
 
 class OverviewView(QWidget):
     """The paper's figures side by side: HVD component with its envelope, instantaneous
@@ -22,11 +25,13 @@ class OverviewView(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.parts = [HVDView(max_components=1), FrequencyView(), BackboneView(compact=True),
-                      EquivalentDampingView()]
+        self.parts = [HVDView(max_components=1, record=False), FrequencyView(),
+                      BackboneView(compact=True), EquivalentDampingView(compact=True)]
         grid = QGridLayout(self)
         grid.setContentsMargins(0, 0, 0, 0)
+        grid.setSpacing(4)
         for i, part in enumerate(self.parts):
+            part.graphics.min_plot = OVERVIEW_MIN_PLOT  # four figures on a laptop screen
             grid.addWidget(part, i // 2, i % 2)
         for k in range(2):  # four equal quarters, whatever each figure holds
             grid.setRowStretch(k, 1)

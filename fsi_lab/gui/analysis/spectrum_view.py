@@ -14,6 +14,9 @@ from fsi_lab.gui.analysis.plotting import COLOURS, draw_line
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults
 
+#: Heights (fractions of the plot) of the labels of successive spectrum peaks.
+PEAK_LABEL_HEIGHTS = (0.95, 0.85, 0.75)
+
 
 class SpectrumView(View):
     title = "Spectrum / FRF"
@@ -27,9 +30,11 @@ class SpectrumView(View):
             freqs = spectrum.get(SPECTRUM_FREQUENCY)
             amps = spectrum.get(SPECTRUM_AMPLITUDE)
             if freqs is not None and amps is not None:
-                plot = self.add_plot(0, 0, f"|{channel}|", "frequency", None, "Hz")
+                unit = results.channels[channel].unit if channel in results.channels else ""
+                plot = self.add_plot(0, 0, f"|{channel}|", "frequency", unit or None, "Hz")
                 yield
                 plot.setLogMode(y=True)
+                plot.getAxis("left").enableAutoSIPrefix(False)  # decades read as they are
                 for k, a in enumerate(rows(amps)):
                     if a.size == np.asarray(freqs).size:
                         draw_line(plot, freqs, np.maximum(np.abs(a), 1e-300),
@@ -43,10 +48,13 @@ class SpectrumView(View):
                 peak_list = np.ravel(peaks if peaks is not None else [])
                 if peak_list.size:
                     plot.setXRange(0, 3 * float(np.max(peak_list[:10])), padding=0)
-                for f in peak_list[:10]:
-                    plot.addItem(pg.InfiniteLine(float(f), pen=pg.mkPen("#9e9e9e", style=Qt.PenStyle.DotLine),
-                                                 label=f"{float(f):.2f} Hz",
-                                                 labelOpts={"position": 0.9, "color": "#555"}))
+                for i, f in enumerate(sorted(float(f) for f in peak_list[:10])):
+                    # labels of neighbouring peaks at staggered heights: they never pile up
+                    plot.addItem(pg.InfiniteLine(
+                        f, pen=pg.mkPen("#9e9e9e", style=Qt.PenStyle.DotLine),
+                        label=f"{f:.2f} Hz",
+                        labelOpts={"position": PEAK_LABEL_HEIGHTS[i % len(PEAK_LABEL_HEIGHTS)],
+                                   "color": "#555", "fill": (255, 255, 255, 200)}))
                     yield
                 drawn = True
         frf = results.result(channel, "frf")
@@ -56,6 +64,7 @@ class SpectrumView(View):
                 plot = self.add_plot(1 if drawn else 0, 0, "|H|", "frequency", None, "Hz")
                 yield
                 plot.setLogMode(y=True)
+                plot.getAxis("left").enableAutoSIPrefix(False)
                 for k, name in enumerate(("h1", "h2")):
                     h = frf.get(f"{name}_magnitude")
                     if h is not None and np.asarray(h).size == np.asarray(freqs).size:

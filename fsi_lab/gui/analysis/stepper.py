@@ -23,6 +23,8 @@ class Stepper(QObject):
     def __init__(self, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self._queue: list[tuple[Iterator[Any], Any]] = []
+        #: The clock slices are measured with (seconds; replaceable, e.g. by a test's).
+        self.clock = time.perf_counter
         self._timer = QTimer(self)
         self._timer.setSingleShot(True)
         self._timer.setInterval(PAUSE_MS)
@@ -53,7 +55,7 @@ class Stepper(QObject):
     def step(self, deadline: float | None = None) -> None:
         """One slice: steps of the first drawing until ``SLICE_S`` is used or it completes."""
         if deadline is None:
-            deadline = time.perf_counter() + SLICE_S
+            deadline = self.clock() + SLICE_S
         try:
             while self._queue:
                 try:
@@ -64,7 +66,7 @@ class Stepper(QObject):
                 except Exception:
                     self._queue.pop(0)  # reported by Qt's handler; the others go on
                     raise
-                if time.perf_counter() >= deadline:
+                if self.clock() >= deadline:
                     break
         finally:
             if self._queue and deadline != float("inf"):

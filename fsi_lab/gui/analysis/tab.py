@@ -23,6 +23,7 @@ from fsi_lab.gui.analysis.summary import SummaryView
 from fsi_lab.gui.analysis.time_views import FrequencyView, HVDView
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.analysis_job import AnalysisJob
+from fsi_lab.gui.figure import scrolled
 from fsi_lab.gui.results import RunResults
 from fsi_lab.gui.worker import TaskPool
 from fsi_lab.registry import Registry
@@ -53,13 +54,15 @@ class AnalysisViews(QWidget):
         self.channel.setObjectName("analysis-channel")
         self.channel.currentIndexChanged.connect(self._redraw)
         self.state = QLabel("")
+        self.state.setWordWrap(True)
+        self.state.setVisible(False)
         self.views: list[Any] = [OverviewView(), HVDView(), FrequencyView(), BackboneView(), DampingView(),
                                  EquivalentDampingView(), ModalModelView(), SpectrumView(),
                                  SummaryView(), DatasetBrowser()]
         self.tabs = QTabWidget()
         self.tabs.setObjectName("analysis-tabs")
         for view in self.views:
-            self.tabs.addTab(view, view.title)
+            self.tabs.addTab(scrolled(view), view.title)
         self._drawn: set[int] = set()  # views drawn for the run and channel shown
         # Draws the figures of the tab shown, then builds the parameter forms of a new run, a
         # slice per turn of the event loop, in that order.
@@ -83,14 +86,14 @@ class AnalysisViews(QWidget):
         parameters.setWidgetResizable(True)
         parameters.setFrameShape(QScrollArea.Shape.NoFrame)
         parameters.setWidget(self.parameters)
-        parameters.setMinimumWidth(300)
+        parameters.setMinimumWidth(250)
         parameters.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         splitter = QSplitter(Qt.Orientation.Horizontal)
         splitter.addWidget(self.tabs)
         splitter.addWidget(parameters)
         splitter.setStretchFactor(0, 4)
         splitter.setStretchFactor(1, 1)
-        self.parameters.setMinimumWidth(280)
+        self.parameters.setMinimumWidth(240)
         layout = QVBoxLayout(self)
         layout.addLayout(bar)
         layout.addWidget(self.state)
@@ -139,6 +142,7 @@ class AnalysisViews(QWidget):
             errors = [f"{r.plugin} on {r.channel}: {r.error}" for groups in results.analysis.values()
                       for r in groups.values() if not r.ok]
             self.state.setText("failed: " + "; ".join(errors) if errors else "")
+        self.state.setVisible(bool(self.state.text()))
         self.state.setStyleSheet("color: #b00020;" if results.analysis and
                                  self.state.text().startswith("failed") else "color: #555;")
         self._redraw()

@@ -22,14 +22,20 @@ from fsi_lab.gui.results import RunResults
 
 
 class HVDView(View):
+    """The decomposed record with the sum of the components (unless ``record`` is False, as
+    in the Overview), then each component with its envelope, one plot each."""
+
     title = "HVD components"
     plugins = ("hvd",)
     cells = ((0, 0), (1, 0), (2, 0))
 
-    def __init__(self, max_components: int = MAX_COMPONENTS_DRAWN,
+    def __init__(self, max_components: int = MAX_COMPONENTS_DRAWN, record: bool = True,
                  parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.max_components = max_components
+        self.record = record
+        if not record:
+            self.cells = ((1, 0),)
 
     def draw(self, results: RunResults, channel: str) -> Iterator[None]:
         hvd = results.result(channel, "hvd")
@@ -42,8 +48,42 @@ class HVDView(View):
         n = (components or envelopes)[0].size
         t = time_axis(results, channel, hvd, n)
         unit = results.channels[channel].unit if channel in results.channels else ""
-        top = self.add_plot(0, 0, channel, "time", unit or None, "s")
-        yield
+        top = self.add_plot(0, 0, channel, "time", unit or None, "s") if self.record else None
+        if top is not None:
+            yield
+            yield from self._record(top, results, channel, hvd, components, t, n)
+        count = min(max(len(components), len(envelopes)), self.max_components)
+        for k in range(count):
+            colour = COLOURS[k % len(COLOURS)]
+            plot = self.add_plot(k + 1, 0, f"component {k}", "time", unit or None, "s")
+            yield
+            if top is None:
+                top = plot  # the others follow its time axis
+            else:
+                plot.setXLink(top)
+            if k < len(components):
+                draw_line(plot, t, components[k], colour, f"component {k}", 1.0)
+                yield
+            if k < len(envelopes):
+                draw_line(plot, t, envelopes[k], "#000000", "envelope", 1.4)
+                yield
+                draw_line(plot, t, -envelopes[k], "#000000", None, 1.4)
+                yield
+        if envelopes and top is not None:
+            span = active_span(t, envelopes[0])
+            if span is not None:
+                top.setXRange(*span, padding=0)
+        cutoffs = hvd.get("cutoffs")
+        extra = f"; cut-offs {', '.join(f'{c:.3g}' for c in np.ravel(cutoffs))} Hz" \
+            if cutoffs is not None else ""
+        self.set_note(f"HVD of {channel}: {count} of {max(len(components), len(envelopes))} "
+                      f"component(s), by decreasing amplitude{extra}")
+        return True
+
+    @staticmethod
+    def _record(top, results: RunResults, channel: str, hvd, components, t, n: int
+                ) -> Iterator[None]:
+        """The record HVD decomposed (or the measured channel) and the sum of the components."""
         residual = hvd.get("residual")
         if components and residual is not None and np.asarray(residual).size == n:
             record = np.sum(components, axis=0) + np.asarray(residual, dtype=float)
@@ -61,30 +101,6 @@ class HVDView(View):
             draw_line(top, t, np.sum(components, axis=0), "#000000", "sum of components", 1.0,
                       Qt.PenStyle.DashLine)
             yield
-        count = min(max(len(components), len(envelopes)), self.max_components)
-        for k in range(count):
-            colour = COLOURS[k % len(COLOURS)]
-            plot = self.add_plot(k + 1, 0, f"component {k}", "time", unit or None, "s")
-            yield
-            plot.setXLink(top)
-            if k < len(components):
-                draw_line(plot, t, components[k], colour, f"component {k}", 1.0)
-                yield
-            if k < len(envelopes):
-                draw_line(plot, t, envelopes[k], "#000000", "envelope", 1.4)
-                yield
-                draw_line(plot, t, -envelopes[k], "#000000", None, 1.4)
-                yield
-        if envelopes:
-            span = active_span(t, envelopes[0])
-            if span is not None:
-                top.setXRange(*span, padding=0)
-        cutoffs = hvd.get("cutoffs")
-        extra = f"; cut-offs {', '.join(f'{c:.3g}' for c in np.ravel(cutoffs))} Hz" \
-            if cutoffs is not None else ""
-        self.set_note(f"HVD of {channel}: {count} of {max(len(components), len(envelopes))} "
-                      f"component(s), by decreasing amplitude{extra}")
-        return True
 
 
 class FrequencyView(View):

@@ -8,6 +8,7 @@ from typing import Iterator
 import pyqtgraph as pg
 from PySide6.QtWidgets import QLabel, QSizePolicy, QVBoxLayout, QWidget
 
+from fsi_lab.gui.figure import Figure, Legend
 from fsi_lab.gui.results import RunResults
 
 
@@ -28,30 +29,29 @@ class View(QWidget):
         # Two lines are reserved whatever the note says, so that a new note does not resize
         # the figures below it (which would repaint every figure of the Overview).
         self.note.setMinimumHeight(2 * self.note.fontMetrics().lineSpacing() + 2)
-        self.graphics = pg.GraphicsLayoutWidget()
-        # The figure takes the space it is given, whatever its plots hint: a drawing never
-        # changes the layout around it (a new layout would repaint every figure around).
+        self.legend = Legend()
+        self.legend.setVisible(False)
+        self.graphics = Figure()
+        # The figure takes the space it is given, whatever its plots hint, down to the minimum
+        # of the plots it shows (the view sits in a scroll area): a drawing does not change
+        # the layout around it unless the figure would otherwise be squashed.
         self.graphics.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Ignored)
         # Plot items are costly to build: they are kept between drawings and emptied.
         self._plots: dict[tuple[int, int], pg.PlotItem] = {}
-        self._labels: dict[tuple[int, int], pg.LabelItem] = {}
         self._used: set[tuple[int, int]] = set()
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(self.note)
-        layout.addWidget(self.graphics, 1)
+        self.column = QVBoxLayout(self)
+        self.column.setContentsMargins(2, 2, 2, 2)
+        self.column.addWidget(self.note)
+        self.column.addWidget(self.legend)
+        self.column.addWidget(self.graphics, 1)
 
     def clear(self) -> None:
         for plot in self._plots.values():
             plot.clear()
-            if plot.legend is not None:
-                plot.legend.clear()
             plot.setTitle(None)
             plot.setLogMode(False, False)
             plot.enableAutoRange()
             plot.setXLink(None)
-        for label in self._labels.values():
-            label.setText("")
         self._used.clear()
         self.filled = False
 
@@ -63,10 +63,13 @@ class View(QWidget):
         self._prune()
 
     def _prune(self) -> None:
-        """Hide the plots and labels the last drawing did not use (kept for the next)."""
-        for store in (self._plots, self._labels):
-            for key, item in store.items():
-                item.setVisible(key in self._used)
+        """Hide the plots the last drawing did not use (kept for the next), list the curves
+        of those it used in the legend, and size the figure for them."""
+        for key, item in self._plots.items():
+            item.setVisible(key in self._used)
+        self.legend.show_items(curve for key in sorted(self._used)
+                               for curve in self._plots[key].listDataItems())
+        self.graphics.fit_minimum()
 
     def show_results(self, results: RunResults, channel: str) -> None:
         """Draw the view at once."""
@@ -121,23 +124,11 @@ class View(QWidget):
         plot = self._plots.get(key)
         if plot is None:
             plot = self._plots[key] = self.graphics.addPlot(row=row, col=col, colspan=colspan)
-            plot.addLegend(offset=(-10, 10))
         plot.setVisible(True)
         self._used.add(key)
         plot.setLabel("left", left, units=left_units)
         plot.setLabel("bottom", bottom, units=bottom_units)
         return plot
-
-    def add_label(self, row: int, col: int, text: str) -> pg.LabelItem:
-        key = (row, col)
-        label = self._labels.get(key)
-        if label is None:
-            label = self._labels[key] = pg.LabelItem(justify="left", size="10pt")
-            self.graphics.addItem(label, row=row, col=col)
-        label.setVisible(True)
-        self._used.add(key)
-        label.setText(text, size="10pt")
-        return label
 
     def set_note(self, text: str) -> None:
         self._set_note(text, "")

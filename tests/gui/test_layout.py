@@ -1,0 +1,99 @@
+"""Every view of the window, drawn at a laptop's and a desktop's screen size, keeps every plot
+readable: no plot area collapses, whatever the window holds."""
+
+import numpy as np
+import pytest
+from conftest import (
+    CHECK_TIMEOUT_MS, LOAD_TIMEOUT_MS, UI_TIMEOUT_MS, assert_readable, wait_checked, write_run,
+)
+
+from fsi_lab.events import DataBlock
+from fsi_lab.gui.app import settle
+
+SIZES = [(1366, 768), (1920, 1080)]
+
+
+@pytest.mark.parametrize("size", SIZES, ids=[f"{w}x{h}" for w, h in SIZES])
+def test_every_view_keeps_its_plots_readable(qtbot, make_window, registry, tmp_path,
+                                             sim_profile, size):
+    window = make_window(registry)
+    window.resize(*size)
+    qtbot.waitUntil(lambda: window.size().toTuple() == size, timeout=CHECK_TIMEOUT_MS)
+    # the analysis figures are built in idle time, their plots hidden until a run is drawn
+    qtbot.waitUntil(lambda: not window.analysis._prebuild, timeout=UI_TIMEOUT_MS)
+
+    # Experiment: the waveform preview and the live plots of a profile's channels (more than
+    # fit the height: they scroll), with data
+    assert window.open_profile(sim_profile(duration=1.0))
+    wait_checked(qtbot, window)
+    units = {f"channel_{k}": "V" for k in range(8)}
+    window.live.configure(units, 2000.0)
+    for i in range(5):
+        window.live.on_block(DataBlock(0.1 * i, 2000.0, {n: np.sin(np.arange(200) + i)
+                                                         for n in units}))
+    window.live.refresh(force=True)
+    areas = assert_readable(window, "experiment")
+    assert len(areas) == 2 * len(units) + 1          # time and spectrum per channel, preview
+
+    # Analysis: each view of a run file opened as from the command line, which brings the
+    # Analysis tab to the front at once (its figures' plots still hidden), six HVD components
+    runs = [write_run(tmp_path / "a.h5", name="run A", c_i=0.6, hvd_components=6),
+            write_run(tmp_path / "b.h5", name="run B", c_i=0.7)]
+    window.open_paths(runs[:1])
+    qtbot.waitUntil(lambda: window.analysis.results is not None and not window.busy()
+                    and not window.analysis.pending, timeout=LOAD_TIMEOUT_MS)
+    assert window.tabs.currentWidget() is window.analysis
+    assert_readable(window, "the Overview as it first appears")
+    filled = window.analysis.filled()
+    for index, view in enumerate(window.analysis.views):
+        window.analysis.tabs.setCurrentIndex(index)
+        if view.title == "All datasets":             # its plot shows a selected dataset
+            tree = view.tree
+            tree.setCurrentItem(tree.topLevelItem(0).child(0))
+        if filled[view.title] and view.title != "Results":
+            assert_readable(window, f"analysis view {view.title!r}")
+
+    # Runs: two runs compared
+    window.open_runs(runs[1:], show=False)
+    qtbot.waitUntil(lambda: len(window.runs.runs) == 2 and not window.runs.pending,
+                    timeout=LOAD_TIMEOUT_MS)
+    window.tabs.setCurrentWidget(window.runs)
+    window.runs.set_checked(runs)
+    assert len(assert_readable(window, "runs")) == 3
+
+
+def test_the_window_fits_a_1366x768_screen(qtbot, make_window, registry, sim_profile,
+                                           tmp_path):
+    window = make_window(registry)
+    window.open_profile(sim_profile(duration=1.0))
+    wait_checked(qtbot, window)
+    window.open_runs([write_run(tmp_path / "a.h5")])
+    qtbot.waitUntil(lambda: window.analysis.results is not None and not window.busy(),
+                    timeout=LOAD_TIMEOUT_MS)
+    window.analysis.filled()
+    settle(window)
+    # with a profile, a run and every figure built, the window may still be that small
+    hint = window.minimumSizeHint()
+    assert hint.width() <= 1366 and hint.height() <= 768, hint
+    window.resize(1366, 768)
+    qtbot.waitUntil(lambda: window.size().toTuple() == (1366, 768), timeout=CHECK_TIMEOUT_MS)
+
+
+def test_a_figure_resized_while_its_plots_are_hidden_fills_out_when_they_show(qtbot):
+    """The plots of a figure are hidden between drawings; a resize then (a tab coming to the
+    front, a window resized) must not leave the figure's layout at its hidden size."""
+    from fsi_lab.gui.figure import Figure
+
+    figure = Figure()
+    qtbot.addWidget(figure)
+    plot = figure.addPlot(row=0, col=0)
+    plot.plot([0, 1, 2], [1, 3, 2])
+    plot.setVisible(False)
+    figure.resize(600, 400)
+    figure.show()
+    qtbot.waitExposed(figure)
+    plot.setVisible(True)
+    qtbot.waitUntil(lambda: plot.geometry().width() > 500 and plot.geometry().height() > 300,
+                    timeout=UI_TIMEOUT_MS)
+    box = plot.getViewBox().sceneBoundingRect()
+    assert box.width() > 400 and box.height() > 250, box
