@@ -60,5 +60,11 @@ $(BENCH_VENV)/.installed: pyproject.toml
 bench: $(BENCH_VENV)/.installed
 	$(BENCH_VENV)/bin/python -m bench
 
+# The validation matrix: Monte-Carlo trials of records with known truth, with a peer method in
+# the same run (TRIALS per case; a name filter may follow, e.g. make validate ARGS="20 Duffing").
+ARGS ?= 40
+validate: $(VENV)/.installed-dev,gui
+	$(BIN)/python -m validation $(ARGS)
+
 clean:
 	rm -rf $(VENV) $(BENCH_VENV) runs build *.egg-info

@@ -1,0 +1,161 @@
+"""Monte-Carlo trials of the validation matrix: fsi-lab's identification and a peer method.
+
+For each case, ``trials`` noisy realisations are identified by :func:`fsi_lab.dsp.identify`
+(the mode nearest the truth's frequency) and by the peer: the plain envelope-law fit on raw
+peaks (the extrema of the record from its largest on, the closed form of the averaged law
+``dA/dt = -a A - b A^2`` fitted by least squares, t-intervals). Reported per quantity: bias and
+RMS error (% of the truth) and the coverage of the 95 % intervals.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.optimize as sopt
+import scipy.stats as sstats
+
+from validation.cases import Case, trial
+
+
+@dataclass
+class Estimate:
+    """One trial's numbers: value and 95 % interval of C_i, C_f and the frequency."""
+
+    c_i: float = math.nan
+    c_i_ci: tuple[float, float] = (math.nan, math.nan)
+    c_f: float = math.nan
+    c_f_ci: tuple[float, float] = (math.nan, math.nan)
+    frequency: float = math.nan
+    frequency_ci: tuple[float, float] = (math.nan, math.nan)
+    law: str = ""
+    warned: bool = False
+    refused: str = ""
+
+
+def fsi_lab_estimate(case: Case, x: np.ndarray) -> Estimate:
+    """fsi-lab's identification of the case's first mode in ``x``."""
+    from fsi_lab.dsp.identify import identify
+    from fsi_lab.errors import AnalysisError
+
+    try:
+        found = identify(x, case.fs)
+    except AnalysisError as exc:
+        return Estimate(refused=str(exc))
+    truth = case.truth.frequency
+    mode = min(found.modes, key=lambda m: abs(math.log(m.frequency_hz / truth)))
+    if abs(mode.frequency_hz / truth - 1.0) > 0.2:
+        return Estimate(refused=f"no mode near {truth:g} Hz")
+    quad = mode.quadratic
+    m = case.mass
+    (a_lo, a_hi), (b_lo, b_hi) = quad.interval("a"), quad.interval("beta")
+    return Estimate(c_i=2 * m * quad.value("a"), c_i_ci=(2 * m * a_lo, 2 * m * a_hi),
+                    c_f=m * quad.value("beta"), c_f_ci=(m * b_lo, m * b_hi),
+                    frequency=mode.frequency_hz, frequency_ci=tuple(mode.frequency_ci),
+                    law=mode.laws.preferred, warned=bool(mode.warnings))
+
+
+def _envelope(t: np.ndarray, a: float, b: float, a0: float) -> np.ndarray:
+    if abs(a) < 1e-12:
+        return a0 / (1.0 + b * a0 * t)
+    e = np.exp(-a * t)
+    return a * a0 * e / (a + b * a0 * (1.0 - e))
+
+
+def peer_estimate(case: Case, x: np.ndarray) -> Estimate:
+    """The plain envelope-law fit on raw peaks (see the module notes); velocity amplitudes:
+    ``b = 4 beta / (3 pi)``, C_i = 2 m a, C_f = m beta."""
+    ax = np.abs(x)
+    # Half cycles between the sign changes of the record smoothed over a twentieth of a
+    # period (noise would cut them up); the largest raw sample of each.
+    width = max(1, int(case.fs / (20.0 * case.truth.frequency)))
+    smooth = np.convolve(x, np.ones(width) / width, mode="same")
+    cuts = np.flatnonzero(np.diff(np.signbit(smooth)))
+    if cuts.size < 8:
+        return Estimate(refused="too few half cycles")
+    idx = np.array([lo + int(np.argmax(ax[lo:hi])) for lo, hi in zip(cuts[:-1], cuts[1:])
+                    if hi > lo + 2])
+    # Parabolic refinement of each extremum.
+    i = idx[(idx > 0) & (idx < x.size - 1)]
+    y0, y1, y2 = ax[i - 1], ax[i], ax[i + 1]
+    den = y0 - 2 * y1 + y2
+    shift = np.where(den != 0, 0.5 * (y0 - y2) / np.where(den != 0, den, 1.0), 0.0)
+    amp = y1 - 0.25 * (y0 - y2) * shift
+    t = (i + shift) / case.fs
+    top = int(np.argmax(amp))
+    noise = case.noise * float(np.max(ax))
+    keep = np.arange(amp.size) >= top
+    keep &= amp > 3.0 * noise
+    t, amp = t[keep], amp[keep]
+    if amp.size < 6:
+        return Estimate(refused="too few peaks above the noise")
+    tt = t - t[0]
+    slope = -np.polyfit(tt, np.log(amp), 1)[0]
+    try:
+        res = sopt.least_squares(lambda p: _envelope(tt, p[0], p[1], p[2]) - amp,
+                                 [max(slope, 1e-3) / 2, max(slope, 1e-3) / (2 * amp[0]), amp[0]],
+                                 x_scale="jac")
+    except ValueError as exc:
+        return Estimate(refused=str(exc))
+    dof = max(amp.size - 3, 1)
+    s2 = float(res.fun @ res.fun) / dof
+    cov = np.linalg.pinv(res.jac.T @ res.jac) * s2
+    q = float(sstats.t.ppf(0.975, dof))
+    a, b = float(res.x[0]), float(res.x[1])
+    se_a, se_b = math.sqrt(max(cov[0, 0], 0)), math.sqrt(max(cov[1, 1], 0))
+    m = case.mass
+    k = 3.0 * math.pi / 4.0
+    return Estimate(c_i=2 * m * a, c_i_ci=(2 * m * (a - q * se_a), 2 * m * (a + q * se_a)),
+                    c_f=m * k * b, c_f_ci=(m * k * (b - q * se_b), m * k * (b + q * se_b)))
+
+
+def run_trial(args: tuple[Case, int]) -> tuple[Estimate, Estimate]:
+    case, seed = args
+    x = trial(case, seed)
+    return fsi_lab_estimate(case, x), peer_estimate(case, x)
+
+
+@dataclass
+class Row:
+    """Statistics of one case."""
+
+    case: Case
+    ours: list[Estimate]
+    peer: list[Estimate]
+
+    def stats(self, which: str, quantity: str) -> dict[str, float]:
+        """Bias and RMS error (% of truth), coverage, over the trials that gave a number."""
+        truth = {"c_i": self.case.truth.c_i, "c_f": self.case.truth.c_f,
+                 "frequency": self.case.truth.frequency}[quantity]
+        ests = [e for e in (self.ours if which == "ours" else self.peer) if not e.refused]
+        values = np.array([getattr(e, quantity) for e in ests], dtype=float)
+        lows = np.array([getattr(e, f"{quantity}_ci")[0] for e in ests], dtype=float)
+        highs = np.array([getattr(e, f"{quantity}_ci")[1] for e in ests], dtype=float)
+        if values.size == 0 or truth == 0:
+            return {"bias": math.nan, "rms": math.nan, "coverage": math.nan}
+        rel = values / truth - 1.0
+        return {"bias": 100 * float(np.nanmean(rel)),
+                "rms": 100 * float(np.sqrt(np.nanmean(rel ** 2))),
+                "coverage": float(np.nanmean((lows <= truth) & (truth <= highs)))}
+
+
+def evaluate(cases: list[Case], trials: int, workers: int = 2) -> list[Row]:
+    """Run ``trials`` realisations of every case (in ``workers`` processes, one BLAS and
+    numba thread each: two processes that each start a thread per core fight over the cores)."""
+    jobs = [(case, seed) for case in cases for seed in range(trials)]
+    if workers > 1:
+        import multiprocessing
+
+        os.environ.update(OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
+                          NUMBA_NUM_THREADS="1")
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            results = pool.map(run_trial, jobs, chunksize=1)
+    else:
+        results = [run_trial(job) for job in jobs]
+    rows = []
+    for k, case in enumerate(cases):
+        part = results[k * trials:(k + 1) * trials]
+        rows.append(Row(case, [p[0] for p in part], [p[1] for p in part]))
+    return rows
