@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 export QT_QPA_PLATFORM ?= offscreen
 
-.PHONY: demo gui qt-libs screenshots test bench clean h5dump-tool
+.PHONY: demo gui qt-libs screenshots test bench validate clean h5dump-tool
 
 # A venv with the package (editable) and the given extras; rebuilt when pyproject.toml changes.
 $(VENV)/.installed-%: pyproject.toml
