@@ -8,18 +8,21 @@ Values in g are converted to m/s^2.
 from __future__ import annotations
 
 import csv
+import io
 import re
 from pathlib import Path
 
 import numpy as np
 
 from fsi_lab.errors import InputFileError
+from fsi_lab.inputfiles import read_text
 from fsi_lab.profile import CHANNEL_NAME
 from fsi_lab.runfile import RunFileWriter, new_run_path, software_version, utc_now
 from fsi_lab.units import QUANTITY_OF_UNIT, to_si
 
 _HEADER = re.compile(r"^\s*(?P<name>[^\[\]]+?)\s*\[(?P<unit>[^\[\]]*)\]\s*$")
 TIME_TOLERANCE = 1e-3  # relative spread of the time steps accepted as uniform sampling
+EXPECTED = "a UTF-8 CSV file with a header row of 'name [unit]' cells and rows of numbers"
 
 
 def _parse_header(path: Path, cells: list[str]) -> list[tuple[str, str]]:
@@ -55,13 +58,12 @@ def _parse_header(path: Path, cells: list[str]) -> list[tuple[str, str]]:
 def read_csv(path: str | Path) -> tuple[list[tuple[str, str]], np.ndarray]:
     """Columns ``(name, unit)`` and the values (rows x columns) of a CSV file."""
     path = Path(path)
+    reader = csv.reader(io.StringIO(read_text(path, EXPECTED), newline=""))
     try:
-        with path.open(newline="", encoding="utf-8-sig") as handle:
-            rows = list(csv.reader(handle))
-    except OSError as exc:
-        raise InputFileError(f"{path}: cannot read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise InputFileError(f"{path}: not a text file; expected a UTF-8 CSV") from None
+        rows = list(reader)
+    except csv.Error as exc:
+        raise InputFileError(f"{path}: line {reader.line_num}: {exc}; expected {EXPECTED}") \
+            from None
     rows = [r for r in rows if any(cell.strip() for cell in r)]
     if not rows:
         raise InputFileError(f"{path}: empty; expected a header row 'name [unit],...' and data")

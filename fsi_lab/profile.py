@@ -17,6 +17,7 @@ from typing import Any, Mapping
 
 from fsi_lab.contract import ROLES
 from fsi_lab.errors import ParameterError, PluginError, ProfileError
+from fsi_lab.inputfiles import MAX_PROFILE_BYTES, read_text
 from fsi_lab.modelling import MODEL_PARAMS
 from fsi_lab.params import Param, Schema, find, validate
 from fsi_lab.registry import Registry
@@ -269,12 +270,54 @@ def load_profile(path: str | Path, registry: Registry, overrides: list[str] = ()
     ProfileError
         With the file name, the key path and what is allowed.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ProfileError(f"{path}: cannot read the profile ({exc.strerror})") from None
+    text = read_text(path, "a profile (TOML text)", MAX_PROFILE_BYTES, error=ProfileError)
     return parse_profile(text, str(path), registry, overrides, sections=sections)
+
+
+#: Deepest nesting of tables and arrays a profile needs (``analysis.hvd.band_hz`` is 4 deep).
+MAX_DEPTH = 8
+
+
+def _deepest(raw: Any) -> tuple[int, list[str]]:
+    """Nesting depth of the tables and arrays in ``raw`` and the key path to the deepest."""
+    deepest: tuple[int, list[str]] = (0, [])
+    stack = [(raw, 0, [])]
+    while stack:
+        node, depth, keys = stack.pop()
+        if isinstance(node, dict):
+            items = [(str(k), v) for k, v in node.items()]
+        elif isinstance(node, list):
+            items = [(f"[{i}]", v) for i, v in enumerate(node)]
+        else:
+            continue
+        if depth + 1 > deepest[0]:
+            deepest = (depth + 1, keys)
+        stack.extend((value, depth + 1, keys + [key]) for key, value in items)
+    return deepest
+
+
+def parse_toml(text: str, path: str) -> dict[str, Any]:
+    """The tables of profile ``text`` (``path`` names it in messages).
+
+    Raises
+    ------
+    ProfileError
+        A TOML syntax error, or tables and arrays nested deeper than :data:`MAX_DEPTH`.
+    """
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ProfileError(f"{path}: TOML syntax error: {exc}") from None
+    except RecursionError:
+        raw = None
+    depth, keys = _deepest(raw) if raw is not None else (MAX_DEPTH + 1, [])
+    if depth > MAX_DEPTH:
+        where = ".".join(keys[:3]).replace(".[", "[") if keys else "the file"
+        raise ProfileError(
+            f"{path}: {where}: tables or arrays nested more than {MAX_DEPTH} levels deep; "
+            f"a profile's sections nest at most {MAX_DEPTH} levels "
+            "(e.g. [analysis.hvd] band_hz = [10, 20])")
+    return raw
 
 
 def parse_profile(text: str, path: str, registry: Registry, overrides: list[str] = (),
@@ -285,10 +328,7 @@ def parse_profile(text: str, path: str, registry: Registry, overrides: list[str]
     ``analysis`` and ``specimen`` so that a run made with drivers not installed here can still
     be analysed), and ``--set`` may address only them.
     """
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ProfileError(f"{path}: TOML syntax error: {exc}") from None
+    raw = parse_toml(text, path)
     if sections is not None:
         raw = {key: value for key, value in raw.items() if key in sections}
         for item in overrides:

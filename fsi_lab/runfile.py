@@ -16,6 +16,7 @@ import numpy as np
 
 from fsi_lab.contract import ChannelData
 from fsi_lab.errors import InputFileError
+from fsi_lab.inputfiles import require_regular_file
 
 FORMAT = "fsi-lab run"
 FORMAT_VERSION = 1
@@ -201,8 +202,7 @@ class RunData:
 
 
 def _open_checked(path: Path, mode: str) -> h5py.File:
-    if not path.exists():
-        raise InputFileError(f"{path}: no such file; expected a run file (.h5)")
+    require_regular_file(path, "a run file (.h5)")
     try:
         handle = h5py.File(path, mode)
     except OSError as exc:

@@ -87,7 +87,7 @@ def test_json_error_is_one_object(tmp_path):
 def test_missing_file_is_named(tmp_path):
     proc = cli("profile", "check", str(tmp_path / "nope.toml"))
     assert proc.returncode == 2
-    assert "nope.toml: cannot read the profile" in proc.stderr
+    assert "nope.toml: no such file; expected a profile (TOML text)" in proc.stderr
 
 
 def test_set_overrides_any_parameter_by_path(registry):
