@@ -297,21 +297,20 @@ def cmd_profile_check(args) -> int:
 
     registry = _registry()
     profile = load_profile(args.profile, registry, args.set)
-    result: dict[str, Any] = {"profile": str(args.profile), "valid": True, "safety": None}
-    if profile.can_run:
-        _, _, report = check_safety(profile, registry)
-        result["safety"] = report.as_dict()
+    profile.require_runnable()
+    _, _, report = check_safety(profile, registry)
+    result: dict[str, Any] = {"profile": str(args.profile), "valid": True,
+                              "safety": report.as_dict()}
     if args.json:
         _emit_json(result)
     else:
+        s = result["safety"]
         print(f"{args.profile}: valid")
-        if result["safety"]:
-            s = result["safety"]
-            print(f"safety: peak drive {s['peak_drive_v']:.4g} V (max {s['max_drive_v']:g}), "
-                  f"gain {s['gain']:g} (max {s['max_gain']:g}), predicted stroke "
-                  f"{s['predicted_stroke_mm']:.3g} mm (max {s['max_stroke_mm']:g}): "
-                  + ("ok" if s["ok"] else "REFUSED: " + "; ".join(s["problems"])))
-    return 0 if not result["safety"] or result["safety"]["ok"] else 2
+        print(f"safety: peak drive {s['peak_drive_v']:.4g} V (max {s['max_drive_v']:g}), "
+              f"gain {s['gain']:g} (max {s['max_gain']:g}), predicted stroke "
+              f"{s['predicted_stroke_mm']:.3g} mm (max {s['max_stroke_mm']:g}): "
+              + ("ok" if s["ok"] else "REFUSED: " + "; ".join(s["problems"])))
+    return 0 if report.ok else 2
 
 
 def _model_profile(args):

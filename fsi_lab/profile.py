@@ -37,27 +37,27 @@ RUN_PARAMS: tuple[Param, ...] = (
 SAFETY_PARAMS: tuple[Param, ...] = (
     Param("max_drive_v", "float", "V", minimum=0.0, exclusive_minimum=True, maximum=10.0,
           help="Largest absolute source voltage the excitation may request."),
-    Param("max_gain", "float", "V/V", minimum=0.0, exclusive_minimum=True,
+    Param("max_gain", "float", "V/V", minimum=0.0, exclusive_minimum=True, maximum=100.0,
           help="Largest amplifier gain the bench may be set to."),
-    Param("max_stroke_mm", "float", "mm", minimum=0.0, exclusive_minimum=True,
+    Param("max_stroke_mm", "float", "mm", minimum=0.0, exclusive_minimum=True, maximum=100.0,
           help="Largest base displacement (zero to peak) predicted by the shaker model."),
 )
 
 SHAKER_PARAMS: tuple[Param, ...] = (
-    Param("suspension_hz", "float", "Hz", 30.0, minimum=0.1,
+    Param("suspension_hz", "float", "Hz", 30.0, minimum=0.1, maximum=2000.0,
           help="Resonance of the shaker armature on its suspension, loaded (about 30 Hz with "
                "the beam mount, 47 Hz unloaded)."),
     Param("damping_ratio", "float", "", 0.08, minimum=0.001, maximum=2.0,
           help="Damping ratio of the suspension resonance."),
     Param("mm_per_volt", "float", "mm/V", 0.5, minimum=0.0, exclusive_minimum=True,
-          help="Static base displacement per volt at the amplifier output."),
+          maximum=100.0, help="Static base displacement per volt at the amplifier output."),
 )
 
 CHANNEL_PARAMS: tuple[Param, ...] = (
     Param("quantity", "str", "", choices=QUANTITIES, help="What the channel measures."),
     Param("unit", "str", "", choices=tuple(QUANTITY_OF_UNIT),
           help="Unit the calibrated channel is stored in."),
-    Param("sensitivity", "float", "V/unit", 1.0, minimum=0.0, exclusive_minimum=True,
+    Param("sensitivity", "float", "V/unit", 1.0, minimum=1e-6, maximum=1e6,
           help="Sensor sensitivity: volts at the digitiser per unit of the quantity."),
     Param("input", "int", "", minimum=1, maximum=64, help="Digitiser input number."),
     Param("sensor", "str", "", "",
@@ -78,7 +78,7 @@ BENCH_PARAMS: tuple[Param, ...] = (
     Param("fault", "str", "", "none",
           choices=("none", "timeout", "drop", "garble", "interlock", "overload"),
           help="Simulated bench only: inject this fault (for rehearsing failures)."),
-    Param("fault_after_s", "float", "s", 1.0, minimum=0.0,
+    Param("fault_after_s", "float", "s", 1.0, minimum=0.0, maximum=86400.0,
           help="Simulated bench only: when the injected fault happens after the start."),
 )
 
@@ -143,6 +143,16 @@ class Profile:
     def can_run(self) -> bool:
         """True when the profile describes a bench and an excitation (not only an analysis)."""
         return bool(self.roles) and self.excitation_plugin is not None
+
+    def require_runnable(self) -> None:
+        """Raise ProfileError unless the profile describes a run (:attr:`can_run`): an empty,
+        comment-only or cut-short file is valid TOML but has nothing to run."""
+        if not self.can_run:
+            raise ProfileError(
+                f"{self.path}: nothing to run: no [bench.<role>] tables and no [excitation]; "
+                f"expected a profile with [safety], "
+                f"{', '.join('[bench.' + r + ']' for r in REQUIRED_ROLES)}, [channels.<name>] "
+                "and [excitation] (see profiles/wet-beam-sim.toml)")
 
 
 def _table(raw: Mapping[str, Any], key: str, where: str) -> dict[str, Any]:
@@ -372,6 +382,32 @@ def _channel(name: str, table: Any, roles: Mapping[str, RoleConfig] | None) -> C
     return ChannelConfig(name=name, **values)
 
 
+#: Fewest samples a record may hold (one period of the lowest frequency needs two).
+MIN_RECORD_SAMPLES = 2
+
+
+def _check_record(run: Mapping[str, Any]) -> None:
+    """The ``[run]`` record must hold :data:`MIN_RECORD_SAMPLES` samples at least."""
+    samples = round(run["duration"] * run["sample_rate"])
+    if samples < MIN_RECORD_SAMPLES:
+        raise ParameterError(
+            f"run.duration: {run['duration']:g} s at run.sample_rate = {run['sample_rate']:g} Hz "
+            f"records {samples} sample{'s' if samples != 1 else ''}; expected at least "
+            f"{MIN_RECORD_SAMPLES} (a duration of {MIN_RECORD_SAMPLES / run['sample_rate']:g} s "
+            "or more)")
+
+
+def _check_model(specimen: Specimen, model: Mapping[str, Any]) -> None:
+    """The beam model of ``[specimen]`` and ``[model]`` must be one the model can build (the
+    damping given one way, ratios for the modes)."""
+    from fsi_lab.modelling import beam_model
+
+    try:
+        beam_model(specimen, dict(model))
+    except ParameterError as exc:
+        raise ParameterError(f"model: {exc}") from None
+
+
 def _validate(raw, path, text, registry, overrides, complete=True, bench_kept=True) -> Profile:
     """The checked profile; ``complete`` False when only some sections were kept, so a bench
     need not come with its excitation and channels; ``bench_kept`` False when ``[bench]`` was
@@ -465,6 +501,10 @@ def _validate(raw, path, text, registry, overrides, complete=True, bench_kept=Tr
             f"specimen.measurement_point: {specimen.measurement_point} m lies beyond the beam "
             f"(length {specimen.length} m); expected a point between 0 and the length"
         )
+    if specimen is not None:
+        _check_model(specimen, model)
+    if complete:
+        _check_record(run)
 
     return Profile(path=path, text=text, run=run, safety=safety, shaker=shaker,
                    specimen=specimen, model=model, bench=bench, roles=roles, channels=channels,

@@ -28,6 +28,7 @@ from fsi_lab.errors import (
     FsiLabError, InstrumentError, PluginError, ProfileError, RunAborted,
 )
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
+from fsi_lab.preflight import check_instruments
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
 from fsi_lab.runfile import (
@@ -66,10 +67,34 @@ class RunOutcome:
         }
 
 
+#: Most samples a drive waveform may have: the largest arb memory of the generators fsi-lab
+#: drives (a 33500B with its memory option); a longer one is refused before it is generated.
+MAX_WAVEFORM_POINTS = 16_000_000
+
+
+def _too_long(profile: Profile, points: float, rate: float) -> ProfileError:
+    return ProfileError(
+        f"{profile.path}: excitation: {profile.excitation_plugin!r} would make {points:,.0f} "
+        f"samples at {rate:g} Sa/s; a source holds at most {MAX_WAVEFORM_POINTS:,}: shorten "
+        "the excitation or lower bench.source.sample_rate (or run.sample_rate when it is unset)")
+
+
 def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray, float]:
-    """Generate the profile's drive waveform (V) and its sample rate (Hz)."""
+    """Generate the profile's drive waveform (V) and its sample rate (Hz).
+
+    Raises
+    ------
+    ProfileError
+        The waveform would have more than :data:`MAX_WAVEFORM_POINTS` samples, or none.
+    PluginError
+        The excitation plugin failed.
+    """
     descriptor = registry.get("excitation", profile.excitation_plugin)
     rate = float(profile.roles["source"].settings.get("sample_rate") or profile.run["sample_rate"])
+    if descriptor.duration is not None:
+        points = float(descriptor.duration(dict(profile.excitation))) * rate
+        if points > MAX_WAVEFORM_POINTS:
+            raise _too_long(profile, points, rate)
     try:
         waveform = np.asarray(descriptor.generate(dict(profile.excitation), rate), dtype=float)
     except Exception as exc:  # noqa: BLE001 - a plugin's failure, before anything is driven
@@ -77,6 +102,8 @@ def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray
             f"{profile.path}: excitation plugin {profile.excitation_plugin!r} failed to generate "
             f"its waveform with {profile.excitation} at {rate:g} Hz: {type(exc).__name__}: {exc}"
         ) from None
+    if waveform.size > MAX_WAVEFORM_POINTS:
+        raise _too_long(profile, waveform.size, rate)
     if waveform.ndim != 1 or waveform.size == 0:
         raise ProfileError(
             f"{profile.path}: excitation {profile.excitation_plugin!r} produced no samples "
@@ -86,8 +113,11 @@ def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray
 
 
 def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, float, SafetyReport]:
-    """Generate the waveform and assess it against ``[safety]`` (does not raise)."""
+    """Generate the waveform, check what the run asks of each instrument
+    (:func:`~fsi_lab.preflight.check_instruments`, which raises) and assess the waveform
+    against ``[safety]`` (the verdict is in the report, not raised)."""
     waveform, rate = prepare_excitation(profile, registry)
+    check_instruments(profile, registry, waveform, rate)
     gain = profile.roles["amplifier"].settings.get("gain")
     if gain is None:
         raise ProfileError(
@@ -120,8 +150,7 @@ class Runner:
 
     def __init__(self, profile: Profile, registry: Registry, out_dir: str | Path,
                  bus: EventBus | None = None, analyze: bool = True) -> None:
-        if not profile.can_run:
-            raise ProfileError(f"{profile.path}: describes no bench and excitation to run")
+        profile.require_runnable()
         self.profile = profile
         self.registry = registry
         self.out_dir = Path(out_dir)
