@@ -138,10 +138,11 @@ def cmd_run(args) -> int:
 def cmd_analyze(args) -> int:
     from fsi_lab.chain import DEFAULT_CHAIN, analyse_and_store
     from fsi_lab.profile import parse_profile
-    from fsi_lab.runfile import read_run
+    from fsi_lab.runfile import read_run, require_analysable
 
     registry = _registry()
     run = read_run(args.run)
+    require_analysable(run)
     text = run.profile_text
     if not text.strip():
         chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
@@ -186,14 +187,10 @@ def cmd_show(args) -> int:
 
     run = read_run(args.run, load_data=False)
     summary = read_analysis_summary(args.run)
+    summary_text = _summary_text(args.run, summary) if summary else ""
     attrs = {k: v for k, v in run.attrs.items() if k not in ("profile", "traceback")}
-    with_lengths = {}
-    import h5py
-
-    with h5py.File(args.run, "r") as handle:
-        for name in run.channels:
-            with_lengths[name] = {**run.channel_attrs[name],
-                                  "samples": int(handle["channels"][name].shape[0])}
+    with_lengths = {name: {**run.channel_attrs[name], "samples": run.channel_samples[name]}
+                    for name in run.channels}
     info = {"run": str(args.run), "attrs": attrs, "instruments": run.instruments,
             "channels": with_lengths,
             "excitation": {k: v for k, v in (run.excitation or {}).items() if k != "waveform"}
@@ -211,12 +208,24 @@ def cmd_show(args) -> int:
         final = inst.get("final_state", {})
         print(f"instrument {role}: {inst.get('identity', '?')}; final state {final}")
     for name, meta in with_lengths.items():
-        rate = float(meta["sample_rate"])
+        rate = run.channels[name].sample_rate
         print(f"channel {name}: {meta['quantity']} [{meta['units']}], {meta['samples']} samples "
               f"at {rate:g} Hz ({meta['samples'] / rate:.3f} s)")
-    if summary:
-        print(format_summary(summary))
+    if summary_text:
+        print(summary_text)
     return 0
+
+
+def _summary_text(path: Path, summary: dict[str, Any]) -> str:
+    """:func:`format_summary` of a run file's stored summary, refused (InputFileError) when it
+    is not laid out as fsi-lab writes it."""
+    try:
+        return format_summary(summary)
+    except (AttributeError, KeyError, TypeError, ValueError, IndexError) as exc:
+        raise InputFileError(
+            f"{path}: /analysis attribute 'summary': not laid out as fsi-lab writes it "
+            f"({type(exc).__name__}: {exc}); expected the summary of fsi-lab analyze (run it "
+            "again)") from None
 
 
 def cmd_plugins(args) -> int:

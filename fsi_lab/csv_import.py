@@ -17,6 +17,7 @@ import numpy as np
 from fsi_lab.errors import InputFileError
 from fsi_lab.inputfiles import read_text
 from fsi_lab.profile import CHANNEL_NAME
+from fsi_lab.runcheck import CHANNEL_RATES_HZ, MAX_T0_S
 from fsi_lab.runfile import RunFileWriter, new_run_path, software_version, utc_now
 from fsi_lab.units import QUANTITY_OF_UNIT, to_si
 
@@ -93,12 +94,22 @@ def read_csv(path: str | Path) -> tuple[list[tuple[str, str]], np.ndarray]:
     return columns, data
 
 
+def _check_rate(rate: float, where: str) -> float:
+    """``rate`` (Hz) if it lies within :data:`~fsi_lab.runcheck.CHANNEL_RATES_HZ`."""
+    low, high = CHANNEL_RATES_HZ
+    if not (np.isfinite(rate) and low <= rate <= high):
+        raise InputFileError(f"{where}: a sample rate of {rate:g} Hz; expected {low:g} to "
+                             f"{high:g} Hz")
+    return rate
+
+
 def _rate_from_time(path: Path, time: np.ndarray) -> float:
     steps = np.diff(time)
     step = float(np.median(steps))
     if step <= 0:
         raise InputFileError(f"{path}: the time column does not increase")
-    spread = float(np.max(np.abs(steps - step))) / step
+    with np.errstate(over="ignore", invalid="ignore"):
+        spread = float(np.max(np.abs(steps - step))) / step
     if spread > TIME_TOLERANCE:
         worst = int(np.argmax(np.abs(steps - step)))
         raise InputFileError(
@@ -106,7 +117,9 @@ def _rate_from_time(path: Path, time: np.ndarray) -> float:
             f"line {worst + 3} against a median of {step:.6g} s); expected uniform sampling "
             f"within {TIME_TOLERANCE:.1%}"
         )
-    return 1.0 / step
+    with np.errstate(over="ignore"):
+        rate = 1.0 / step
+    return _check_rate(rate, f"{path}: the time column (steps of {step:.6g} s) gives")
 
 
 def import_csv(path: str | Path, out: str | Path, rate: float | None) -> Path:
@@ -123,16 +136,35 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None) -> Path:
     """
     path, out = Path(path), Path(out)
     columns, data = read_csv(path)
-    names = [n for n, _ in columns]
+    times = [i for i, (name, _) in enumerate(columns) if name.lower() == "time"]
+    if len(times) > 1:
+        raise InputFileError(f"{path}: header columns {times[0] + 1} and {times[1] + 1} are both "
+                             "time columns; expected at most one 'time [s]' column")
+    if len(times) == len(columns):
+        raise InputFileError(f"{path}: only a time column; expected data columns 'name [unit]' "
+                             "beside it")
     t0 = 0.0
-    if "time" in [n.lower() for n in names]:
-        index = [n.lower() for n in names].index("time")
-        rate = _rate_from_time(path, data[:, index])
-        t0 = float(data[0, index])
+    if times:
+        rate = _rate_from_time(path, data[:, times[0]])
+        t0 = float(data[0, times[0]])
+        if abs(t0) > MAX_T0_S:
+            raise InputFileError(f"{path}: line 2: the time column starts at {t0:g} s; "
+                                 f"expected a start within {MAX_T0_S:g} s of 0")
     elif rate is None:
         raise InputFileError(f"{path}: no 'time [s]' column; give the sample rate with --rate HZ")
-    elif not (np.isfinite(rate) and rate > 0):
-        raise InputFileError(f"--rate {rate}: expected a positive sample rate in Hz")
+    else:
+        _check_rate(rate, f"--rate {rate:g}")
+    values = {}
+    for col, (name, unit) in enumerate(columns):
+        if col in times:
+            continue
+        si_unit, factor = to_si(unit)
+        with np.errstate(over="ignore"):
+            values[name] = data[:, col] * factor
+        if not np.all(np.isfinite(values[name])):
+            line = int(np.argmax(~np.isfinite(values[name]))) + 2
+            raise InputFileError(f"{path}: line {line}, column {col + 1} ({name}): too large "
+                                 f"to convert from {unit} to {si_unit}; expected a finite value")
     if out.exists():
         raise InputFileError(f"{out}: already exists; choose another output file")
     _, run_uuid, started = new_run_path(out.parent)
@@ -141,17 +173,19 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None) -> Path:
         "source_file": str(path), "profile": "", "software_version": software_version(),
     })
     try:
-        for col, (name, unit) in enumerate(columns):
-            if name.lower() == "time":
+        for name, unit in columns:
+            if name not in values:
                 continue
-            si_unit, factor = to_si(unit)
             writer.create_channel(name, {
-                "units": si_unit, "quantity": QUANTITY_OF_UNIT[unit], "sample_rate": rate,
-                "t0": t0, "sensitivity": 1.0, "source_instrument": f"imported from {path.name}",
-                "original_units": unit,
+                "units": to_si(unit)[0], "quantity": QUANTITY_OF_UNIT[unit],
+                "sample_rate": rate, "t0": t0, "sensitivity": 1.0,
+                "source_instrument": f"imported from {path.name}", "original_units": unit,
             })
-            writer.append(name, data[:, col] * factor)
+            writer.append(name, values[name])
         writer.set_attrs({"exit_status": "completed", "stop_time": utc_now()})
-    finally:
         writer.close()
+    except BaseException:  # interrupted or failed: no half-written file is left behind
+        writer.abandon()
+        out.unlink(missing_ok=True)
+        raise
     return out

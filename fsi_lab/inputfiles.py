@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import stat
 from pathlib import Path
+from typing import Any
 
 from fsi_lab.errors import FsiLabError, InputFileError
 
@@ -20,6 +21,25 @@ MAX_PROFILE_BYTES = 1 << 20
 _KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
           (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
           (stat.S_ISSOCK, "a socket"))
+
+
+def nesting(value: Any) -> tuple[int, list[str]]:
+    """How deeply the dictionaries and lists of parsed input ``value`` nest, and the keys
+    (``[i]`` for list items) down to the deepest; 0 for a plain value."""
+    deepest: tuple[int, list[str]] = (0, [])
+    stack = [(value, 0, [])]
+    while stack:
+        node, depth, keys = stack.pop()
+        if isinstance(node, dict):
+            items = [(str(k), v) for k, v in node.items()]
+        elif isinstance(node, list):
+            items = [(f"[{i}]", v) for i, v in enumerate(node)]
+        else:
+            continue
+        if depth + 1 > deepest[0]:
+            deepest = (depth + 1, keys)
+        stack.extend((item, depth + 1, keys + [key]) for key, item in items)
+    return deepest
 
 
 def _kind(mode: int) -> str:

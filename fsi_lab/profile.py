@@ -17,7 +17,7 @@ from typing import Any, Mapping
 
 from fsi_lab.contract import ROLES
 from fsi_lab.errors import ParameterError, PluginError, ProfileError
-from fsi_lab.inputfiles import MAX_PROFILE_BYTES, read_text
+from fsi_lab.inputfiles import MAX_PROFILE_BYTES, nesting, read_text
 from fsi_lab.modelling import MODEL_PARAMS
 from fsi_lab.params import Param, Schema, find, validate
 from fsi_lab.registry import Registry
@@ -288,24 +288,6 @@ def load_profile(path: str | Path, registry: Registry, overrides: list[str] = ()
 MAX_DEPTH = 8
 
 
-def _deepest(raw: Any) -> tuple[int, list[str]]:
-    """Nesting depth of the tables and arrays in ``raw`` and the key path to the deepest."""
-    deepest: tuple[int, list[str]] = (0, [])
-    stack = [(raw, 0, [])]
-    while stack:
-        node, depth, keys = stack.pop()
-        if isinstance(node, dict):
-            items = [(str(k), v) for k, v in node.items()]
-        elif isinstance(node, list):
-            items = [(f"[{i}]", v) for i, v in enumerate(node)]
-        else:
-            continue
-        if depth + 1 > deepest[0]:
-            deepest = (depth + 1, keys)
-        stack.extend((value, depth + 1, keys + [key]) for key, value in items)
-    return deepest
-
-
 def parse_toml(text: str, path: str) -> dict[str, Any]:
     """The tables of profile ``text`` (``path`` names it in messages).
 
@@ -320,7 +302,7 @@ def parse_toml(text: str, path: str) -> dict[str, Any]:
         raise ProfileError(f"{path}: TOML syntax error: {exc}") from None
     except RecursionError:
         raw = None
-    depth, keys = _deepest(raw) if raw is not None else (MAX_DEPTH + 1, [])
+    depth, keys = nesting(raw) if raw is not None else (MAX_DEPTH + 1, [])
     if depth > MAX_DEPTH:
         where = ".".join(keys[:3]).replace(".[", "[") if keys else "the file"
         raise ProfileError(

@@ -63,7 +63,8 @@ def test_channel_without_attributes_is_named(tmp_path):
     with h5py.File(path, "w") as handle:
         handle.attrs["format"] = "fsi-lab run"
         handle.create_dataset("channels/v", data=np.zeros(3))
-    with pytest.raises(InputFileError, match=r"/channels/v lacks attribute 'units'"):
+    with pytest.raises(InputFileError, match=r"/channels/v attribute 'quantity': is missing; "
+                                             r"expected one of 'displacement', 'velocity'"):
         read_run(path)
 
 
