@@ -15,8 +15,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fsi_lab.errors import FsiLabError, InputFileError
+from fsi_lab.errors import FsiLabError, InputFileError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
+from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
 EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "aborted": 130}
 LEVELS = {"DEBUG": 10, "INFO": 20, "WARNING": 30, "ERROR": 40}
@@ -64,8 +65,13 @@ class Console:
             self.bar = None
 
 
+_json_emitted = False  # whether this command printed its one JSON object
+
+
 def _emit_json(obj: dict[str, Any]) -> None:
+    global _json_emitted
     print(json.dumps(_clean(obj), indent=2, default=_json_default, allow_nan=False))
+    _json_emitted = True
 
 
 def _json_default(value):
@@ -126,6 +132,8 @@ def cmd_run(args) -> int:
         if outcome.summary:
             print(format_summary(outcome.summary))
     code = EXIT_FOR_STATUS[outcome.exit_status]
+    if outcome.interrupted and code == 0:  # the record is complete, the command was not
+        code = EXIT_FOR_STATUS["aborted"]
     if outcome.file_abandoned:
         # After a failed write HDF5 crashes in its own shutdown: leave without it, so that the
         # exit code says what happened (the bench is safe and the outcome printed).
@@ -158,12 +166,14 @@ def cmd_analyze(args) -> int:
     bus = EventBus()
     console = Console(args.quiet or args.json, args.verbose)
     bus.subscribe(console)
+    bus.subscribe(args.signal_note.checkpoint)  # a signal whose exception was swallowed
     try:
         summary = analyse_and_store(Path(args.run), run.channels, profile.analysis,
                                     profile.analysis_params, registry, profile.specimen,
                                     args.mass_per_length, bus)
     finally:
         console.close()
+    args.signal_note.check()
     if args.json:
         _emit_json(summary)
     else:
@@ -351,7 +361,7 @@ def cmd_model(args) -> int:
 def cmd_simulate(args) -> int:
     from fsi_lab.errors import ProfileError, RunAborted
     from fsi_lab.modelling import simulate_run
-    from fsi_lab.runfile import INTERRUPTED, new_run_path, software_version
+    from fsi_lab.runfile import new_run_path, software_version
     from fsi_lab.runner import prepare_excitation
     from fsi_lab.signals import RunSignals
 
@@ -404,6 +414,7 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_gui(args) -> int:
+    args.signals.restore()  # the window handles its own ending
     try:
         from fsi_lab.gui.app import main as gui_main
     except ImportError as exc:
@@ -599,8 +610,37 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser(json_requested="--json" in argv).parse_args(argv)
+    """``fsi-lab``: run a command and return its exit code.
+
+    From the first line, Ctrl+C and SIGTERM end the command with exit code 130 and one message
+    (a run first puts its bench in the safe state and finalises its file); the signal is also
+    noted, so that one whose exception a library swallows is raised at the next checkpoint.
+    """
+    global _json_emitted
+    note = SignalNote()
+    signals = RunSignals(on_signal=note)
+    signals.install()
+    wants_json = False
+    try:
+        _json_emitted = False
+        argv = sys.argv[1:] if argv is None else list(argv)
+        wants_json = "--json" in argv
+        args = build_parser(json_requested=wants_json).parse_args(argv)
+        args.signals, args.signal_note = signals, note
+        return _run_command(args)
+    except (KeyboardInterrupt, RunAborted) as exc:
+        signals.silence()
+        reason = str(exc) or INTERRUPTED
+        if wants_json and not _json_emitted:
+            _emit_json({"error": f"interrupted: {reason}", "exit_code": 130})
+        print(f"fsi-lab: interrupted: {reason}", file=sys.stderr)
+        return 130
+    finally:
+        signals.restore()
+
+
+def _run_command(args) -> int:
+    """``args.func(args)``, with the errors meant for the user turned into one message."""
     try:
         return args.func(args)
     except BrokenPipeError:  # the reader of stdout went away (`fsi-lab show RUN | head`)
@@ -616,9 +656,6 @@ def main(argv: list[str] | None = None) -> int:
             _emit_json({"error": text, "exit_code": code})
         print(f"fsi-lab: error: {text}", file=sys.stderr)
         return code
-    except KeyboardInterrupt:
-        print("fsi-lab: interrupted", file=sys.stderr)
-        return 130
 
 
 if __name__ == "__main__":

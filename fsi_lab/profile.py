@@ -30,8 +30,9 @@ RUN_PARAMS: tuple[Param, ...] = (
           help="Length of the acquisition record."),
     Param("sample_rate", "float", "Hz", 10000.0, minimum=1.0, maximum=204800.0,
           help="Acquisition sample rate (the digitiser may round it)."),
-    Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=1.0,
-          help="Length of the blocks streamed from the digitiser into the run file."),
+    Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=0.5,
+          help="Length of the blocks streamed from the digitiser into the run file (at most "
+               "0.5 s: a crash loses at most 0.5 s of the record)."),
 )
 
 SAFETY_PARAMS: tuple[Param, ...] = (

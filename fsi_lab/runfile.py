@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
-import time
 import uuid as _uuid
 from dataclasses import dataclass, field
 from importlib import metadata
@@ -22,13 +21,15 @@ from fsi_lab.runcheck import EXPECTED as RUN_FILE
 from fsi_lab.runcheck import (
     CHANNEL_RATES_HZ, H5_ERRORS, MAX_T0_S, RunFileReader, decode_attr,
 )
+from fsi_lab.signals import INTERRUPTED  # noqa: F401 - the error recorded for Ctrl+C
 from fsi_lab.units import QUANTITIES
 
 FORMAT = "fsi-lab run"
 FORMAT_VERSION = 1
 EXIT_STATUSES = ("running", "completed", "aborted", "failed")
-INTERRUPTED = "interrupted (Ctrl+C)"  # the error recorded for a run ended by Ctrl+C
-FLUSH_INTERVAL_S = 0.5  # at most this long between flushes while data arrives
+#: A crash (even ``kill -9``) loses at most this much of the record delivered, s: the file is
+#: flushed before the samples not yet flushed, with the next block, would exceed it.
+FLUSH_SPAN_S = 0.5
 CHUNK_SAMPLES = 16384
 
 
@@ -85,9 +86,13 @@ def read_attrs(node: h5py.HLObject) -> dict[str, Any]:
 class RunFileWriter:
     """Creates a run file and appends to it as blocks arrive.
 
-    Every append is followed by a flush when more than :data:`FLUSH_INTERVAL_S` passed since
-    the last one, so that a run killed at any moment leaves a file that opens with h5py and
-    h5dump and holds every block up to the last flush. The file uses the earliest HDF5 file
+    After each block (:meth:`flush_if_due`) the file is flushed when the samples not yet
+    flushed and a next block as long as this one would span more than :data:`FLUSH_SPAN_S`
+    of the record, so that a run killed at any moment (with the next block on its way) loses
+    at most that span, and leaves a file that opens with h5py and h5dump and holds every
+    block up to the last flush. The rule counts samples, not time, so it holds on a slow
+    machine and for a bench that runs faster than real time. Blocks must not be longer than
+    :data:`FLUSH_SPAN_S` (the profile's limits see to it). The file uses the earliest HDF5 file
     format (no SWMR): after a crash it opens without ``h5clear``.
     """
 
@@ -99,8 +104,9 @@ class RunFileWriter:
                                  "exit_status": "running", **attrs})
         for group in ("instruments", "channels", "analysis"):
             self._file.create_group(group)
-        self._last_flush = time.monotonic()
         self.samples_flushed: dict[str, int] = {}
+        self._rates: dict[str, float] = {}
+        self._last_block: dict[str, int] = {}
         self._file.flush()
 
     @property
@@ -139,6 +145,8 @@ class RunFileWriter:
         )
         write_attrs(dataset, attrs)
         self.samples_flushed[name] = 0
+        self._rates[name] = float(attrs["sample_rate"])
+        self._last_block[name] = 0
 
     def append(self, name: str, block: np.ndarray) -> None:
         """Append samples to ``/channels/<name>``."""
@@ -146,17 +154,26 @@ class RunFileWriter:
         start = dataset.shape[0]
         dataset.resize((start + block.size,))
         dataset[start:] = block
+        self._last_block[name] = block.size
+
+    def unflushed_s(self) -> float:
+        """The longest span of record, s, a crash would lose now with a next block as long
+        as the last on its way (what :meth:`flush_if_due` keeps within FLUSH_SPAN_S)."""
+        channels = self._file["channels"]
+        return max(((channels[name].shape[0] - flushed + self._last_block[name])
+                    / self._rates[name] for name, flushed in self.samples_flushed.items()),
+                   default=0.0)
 
     def flush_if_due(self) -> bool:
-        """Flush if the last flush is older than the interval; returns whether it flushed."""
-        if time.monotonic() - self._last_flush < FLUSH_INTERVAL_S:
+        """Flush when the record not yet flushed, with a next block as long as the last, would
+        exceed :data:`FLUSH_SPAN_S`; returns whether it flushed. Call it after every block."""
+        if self.unflushed_s() <= FLUSH_SPAN_S * (1 + 1e-9):
             return False
         self.flush()
         return True
 
     def flush(self) -> None:
         self._file.flush()
-        self._last_flush = time.monotonic()
         for name, dataset in self._file["channels"].items():
             self.samples_flushed[name] = dataset.shape[0]
 

@@ -54,12 +54,16 @@ class RunOutcome:
     stopped_early: bool = False
     #: the run file could not be finalised and was given up (a full disk)
     file_abandoned: bool = False
+    #: Ctrl+C or SIGTERM arrived after the record was complete (while it was finalised, or
+    #: during its analysis): the run completed, the command was interrupted
+    interrupted: bool = False
 
     def as_json(self) -> dict[str, Any]:
         return {
             "run": str(self.path) if self.path else None,
             "exit_status": self.exit_status,
             "stopped_early": self.stopped_early,
+            "interrupted": self.interrupted,
             "error": self.error,
             "safety": self.safety.as_dict() if self.safety else None,
             "final_state": self.final_states,
@@ -213,31 +217,68 @@ class Runner:
                 f"{type(exc).__name__}: {exc}")
             outcome.traceback = traceback.format_exc()
         finally:
+            self._finish(signals, writer, outcome)
+        # From here to the end Ctrl+C and SIGTERM end only the analysis (the record is safe);
+        # the run's handlers also set the abort flag, checked at every progress event.
+        try:
+            self.bus.emit(StateChanged(outcome.exit_status, outcome.error or ""))
+            if signals.pending:
+                outcome.interrupted = True
+                self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
+            elif outcome.exit_status == "completed" and self.analyze \
+                    and self.profile.analysis["chain"]:
+                self._analyse_into(outcome)
+        except (KeyboardInterrupt, RunAborted) as exc:
+            outcome.interrupted = True
+            if outcome.exit_status == "completed" and outcome.summary is None:
+                outcome.error = (f"the analysis was stopped ({str(exc) or 'Ctrl+C'}); the record "
+                                 "is complete: run `fsi-lab analyze` on the file")
+                self.bus.log("WARNING", outcome.error)
+        finally:
+            signals.restore()
+        return outcome
+
+    def _finish(self, signals: RunSignals, writer: RunFileWriter | None,
+                outcome: RunOutcome) -> None:
+        """Safe state, then the run file finalised, with Ctrl+C and SIGTERM held back.
+
+        A signal that arrives in the instant before they are held back raises here: it is
+        noted as held and the safe state is carried out all the same (it is never skipped).
+        """
+        for _ in range(3):
             try:
                 with signals.held():
                     outcome.final_states = self._safe_state_all()
                     self._require_bench_safe(outcome)
                     self._finalize(writer, outcome)
-            finally:
-                signals.restore()
-        self.bus.emit(StateChanged(outcome.exit_status, outcome.error or ""))
-        if signals.pending:
-            self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
-        elif outcome.exit_status == "completed" and self.analyze and self.profile.analysis["chain"]:
-            analysis_signals = RunSignals()  # SIGTERM, like Ctrl+C, ends only the analysis
-            analysis_signals.install()
-            try:
-                outcome.summary = self._analyse(outcome.path)
-            except (FsiLabError, OSError) as exc:  # the record is safe; only the analysis is lost
-                outcome.error = f"analysis not stored: {exc}; run `fsi-lab analyze` on the file"
-                self.bus.log("ERROR", outcome.error)
+                return
             except (KeyboardInterrupt, RunAborted) as exc:
-                outcome.error = (f"the analysis was stopped ({str(exc) or 'Ctrl+C'}); the record "
-                                 "is complete: run `fsi-lab analyze` on the file")
-                self.bus.log("WARNING", outcome.error)
-            finally:
-                analysis_signals.restore()
-        return outcome
+                signals.pending.append(signal.SIGINT if isinstance(exc, KeyboardInterrupt)
+                                       else signal.SIGTERM)
+        raise RunAborted("the safe state was interrupted three times; check the bench by hand")
+
+    def _analyse_into(self, outcome: RunOutcome) -> None:
+        """Run the chain on the completed record into ``outcome.summary``; a signal ends it
+        (raised), also one whose exception a library swallowed (the abort flag is checked at
+        every progress event and at the end)."""
+        unsubscribe = self.bus.subscribe(self._checkpoint)
+        try:
+            outcome.summary = self._analyse(outcome.path)
+        except (FsiLabError, OSError) as exc:  # the record is safe; only the analysis is lost
+            outcome.error = f"analysis not stored: {exc}; run `fsi-lab analyze` on the file"
+            self.bus.log("ERROR", outcome.error)
+        finally:
+            unsubscribe()
+        if self._abort.is_set():
+            outcome.interrupted = True
+            outcome.error = (f"{self._abort_reason} at the end of the analysis"
+                             + ("; its results were stored" if outcome.summary else ""))
+            self.bus.log("WARNING", outcome.error)
+
+    def _checkpoint(self, event) -> None:
+        """Event-bus subscriber: raise the abort at every progress event once requested."""
+        if isinstance(event, Progress):
+            self._check_abort()
 
     def _root_attrs(self, run_uuid: str, started: str) -> dict[str, Any]:
         versions = {r.name: f"{r.distribution} {r.version}" for r in self.registry.records

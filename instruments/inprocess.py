@@ -265,7 +265,7 @@ PLUGINS = [
         help="Simulated laser vibrometer."),
     InstrumentPlugin(
         "inprocess-acquisition", "acquisition",
-        (Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=1.0,
+        (Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=0.5,
                help="Length of each streamed block."),
          Param("realtime", "bool", "", False, help="Pace blocks at the real acquisition rate."),
          Param("noise_v", "float", "V", 1e-4, minimum=0.0, maximum=10.0,

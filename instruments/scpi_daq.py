@@ -257,7 +257,7 @@ PLUGIN = InstrumentPlugin(
     name=NAME,
     role="acquisition",
     params=(
-        Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=1.0,
+        Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=0.5,
               help="Length of each block fetched and streamed into the run file."),
         Param("ranges_v", "floats", "V", [10.0, 10.0, 10.0, 10.0], minimum=0.001,
               maximum=10.0, help="Input range of inputs 1 to 4 (peak volts)."),
