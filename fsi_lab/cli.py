@@ -152,9 +152,11 @@ def cmd_analyze(args) -> int:
     run = read_run(args.run)
     require_analysable(run)
     text = run.profile_text
-    if not text.strip():
+    if not text.strip():  # imported data: the default chain, and the reference given on import
         chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
         text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
+        if run.reference:
+            text += "reference = " + json.dumps(run.reference) + "\n"
     # The run's own --set overrides of what analysis reads come first, the new ones after.
     sections = ("analysis", "specimen")
     recorded = [item for item in run.attrs.get("overrides", [])
@@ -184,7 +186,17 @@ def cmd_analyze(args) -> int:
 def cmd_import(args) -> int:
     from fsi_lab.csv_import import import_csv
 
-    out = import_csv(args.csv, args.output, args.rate)
+    delays = {}
+    for item in args.delay:
+        name, sep, text = item.partition("=")
+        try:
+            delays[name.strip()] = float(text)
+        except ValueError:
+            sep = ""
+        if not sep:
+            raise InputFileError(f"--delay {item}: expected NAME=SECONDS, e.g. "
+                                 "tip_velocity=0.0011")
+    out = import_csv(args.csv, args.output, args.rate, args.reference, delays)
     if args.json:
         _emit_json({"run": str(out)})
     else:
@@ -218,9 +230,12 @@ def cmd_show(args) -> int:
         final = inst.get("final_state", {})
         print(f"instrument {role}: {inst.get('identity', '?')}; final state {final}")
     for name, meta in with_lengths.items():
-        rate = run.channels[name].sample_rate
+        rate, t0 = run.channels[name].sample_rate, run.channels[name].t0
         print(f"channel {name}: {meta['quantity']} [{meta['units']}], {meta['samples']} samples "
-              f"at {rate:g} Hz ({meta['samples'] / rate:.3f} s)")
+              f"at {rate:g} Hz ({meta['samples'] / rate:.3f} s)"
+              + (f", t0 = {t0:g} s" if t0 else ""))
+    if run.reference:
+        print(f"{'reference:':<18}{run.reference}")
     if summary_text:
         print(summary_text)
     return 0
@@ -550,6 +565,11 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     p = sub.add_parser("import", help="turn a CSV file ('name [unit]' header) into a run file")
     p.add_argument("csv", type=Path)
     p.add_argument("--rate", type=float, metavar="HZ", help="sample rate without a time column")
+    p.add_argument("--reference", metavar="NAME",
+                   help="the base acceleration column (the analysis's reference channel)")
+    p.add_argument("--delay", action="append", default=[], metavar="NAME=SECONDS",
+                   help="signal delay of a column's sensor, e.g. tip_velocity=0.0011 (a "
+                        "vibrometer's; `fsi-lab show` prints a run's as t0)")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="RUN.h5")
     common(p)
     p.set_defaults(func=cmd_import)

@@ -2,7 +2,9 @@
 
 The header row names each column ``name [unit]``; the unit (m, m/s, m/s^2, g or V) gives the
 quantity. An optional ``time [s]`` column replaces the sample rate given on the command line.
-Values in g are converted to m/s^2.
+Values in g are converted to m/s^2. What a run file gets from its profile and instruments and a
+CSV cannot say is given on import: the base acceleration column (``reference``) and the sensors'
+signal delays, so that the analysis of exported data gives the run's results.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ import csv
 import io
 import re
 from pathlib import Path
+from typing import Mapping
 
 import numpy as np
 
@@ -122,7 +125,32 @@ def _rate_from_time(path: Path, time: np.ndarray) -> float:
     return _check_rate(rate, f"{path}: the time column (steps of {step:.6g} s) gives")
 
 
-def import_csv(path: str | Path, out: str | Path, rate: float | None) -> Path:
+#: Largest sensor delay accepted on import, s (a vibrometer's is about a millisecond).
+MAX_DELAY_S = 1.0
+
+
+def _check_analysis_inputs(path: Path, columns: list[tuple[str, str]], reference: str | None,
+                           delays: Mapping[str, float]) -> None:
+    """The reference must be an acceleration column and each delay name a data column."""
+    quantities = {name: QUANTITY_OF_UNIT[unit] for name, unit in columns
+                  if name.lower() != "time"}
+    listing = ", ".join(quantities)
+    if reference is not None and quantities.get(reference) != "acceleration":
+        found = (f"a {quantities[reference]} column" if reference in quantities
+                 else f"not a data column of {path}")
+        raise InputFileError(f"--reference {reference}: {found}; expected the base "
+                             f"acceleration column (columns: {listing})")
+    for name, delay in delays.items():
+        if name not in quantities:
+            raise InputFileError(f"--delay {name}={delay:g}: {name!r} is not a data column of "
+                                 f"{path}; expected one of {listing}")
+        if not (np.isfinite(delay) and 0.0 <= delay <= MAX_DELAY_S):
+            raise InputFileError(f"--delay {name}={delay:g}: expected a sensor delay from 0 to "
+                                 f"{MAX_DELAY_S:g} s")
+
+
+def import_csv(path: str | Path, out: str | Path, rate: float | None,
+               reference: str | None = None, delays: Mapping[str, float] | None = None) -> Path:
     """Write the CSV file ``path`` as the run file ``out``; returns ``out``.
 
     Parameters
@@ -133,9 +161,18 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None) -> Path:
         Run file to create; must not exist (nothing is ever overwritten).
     rate
         Sample rate, Hz; ignored (and may be None) when the file has a ``time [s]`` column.
+    reference
+        The base acceleration column, stored as the root attribute ``reference``:
+        ``fsi-lab analyze`` uses it as the profile's ``[analysis] reference`` (base motion
+        removed by HVD, transfer functions, the modal model).
+    delays
+        Signal delay of a column's sensor, s, by column name (a vibrometer's); the column's
+        time origin ``t0`` is moved back by it, as a run does with the vibrometer's delay.
     """
     path, out = Path(path), Path(out)
+    delays = dict(delays or {})
     columns, data = read_csv(path)
+    _check_analysis_inputs(path, columns, reference, delays)
     times = [i for i, (name, _) in enumerate(columns) if name.lower() == "time"]
     if len(times) > 1:
         raise InputFileError(f"{path}: header columns {times[0] + 1} and {times[1] + 1} are both "
@@ -171,6 +208,7 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None) -> Path:
     writer = RunFileWriter(out, {
         "uuid": run_uuid, "start_time": started, "kind": "imported",
         "source_file": str(path), "profile": "", "software_version": software_version(),
+        **({"reference": reference} if reference else {}),
     })
     try:
         for name, unit in columns:
@@ -178,8 +216,9 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None) -> Path:
                 continue
             writer.create_channel(name, {
                 "units": to_si(unit)[0], "quantity": QUANTITY_OF_UNIT[unit],
-                "sample_rate": rate, "t0": t0, "sensitivity": 1.0,
+                "sample_rate": rate, "t0": t0 - delays.get(name, 0.0), "sensitivity": 1.0,
                 "source_instrument": f"imported from {path.name}", "original_units": unit,
+                "sensor_delay_s": delays.get(name, 0.0),
             })
             writer.append(name, values[name])
         writer.set_attrs({"exit_status": "completed", "stop_time": utc_now()})

@@ -213,6 +213,11 @@ class RunData:
     def profile_text(self) -> str:
         return self.attrs.get("profile", "") or ""
 
+    @property
+    def reference(self) -> str:
+        """Imported data: the base acceleration channel given on import, or empty."""
+        return self.attrs.get("reference", "") or ""
+
 
 def _open_checked(path: Path, mode: str) -> h5py.File:
     require_regular_file(path, "a run file (.h5)")
@@ -262,6 +267,7 @@ def _read_run(path: Path, load_data: bool) -> RunData:
         reader = RunFileReader(path)
         attrs = reader.attrs(handle)
         reader.text(attrs, "profile", "/", default="")
+        reference = reader.text(attrs, "reference", "/", default="")
         overrides = attrs.get("overrides", [])
         if not isinstance(overrides, list) or not all(isinstance(o, str) for o in overrides):
             raise reader.refuse("/ attribute 'overrides'", "is not a list of texts",
@@ -281,6 +287,9 @@ def _read_run(path: Path, load_data: bool) -> RunData:
             samples[name], data = reader.samples(dataset, load_data)
             channel_attrs[name] = meta
             channels[name] = ChannelData(name, data, rate, quantity, unit, t0)
+        if reference and reference not in channels:
+            raise reader.refuse("/ attribute 'reference'", f"names {reference!r}, which is not "
+                                "a channel of the file", "one of " + (", ".join(channels) or "none"))
         instruments = {}
         group = reader.child(handle, "instruments", h5py.Group)
         for role in reader.names(group) if group is not None else []:
