@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import faulthandler
 import os
+import select
 import signal
 import time
 from typing import Callable, ContextManager
@@ -51,16 +52,11 @@ def crash_or_hang(task: Callable[[], object], size_bytes: int = 0,
             except BaseException:  # noqa: BLE001 - an ordinary failure is the parent's to report
                 code = 3
             os._exit(code)
-    deadline = time.monotonic() + timeout
     try:
-        while True:
-            done, status = os.waitpid(pid, os.WNOHANG)
-            if done:
-                pid = 0
-                break
-            if time.monotonic() > deadline:
-                return f"reading it did not finish within {timeout:.3g} s"
-            time.sleep(_POLL_S)
+        status = _wait(pid, timeout)
+        if status is None:
+            return f"reading it did not finish within {timeout:.3g} s"
+        pid = 0
     finally:
         if pid:  # timed out, or the parent was interrupted: the child must not outlive it
             os.kill(pid, signal.SIGKILL)
@@ -68,3 +64,25 @@ def crash_or_hang(task: Callable[[], object], size_bytes: int = 0,
     if os.WIFSIGNALED(status):
         return f"the HDF5 library crashed reading it ({signal.Signals(os.WTERMSIG(status)).name})"
     return None
+
+
+def _wait(pid: int, timeout: float) -> int | None:
+    """The wait status of child ``pid``, or None if it is still running after ``timeout`` s.
+    Woken by the child's exit where the system offers it (a pidfd), else by polling."""
+    deadline = time.monotonic() + timeout
+    fd = os.pidfd_open(pid) if hasattr(os, "pidfd_open") else None
+    try:
+        while True:
+            done, status = os.waitpid(pid, os.WNOHANG)
+            if done:
+                return status
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return None
+            if fd is not None:
+                select.select([fd], [], [], remaining)
+            else:  # pragma: no cover - older kernels
+                time.sleep(min(_POLL_S, remaining))
+    finally:
+        if fd is not None:
+            os.close(fd)

@@ -71,6 +71,22 @@ class RunFileReader:
         h5py.Dataset) stored in the file itself; None when absent and not ``required``."""
         where = f"{group.name.rstrip('/')}/{name}"
         what = "a group" if kind is h5py.Group else "a dataset"
+        node = self._open(group, name, what, required)
+        if node is not None and not isinstance(node, kind):
+            found = "a group" if isinstance(node, h5py.Group) else "a dataset"
+            raise self.refuse(where, f"is {found}", what)
+        return node
+
+    def walk(self, group: h5py.Group) -> None:
+        """Open every member of ``group`` and below (refused if one does not open)."""
+        for name in self.names(group):
+            node = self._open(group, name, "a group or a dataset", True)
+            if isinstance(node, h5py.Group):
+                self.walk(node)
+
+    def _open(self, group: h5py.Group, name: str, what: str, required: bool):
+        """The member ``name`` of ``group`` through a hard link; None if absent."""
+        where = f"{group.name.rstrip('/')}/{name}"
         try:
             link = group.get(name, getlink=True)
         except H5_ERRORS as exc:
@@ -83,13 +99,9 @@ class RunFileReader:
             kind_of_link = "a soft" if isinstance(link, h5py.SoftLink) else "an external"
             raise self.refuse(where, f"is {kind_of_link} link", f"{what} stored in the file")
         try:
-            node = group[name]
+            return group[name]
         except H5_ERRORS as exc:
             raise self.refuse(where, f"cannot be read ({exc})") from None
-        if not isinstance(node, kind):
-            found = "a group" if isinstance(node, h5py.Group) else "a dataset"
-            raise self.refuse(where, f"is {found}", what)
-        return node
 
     def names(self, group: h5py.Group) -> list[str]:
         """The members of ``group`` (refused if a name is not UTF-8 text)."""

@@ -14,7 +14,7 @@ import h5py
 import numpy as np
 
 from fsi_lab.contract import ChannelData
-from fsi_lab.errors import InputFileError
+from fsi_lab.errors import AnalysisError, InputFileError
 from fsi_lab.inputfiles import require_regular_file
 from fsi_lab.isolation import crash_or_hang
 from fsi_lab.runcheck import EXPECTED as RUN_FILE
@@ -240,13 +240,24 @@ def _open_checked(path: Path, mode: str) -> h5py.File:
     return handle
 
 
-def _read_safely(path: Path, read):
-    """``read(path)``, once a forked child has read the file the same way without crashing
-    or hanging the HDF5 library (:func:`~fsi_lab.isolation.crash_or_hang`)."""
+#: Files a child has read without crashing, by (device, inode, size, mtime, with data): read
+#: again unchanged (``show`` reads the channels, then the analysis) they need no second child.
+_SURVIVED: set[tuple[int, int, int, int, bool]] = set()
+
+
+def _read_safely(path: Path, read, load_data: bool = False):
+    """``read(path)``, once a forked child has read the file (its nodes and analysis summary,
+    its data too with ``load_data``) without crashing or hanging the HDF5 library
+    (:func:`~fsi_lab.isolation.crash_or_hang`)."""
     require_regular_file(path, "a run file (.h5)")
-    problem = crash_or_hang(lambda: read(path), path.stat().st_size, hold=h5py._objects.phil)
-    if problem:
-        raise InputFileError(f"{path}: damaged: {problem}; expected {RUN_FILE}")
+    info = path.stat()
+    key = (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns)
+    if (*key, True) not in _SURVIVED and (*key, load_data) not in _SURVIVED:
+        problem = crash_or_hang(lambda: (_read_run(path, load_data), _read_summary(path)),
+                                info.st_size, hold=h5py._objects.phil)
+        if problem:
+            raise InputFileError(f"{path}: damaged: {problem}; expected {RUN_FILE}")
+        _SURVIVED.add((*key, load_data))
     return read(path)
 
 
@@ -259,7 +270,7 @@ def read_run(path: str | Path, load_data: bool = True) -> RunData:
         Missing file, not HDF5, not an fsi-lab run file, or a node or attribute that is not as
         fsi-lab writes it (named in the message), including damage that would crash HDF5.
     """
-    return _read_safely(Path(path), lambda p: _read_run(p, load_data))
+    return _read_safely(Path(path), lambda p: _read_run(p, load_data), load_data)
 
 
 def _read_run(path: Path, load_data: bool) -> RunData:
@@ -337,29 +348,51 @@ def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
     ``groups`` maps ``"<channel>/<plugin>"`` to a dict with ``datasets``, ``units``, ``attrs``
     and ``params``. The new group is written beside the old one and swapped in at the end,
     so a failure while writing keeps the previous results.
+
+    Raises
+    ------
+    AnalysisError
+        A result HDF5 cannot store (named); the previous results stay.
+    InputFileError
+        The previous ``/analysis`` cannot be replaced (a damaged file).
     """
     path = Path(path)
     with _open_checked(path, "r+") as handle:
-        if "analysis.new" in handle:
-            del handle["analysis.new"]
-        root = handle.create_group("analysis.new")
+        where = "/analysis.new"
+        try:
+            if "analysis.new" in handle:
+                del handle["analysis.new"]
+            root = handle.create_group("analysis.new")
+        except H5_ERRORS as exc:
+            raise InputFileError(f"{path}: {where}: cannot be replaced ({exc}); expected "
+                                 f"{RUN_FILE}") from None
         try:
             write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
             for key, content in groups.items():
+                where = f"/analysis/{key}"
                 group = root.create_group(key)
                 for name, array in content.get("datasets", {}).items():
+                    where = f"/analysis/{key}/{name}"
                     dataset = group.create_dataset(name, data=np.asarray(array))
                     unit = content.get("units", {}).get(name)
                     if unit is not None:
                         dataset.attrs["units"] = unit
                 write_attrs(group, content.get("attrs", {}))
                 write_attrs(group.create_group("params"), content.get("params", {}))
-        except BaseException:  # the previous results stay; no half-written group is left
+        except BaseException as exc:  # the previous results stay; no half-written group is left
             del handle["analysis.new"]
+            if isinstance(exc, H5_ERRORS):
+                raise AnalysisError(f"{path}: {where}: the analysis result cannot be stored "
+                                    f"({type(exc).__name__}: {exc}); the previous results are "
+                                    "kept") from None
             raise
-        if "analysis" in handle:
-            del handle["analysis"]
-        handle.move("analysis.new", "analysis")
+        try:
+            if "analysis" in handle:
+                del handle["analysis"]
+            handle.move("analysis.new", "analysis")
+        except H5_ERRORS as exc:
+            raise InputFileError(f"{path}: /analysis: the previous results cannot be replaced "
+                                 f"({exc}); expected {RUN_FILE}") from None
 
 
 def read_analysis_summary(path: str | Path) -> dict[str, Any] | None:
@@ -378,6 +411,8 @@ def _read_summary(path: Path) -> dict[str, Any] | None:
         reader = RunFileReader(path)
         group = reader.child(handle, "analysis", h5py.Group)
         text = reader.attrs(group).get("summary") if group is not None else None
+        if group is not None:
+            reader.walk(group)  # analyze replaces it all: every member must open
     if text is None or text == "":
         return None
     if not isinstance(text, dict):  # decode_attr parses what is JSON

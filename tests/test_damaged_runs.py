@@ -11,7 +11,7 @@ import pytest
 
 from support import SIM_PROFILE, run_main
 
-from fsi_lab.errors import InputFileError
+from fsi_lab.errors import AnalysisError, InputFileError
 from fsi_lab.isolation import crash_or_hang
 from fsi_lab.runfile import read_run, write_analysis
 
@@ -176,7 +176,8 @@ def test_a_failed_analysis_write_keeps_the_previous_results(measured_run, tmp_pa
     path = tmp_path / "run.h5"
     shutil.copy(measured_run, path)
     before = read_run(path)
-    with pytest.raises(TypeError):  # a result that HDF5 cannot store
+    with pytest.raises(AnalysisError, match=r"/analysis/tip_velocity/bad/x: the analysis "
+                                            r"result cannot be stored \(TypeError"):
         write_analysis(path, {"tip_velocity/bad": {"datasets": {"x": np.array([object()])}}},
                        {"channels": {}})
     with h5py.File(path, "r") as handle:
