@@ -333,18 +333,23 @@ def cmd_profile_check(args) -> int:
     profile = load_profile(args.profile, registry, args.set)
     profile.require_runnable()
     _, _, report = check_safety(profile, registry)
-    result: dict[str, Any] = {"profile": str(args.profile), "valid": True,
-                              "safety": report.as_dict()}
+    s = report.as_dict()
+    result: dict[str, Any] = {"profile": str(args.profile), "valid": True, "safety": s}
+    refusal = "" if report.ok else f"{args.profile}: refused: {'; '.join(report.problems)}"
+    if refusal:  # the one message a refusal gets, as fsi-lab run gives it
+        result.update(error=refusal, exit_code=2)
     if args.json:
         _emit_json(result)
     else:
-        s = result["safety"]
         print(f"{args.profile}: valid")
         print(f"safety: peak drive {s['peak_drive_v']:.4g} V (max {s['max_drive_v']:g}), "
               f"gain {s['gain']:g} (max {s['max_gain']:g}), predicted stroke "
               f"{s['predicted_stroke_mm']:.3g} mm (max {s['max_stroke_mm']:g}): "
               + ("ok" if s["ok"] else "REFUSED: " + "; ".join(s["problems"])))
-    return 0 if report.ok else 2
+    if refusal:
+        print(f"fsi-lab: error: {refusal}", file=sys.stderr)
+        return 2
+    return 0
 
 
 def _model_profile(args):
