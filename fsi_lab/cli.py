@@ -526,14 +526,16 @@ def _add_plugin_commands(sub) -> None:
 
 
 class _Parser(argparse.ArgumentParser):
-    """Usage errors also give the one JSON object when ``--json`` was asked for."""
+    """A usage error is one message (naming the command and the argument, and where to see
+    what it accepts), and the one JSON object when ``--json`` was asked for; exit code 2."""
 
     json_requested = False
 
     def error(self, message: str):
+        text = f"{self.prog}: {message} (see {self.prog} --help)"
         if self.json_requested:
-            _emit_json({"error": f"{self.prog}: {message}", "exit_code": 2})
-        super().error(message)
+            _emit_json({"error": text, "exit_code": 2})
+        self.exit(2, f"fsi-lab: error: {text}\n")
 
 
 def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:

@@ -15,3 +15,12 @@ def loaded_once():
     fsi_lab.cli._registry = lambda: registry
     yield registry
     fsi_lab.cli._registry = saved
+
+
+def pytest_terminal_summary(terminalreporter):
+    """How many cases the fuzzing family generated in this session."""
+    from fuzzkit import TALLY
+
+    if TALLY:
+        parts = ", ".join(f"{name} {count}" for name, count in TALLY.items())
+        terminalreporter.write_line(f"fuzzing: {sum(TALLY.values())} generated cases ({parts})")

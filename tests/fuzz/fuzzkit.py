@@ -24,6 +24,14 @@ FUZZ = settings(derandomize=True, deadline=None, database=None, print_blob=False
                 suppress_health_check=list(HealthCheck))
 
 _MESSAGE = "fsi-lab: error: "
+#: Cases generated in this session, by test (reported at the end of the session).
+TALLY: dict[str, int] = {}
+
+
+def tally(name: str, count: int, wanted: int) -> None:
+    """Record that test ``name`` ran ``count`` cases, and require the ``wanted`` number."""
+    TALLY[name] = count
+    assert count >= wanted, f"{name}: {count} cases generated; {wanted} wanted"
 
 
 def check_command(args: list[str], named: Iterable[str], inputs: Iterable[Path] = (),
