@@ -20,6 +20,8 @@ from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChange
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
 EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "aborted": 130}
+#: Most samples per channel ``fsi-lab simulate`` writes (100 s at 204.8 kHz).
+MAX_SIMULATED_SAMPLES = 20_480_000
 LEVELS = {"DEBUG": 10, "INFO": 20, "WARNING": 30, "ERROR": 40}
 
 
@@ -391,6 +393,12 @@ def cmd_simulate(args) -> int:
     for name, value, unit in (("--duration", args.duration, "s"), ("--rate", args.rate, "Hz")):
         if not (math.isfinite(value) and value > 0):
             raise InputFileError(f"{name} {value}: expected a positive number of {unit}")
+    samples = args.duration * args.rate
+    if not 2 <= samples <= MAX_SIMULATED_SAMPLES:
+        raise InputFileError(
+            f"--duration {args.duration:g} s at --rate {args.rate:g} Hz makes {samples:,.0f} "
+            f"samples per channel; expected 2 to {MAX_SIMULATED_SAMPLES:,} (the simulation is "
+            "held in memory): change --duration or --rate")
     if args.output.exists():
         raise InputFileError(f"{args.output}: already exists; choose another output file")
     waveform, rate = prepare_excitation(profile, registry)

@@ -305,7 +305,7 @@ def parse_toml(text: str, path: str) -> dict[str, Any]:
         raw = None
     depth, keys = nesting(raw) if raw is not None else (MAX_DEPTH + 1, [])
     if depth > MAX_DEPTH:
-        where = ".".join(keys[:3]).replace(".[", "[") if keys else "the file"
+        where = ".".join(keys[:3]).replace(".[", "[") if keys else "the profile"
         raise ProfileError(
             f"{path}: {where}: tables or arrays nested more than {MAX_DEPTH} levels deep; "
             f"a profile's sections nest at most {MAX_DEPTH} levels "

@@ -57,7 +57,7 @@ def _refused(path, command, *fragments):
     code, out, err = run_main(*command, str(path))
     assert code == 2, (command, out, err)
     assert err.count("fsi-lab: error:") == 1 and "Traceback" not in err, err
-    assert err.startswith(f"fsi-lab: error: {path}: "), err
+    assert err.startswith(f"fsi-lab: error: {path}:"), err  # (the stored profile: PATH:/profile)
     for fragment in fragments:
         assert fragment in err, err
     assert path.read_bytes() == before  # nothing written to a refused file
@@ -125,6 +125,9 @@ UNANALYSABLE = [
      "holds 0 samples; expected at least 2 to analyse"),
     ("NaN samples", lambda h: h["channels/tip_velocity"].__setitem__(slice(5, 50), np.nan),
      f"{CHANNEL} holds 45 NaN or infinite samples (the first at index 5); expected finite"),
+    ("a deeply nested stored profile",  # RecursionError in tomllib before
+     _set("/", "profile", "x = " + "[" * 5000 + "]" * 5000),
+     ":/profile: the profile: tables or arrays nested more than 8 levels deep"),
 ]
 
 

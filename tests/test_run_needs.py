@@ -120,3 +120,14 @@ def test_the_example_profiles_pass_the_check():
         code, stdout, stderr = run_main("profile", "check", str(path))
         assert code == 0, (path, stderr)
         assert stdout.startswith(f"{path}: valid\nsafety: ") and stdout.endswith(": ok\n")
+
+
+@pytest.mark.parametrize("duration, rate", [("1", "1e12"), ("1e9", "2000"), ("1e-9", "1000")])
+def test_simulate_refuses_a_record_it_cannot_hold(tmp_path, duration, rate):
+    out = tmp_path / "sim.h5"
+    code, _, err = run_main("simulate", str(GOOD_PROFILE), "--duration", duration, "--rate",
+                            rate, "-o", str(out))
+    assert code == 2 and err.count("fsi-lab: error:") == 1 and "Traceback" not in err, err
+    assert f"--duration {float(duration):g} s at --rate {float(rate):g} Hz makes" in err
+    assert "expected 2 to 20,480,000 (the simulation is held in memory)" in err
+    assert not out.exists()
