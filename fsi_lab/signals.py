@@ -1,5 +1,7 @@
-"""Ctrl+C and SIGTERM while the bench is driven: turned into an abort, or held back while the
-bench is being made safe and the run file finalised."""
+"""Ctrl+C and SIGTERM: from the first line of ``fsi-lab``'s main an exception (exit code 130),
+while the bench is driven an abort, held back while the bench is being made safe and the run
+file finalised, and noted so that one whose exception a library swallows is raised at the next
+checkpoint."""
 
 from __future__ import annotations
 
