@@ -40,8 +40,9 @@ def _cpu_seconds(pid: int) -> float:
 
 
 def _start_bench(*args: str) -> tuple[subprocess.Popen, dict]:
-    proc = subprocess.Popen([sys.executable, "-m", "fsi_lab.instruments.sim.cli", "--json",
-                             "--quiet", *args], stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen([sys.executable, "-m", "fsi_lab.instruments.sim.cli",
+                             str(ROOT / "profiles" / "wet-beam-sim.toml"), "--json", "--quiet",
+                             *args], stdout=subprocess.PIPE, text=True)
     line = proc.stdout.readline()
     if not line:
         proc.kill()

@@ -15,10 +15,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fsi_lab.errors import FsiLabError, InputFileError
+from fsi_lab.errors import FsiLabError, InputFileError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
+from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
 EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "aborted": 130}
+#: Most samples per channel ``fsi-lab simulate`` writes (100 s at 204.8 kHz).
+MAX_SIMULATED_SAMPLES = 20_480_000
 LEVELS = {"DEBUG": 10, "INFO": 20, "WARNING": 30, "ERROR": 40}
 
 
@@ -64,8 +67,13 @@ class Console:
             self.bar = None
 
 
+_json_emitted = False  # whether this command printed its one JSON object
+
+
 def _emit_json(obj: dict[str, Any]) -> None:
+    global _json_emitted
     print(json.dumps(_clean(obj), indent=2, default=_json_default, allow_nan=False))
+    _json_emitted = True
 
 
 def _json_default(value):
@@ -126,6 +134,8 @@ def cmd_run(args) -> int:
         if outcome.summary:
             print(format_summary(outcome.summary))
     code = EXIT_FOR_STATUS[outcome.exit_status]
+    if outcome.interrupted and code == 0:  # the record is complete, the command was not
+        code = EXIT_FOR_STATUS["aborted"]
     if args.strict and not args.no_analysis:
         code = _strict_exit(outcome.summary or {}, code)
     if outcome.file_abandoned:
@@ -140,14 +150,17 @@ def cmd_run(args) -> int:
 def cmd_analyze(args) -> int:
     from fsi_lab.chain import DEFAULT_CHAIN, analyse_and_store, channels_to_analyse
     from fsi_lab.profile import parse_profile
-    from fsi_lab.runfile import read_run
+    from fsi_lab.runfile import read_run, require_analysable
 
     registry = _registry()
     run = read_run(args.run)
+    require_analysable(run)
     text = run.profile_text
-    if not text.strip():
+    if not text.strip():  # imported data: the default chain, and the reference given on import
         chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
         text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
+        if run.reference:
+            text += "reference = " + json.dumps(run.reference) + "\n"
     # The run's own --set overrides of what analysis reads come first, the new ones after.
     sections = ("analysis", "specimen")
     recorded = [item for item in run.attrs.get("overrides", [])
@@ -165,12 +178,14 @@ def cmd_analyze(args) -> int:
     bus = EventBus()
     console = Console(args.quiet or args.json, args.verbose)
     bus.subscribe(console)
+    bus.subscribe(args.signal_note.checkpoint)  # a signal whose exception was swallowed
     try:
         summary = analyse_and_store(Path(args.run), run.channels, profile.analysis,
                                     profile.analysis_params, registry, profile.specimen,
                                     args.mass_per_length, bus)
     finally:
         console.close()
+    args.signal_note.check()
     if args.json:
         _emit_json(summary)
     else:
@@ -181,7 +196,17 @@ def cmd_analyze(args) -> int:
 def cmd_import(args) -> int:
     from fsi_lab.csv_import import import_csv
 
-    out = import_csv(args.csv, args.output, args.rate)
+    delays = {}
+    for item in args.delay:
+        name, sep, text = item.partition("=")
+        try:
+            delays[name.strip()] = float(text)
+        except ValueError:
+            sep = ""
+        if not sep:
+            raise InputFileError(f"--delay {item}: expected NAME=SECONDS, e.g. "
+                                 "tip_velocity=0.0011")
+    out = import_csv(args.csv, args.output, args.rate, args.reference, delays)
     if args.json:
         _emit_json({"run": str(out)})
     else:
@@ -194,14 +219,10 @@ def cmd_show(args) -> int:
 
     run = read_run(args.run, load_data=False)
     summary = read_analysis_summary(args.run)
+    summary_text = _summary_text(args.run, summary) if summary else ""
     attrs = {k: v for k, v in run.attrs.items() if k not in ("profile", "traceback")}
-    with_lengths = {}
-    import h5py
-
-    with h5py.File(args.run, "r") as handle:
-        for name in run.channels:
-            with_lengths[name] = {**run.channel_attrs[name],
-                                  "samples": int(handle["channels"][name].shape[0])}
+    with_lengths = {name: {**run.channel_attrs[name], "samples": run.channel_samples[name]}
+                    for name in run.channels}
     info = {"run": str(args.run), "attrs": attrs, "instruments": run.instruments,
             "channels": with_lengths,
             "excitation": {k: v for k, v in (run.excitation or {}).items() if k != "waveform"}
@@ -219,12 +240,27 @@ def cmd_show(args) -> int:
         final = inst.get("final_state", {})
         print(f"instrument {role}: {inst.get('identity', '?')}; final state {final}")
     for name, meta in with_lengths.items():
-        rate = float(meta["sample_rate"])
+        rate, t0 = run.channels[name].sample_rate, run.channels[name].t0
         print(f"channel {name}: {meta['quantity']} [{meta['units']}], {meta['samples']} samples "
-              f"at {rate:g} Hz ({meta['samples'] / rate:.3f} s)")
-    if summary:
-        print(format_summary(summary))
+              f"at {rate:g} Hz ({meta['samples'] / rate:.3f} s)"
+              + (f", t0 = {t0:g} s" if t0 else ""))
+    if run.reference:
+        print(f"{'reference:':<18}{run.reference}")
+    if summary_text:
+        print(summary_text)
     return 0
+
+
+def _summary_text(path: Path, summary: dict[str, Any]) -> str:
+    """:func:`format_summary` of a run file's stored summary, refused (InputFileError) when it
+    is not laid out as fsi-lab writes it."""
+    try:
+        return format_summary(summary)
+    except (AttributeError, KeyError, TypeError, ValueError, IndexError) as exc:
+        raise InputFileError(
+            f"{path}: /analysis attribute 'summary': not laid out as fsi-lab writes it "
+            f"({type(exc).__name__}: {exc}); expected the summary of fsi-lab analyze (run it "
+            "again)") from None
 
 
 def cmd_plugins(args) -> int:
@@ -305,21 +341,25 @@ def cmd_profile_check(args) -> int:
 
     registry = _registry()
     profile = load_profile(args.profile, registry, args.set)
-    result: dict[str, Any] = {"profile": str(args.profile), "valid": True, "safety": None}
-    if profile.can_run:
-        _, _, report = check_safety(profile, registry)
-        result["safety"] = report.as_dict()
+    profile.require_runnable()
+    _, _, report = check_safety(profile, registry)
+    s = report.as_dict()
+    result: dict[str, Any] = {"profile": str(args.profile), "valid": True, "safety": s}
+    refusal = "" if report.ok else f"{args.profile}: refused: {'; '.join(report.problems)}"
+    if refusal:  # the one message a refusal gets, as fsi-lab run gives it
+        result.update(error=refusal, exit_code=2)
     if args.json:
         _emit_json(result)
     else:
         print(f"{args.profile}: valid")
-        if result["safety"]:
-            s = result["safety"]
-            print(f"safety: peak drive {s['peak_drive_v']:.4g} V (max {s['max_drive_v']:g}), "
-                  f"gain {s['gain']:g} (max {s['max_gain']:g}), predicted stroke "
-                  f"{s['predicted_stroke_mm']:.3g} mm (max {s['max_stroke_mm']:g}): "
-                  + ("ok" if s["ok"] else "REFUSED: " + "; ".join(s["problems"])))
-    return 0 if not result["safety"] or result["safety"]["ok"] else 2
+        print(f"safety: peak drive {s['peak_drive_v']:.4g} V (max {s['max_drive_v']:g}), "
+              f"gain {s['gain']:g} (max {s['max_gain']:g}), predicted stroke "
+              f"{s['predicted_stroke_mm']:.3g} mm (max {s['max_stroke_mm']:g}): "
+              + ("ok" if s["ok"] else "REFUSED: " + "; ".join(s["problems"])))
+    if refusal:
+        print(f"fsi-lab: error: {refusal}", file=sys.stderr)
+        return 2
+    return 0
 
 
 def _model_profile(args):
@@ -351,7 +391,7 @@ def cmd_model(args) -> int:
 def cmd_simulate(args) -> int:
     from fsi_lab.errors import ProfileError, RunAborted
     from fsi_lab.modelling import simulate_run
-    from fsi_lab.runfile import INTERRUPTED, new_run_path, software_version
+    from fsi_lab.runfile import new_run_path, software_version
     from fsi_lab.runner import prepare_excitation
     from fsi_lab.signals import RunSignals
 
@@ -361,6 +401,12 @@ def cmd_simulate(args) -> int:
     for name, value, unit in (("--duration", args.duration, "s"), ("--rate", args.rate, "Hz")):
         if not (math.isfinite(value) and value > 0):
             raise InputFileError(f"{name} {value}: expected a positive number of {unit}")
+    samples = args.duration * args.rate
+    if not 2 <= samples <= MAX_SIMULATED_SAMPLES:
+        raise InputFileError(
+            f"--duration {args.duration:g} s at --rate {args.rate:g} Hz makes {samples:,.0f} "
+            f"samples per channel; expected 2 to {MAX_SIMULATED_SAMPLES:,} (the simulation is "
+            "held in memory): change --duration or --rate")
     if args.output.exists():
         raise InputFileError(f"{args.output}: already exists; choose another output file")
     waveform, rate = prepare_excitation(profile, registry)
@@ -404,6 +450,7 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_gui(args) -> int:
+    args.signals.restore()  # the window handles its own ending
     try:
         from fsi_lab.gui.app import main as gui_main
     except ImportError as exc:
@@ -551,14 +598,16 @@ def _add_plugin_commands(sub) -> None:
 
 
 class _Parser(argparse.ArgumentParser):
-    """Usage errors also give the one JSON object when ``--json`` was asked for."""
+    """A usage error is one message (naming the command and the argument, and where to see
+    what it accepts), and the one JSON object when ``--json`` was asked for; exit code 2."""
 
     json_requested = False
 
     def error(self, message: str):
+        text = f"{self.prog}: {message} (see {self.prog} --help)"
         if self.json_requested:
-            _emit_json({"error": f"{self.prog}: {message}", "exit_code": 2})
-        super().error(message)
+            _emit_json({"error": text, "exit_code": 2})
+        self.exit(2, f"fsi-lab: error: {text}\n")
 
 
 def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
@@ -599,6 +648,11 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     p = sub.add_parser("import", help="turn a CSV file ('name [unit]' header) into a run file")
     p.add_argument("csv", type=Path)
     p.add_argument("--rate", type=float, metavar="HZ", help="sample rate without a time column")
+    p.add_argument("--reference", metavar="NAME",
+                   help="the base acceleration column (the analysis's reference channel)")
+    p.add_argument("--delay", action="append", default=[], metavar="NAME=SECONDS",
+                   help="signal delay of a column's sensor, e.g. tip_velocity=0.0011 (a "
+                        "vibrometer's; `fsi-lab show` prints a run's as t0)")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="RUN.h5")
     common(p)
     p.set_defaults(func=cmd_import)
@@ -663,8 +717,37 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser(json_requested="--json" in argv).parse_args(argv)
+    """``fsi-lab``: run a command and return its exit code.
+
+    From the first line, Ctrl+C and SIGTERM end the command with exit code 130 and one message
+    (a run first puts its bench in the safe state and finalises its file); the signal is also
+    noted, so that one whose exception a library swallows is raised at the next checkpoint.
+    """
+    global _json_emitted
+    note = SignalNote()
+    signals = RunSignals(on_signal=note)
+    signals.install()
+    wants_json = False
+    try:
+        _json_emitted = False
+        argv = sys.argv[1:] if argv is None else list(argv)
+        wants_json = "--json" in argv
+        args = build_parser(json_requested=wants_json).parse_args(argv)
+        args.signals, args.signal_note = signals, note
+        return _run_command(args)
+    except (KeyboardInterrupt, RunAborted) as exc:
+        signals.silence()
+        reason = str(exc) or INTERRUPTED
+        if wants_json and not _json_emitted:
+            _emit_json({"error": f"interrupted: {reason}", "exit_code": 130})
+        print(f"fsi-lab: interrupted: {reason}", file=sys.stderr)
+        return 130
+    finally:
+        signals.restore()
+
+
+def _run_command(args) -> int:
+    """``args.func(args)``, with the errors meant for the user turned into one message."""
     try:
         return args.func(args)
     except BrokenPipeError:  # the reader of stdout went away (`fsi-lab show RUN | head`)
@@ -680,9 +763,6 @@ def main(argv: list[str] | None = None) -> int:
             _emit_json({"error": text, "exit_code": code})
         print(f"fsi-lab: error: {text}", file=sys.stderr)
         return code
-    except KeyboardInterrupt:
-        print("fsi-lab: interrupted", file=sys.stderr)
-        return 130
 
 
 if __name__ == "__main__":

@@ -140,6 +140,13 @@ class InstrumentPlugin:
     ``"run"``, or ``"outside-run"`` when the instrument is opened only to be made safe or
     identified (``fsi-lab safe``, ``fsi-lab identify``, the GUI's bench panel), when a driver
     must change nothing it need not (it leaves latched interlocks latched).
+
+    ``check(address, settings, plan)``, optional, raises ValueError with a message naming the
+    setting and what the instrument accepts when the run ``plan`` describes would be refused by
+    the instrument (an input it does not have, a range it does not offer, more points than its
+    memory holds). It runs in ``fsi-lab profile check`` and before a run, before any instrument
+    is opened, and must not talk to the instrument. ``plan`` is the ``bench`` dict above plus
+    the record (:data:`RUN_PLAN_KEYS`).
     """
 
     name: str
@@ -147,6 +154,18 @@ class InstrumentPlugin:
     params: tuple[Param, ...]
     open: Callable[[str, dict[str, Any], dict[str, Any]], Instrument]
     help: str = ""
+    check: Callable[[str, dict[str, Any], Mapping[str, Any]], None] | None = None
+
+
+#: Keys a :class:`InstrumentPlugin`'s ``check`` finds in its ``plan``, besides the bench
+#: context's ``specimen``, ``model``, ``shaker`` and ``bench``.
+RUN_PLAN_KEYS = {
+    "inputs": "digitiser input number per channel name",
+    "sample_rate": "record sample rate asked of the digitiser, Hz",
+    "duration": "record length, s",
+    "waveform_points": "samples of the excitation waveform sent to the source",
+    "waveform_rate": "rate the source plays the waveform at, Sa/s",
+}
 
 
 # --------------------------------------------------------------------------- excitations
@@ -156,13 +175,15 @@ class ExcitationPlugin:
 
     ``generate(params, sample_rate)`` returns the samples in volts at the source, starting at
     t = 0. Its peak absolute value is the peak drive that the safety check compares with the
-    profile's limit.
+    profile's limit. ``duration(params)``, optional, gives the waveform's length in seconds
+    without generating it, so that a waveform too long for any source is refused first.
     """
 
     name: str
     params: tuple[Param, ...]
     generate: Callable[[dict[str, Any], float], np.ndarray]
     help: str = ""
+    duration: Callable[[dict[str, Any]], float] | None = None
 
 
 # --------------------------------------------------------------------------- analyses
@@ -291,6 +312,9 @@ def check_descriptor(kind: str, descriptor: Any) -> None:
         raise ValueError(f"{descriptor.name}: a parameter is declared twice")
     for attr in ("open", "generate", "run"):
         if hasattr(descriptor, attr) and not callable(getattr(descriptor, attr)):
+            raise TypeError(f"{descriptor.name}: {attr} is not callable")
+    for attr in ("check", "duration"):
+        if getattr(descriptor, attr, None) is not None and not callable(getattr(descriptor, attr)):
             raise TypeError(f"{descriptor.name}: {attr} is not callable")
     if kind == "instrument" and descriptor.role not in ROLES:
         raise ValueError(

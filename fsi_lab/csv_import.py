@@ -2,24 +2,31 @@
 
 The header row names each column ``name [unit]``; the unit (m, m/s, m/s^2, g or V) gives the
 quantity. An optional ``time [s]`` column replaces the sample rate given on the command line.
-Values in g are converted to m/s^2.
+Values in g are converted to m/s^2. What a run file gets from its profile and instruments and a
+CSV cannot say is given on import: the base acceleration column (``reference``) and the sensors'
+signal delays, so that the analysis of exported data gives the run's results.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import re
 from pathlib import Path
+from typing import Mapping
 
 import numpy as np
 
 from fsi_lab.errors import InputFileError
+from fsi_lab.inputfiles import read_text
 from fsi_lab.profile import CHANNEL_NAME
+from fsi_lab.runcheck import CHANNEL_RATES_HZ, MAX_T0_S
 from fsi_lab.runfile import RunFileWriter, new_run_path, software_version, utc_now
 from fsi_lab.units import QUANTITY_OF_UNIT, to_si
 
 _HEADER = re.compile(r"^\s*(?P<name>[^\[\]]+?)\s*\[(?P<unit>[^\[\]]*)\]\s*$")
 TIME_TOLERANCE = 1e-3  # relative spread of the time steps accepted as uniform sampling
+EXPECTED = "a UTF-8 CSV file with a header row of 'name [unit]' cells and rows of numbers"
 
 
 def _parse_header(path: Path, cells: list[str]) -> list[tuple[str, str]]:
@@ -55,13 +62,12 @@ def _parse_header(path: Path, cells: list[str]) -> list[tuple[str, str]]:
 def read_csv(path: str | Path) -> tuple[list[tuple[str, str]], np.ndarray]:
     """Columns ``(name, unit)`` and the values (rows x columns) of a CSV file."""
     path = Path(path)
+    reader = csv.reader(io.StringIO(read_text(path, EXPECTED), newline=""))
     try:
-        with path.open(newline="", encoding="utf-8-sig") as handle:
-            rows = list(csv.reader(handle))
-    except OSError as exc:
-        raise InputFileError(f"{path}: cannot read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise InputFileError(f"{path}: not a text file; expected a UTF-8 CSV") from None
+        rows = list(reader)
+    except csv.Error as exc:
+        raise InputFileError(f"{path}: line {reader.line_num}: {exc}; expected {EXPECTED}") \
+            from None
     rows = [r for r in rows if any(cell.strip() for cell in r)]
     if not rows:
         raise InputFileError(f"{path}: empty; expected a header row 'name [unit],...' and data")
@@ -91,12 +97,22 @@ def read_csv(path: str | Path) -> tuple[list[tuple[str, str]], np.ndarray]:
     return columns, data
 
 
+def _check_rate(rate: float, where: str) -> float:
+    """``rate`` (Hz) if it lies within :data:`~fsi_lab.runcheck.CHANNEL_RATES_HZ`."""
+    low, high = CHANNEL_RATES_HZ
+    if not (np.isfinite(rate) and low <= rate <= high):
+        raise InputFileError(f"{where}: a sample rate of {rate:g} Hz; expected {low:g} to "
+                             f"{high:g} Hz")
+    return rate
+
+
 def _rate_from_time(path: Path, time: np.ndarray) -> float:
     steps = np.diff(time)
     step = float(np.median(steps))
     if step <= 0:
         raise InputFileError(f"{path}: the time column does not increase")
-    spread = float(np.max(np.abs(steps - step))) / step
+    with np.errstate(over="ignore", invalid="ignore"):
+        spread = float(np.max(np.abs(steps - step))) / step
     if spread > TIME_TOLERANCE:
         worst = int(np.argmax(np.abs(steps - step)))
         raise InputFileError(
@@ -104,10 +120,37 @@ def _rate_from_time(path: Path, time: np.ndarray) -> float:
             f"line {worst + 3} against a median of {step:.6g} s); expected uniform sampling "
             f"within {TIME_TOLERANCE:.1%}"
         )
-    return 1.0 / step
+    with np.errstate(over="ignore"):
+        rate = 1.0 / step
+    return _check_rate(rate, f"{path}: the time column (steps of {step:.6g} s) gives")
 
 
-def import_csv(path: str | Path, out: str | Path, rate: float | None) -> Path:
+#: Largest sensor delay accepted on import, s (a vibrometer's is about a millisecond).
+MAX_DELAY_S = 1.0
+
+
+def _check_analysis_inputs(path: Path, columns: list[tuple[str, str]], reference: str | None,
+                           delays: Mapping[str, float]) -> None:
+    """The reference must be an acceleration column and each delay name a data column."""
+    quantities = {name: QUANTITY_OF_UNIT[unit] for name, unit in columns
+                  if name.lower() != "time"}
+    listing = ", ".join(quantities)
+    if reference is not None and quantities.get(reference) != "acceleration":
+        found = (f"a {quantities[reference]} column" if reference in quantities
+                 else f"not a data column of {path}")
+        raise InputFileError(f"--reference {reference}: {found}; expected the base "
+                             f"acceleration column (columns: {listing})")
+    for name, delay in delays.items():
+        if name not in quantities:
+            raise InputFileError(f"--delay {name}={delay:g}: {name!r} is not a data column of "
+                                 f"{path}; expected one of {listing}")
+        if not (np.isfinite(delay) and 0.0 <= delay <= MAX_DELAY_S):
+            raise InputFileError(f"--delay {name}={delay:g}: expected a sensor delay from 0 to "
+                                 f"{MAX_DELAY_S:g} s")
+
+
+def import_csv(path: str | Path, out: str | Path, rate: float | None,
+               reference: str | None = None, delays: Mapping[str, float] | None = None) -> Path:
     """Write the CSV file ``path`` as the run file ``out``; returns ``out``.
 
     Parameters
@@ -118,38 +161,70 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None) -> Path:
         Run file to create; must not exist (nothing is ever overwritten).
     rate
         Sample rate, Hz; ignored (and may be None) when the file has a ``time [s]`` column.
+    reference
+        The base acceleration column, stored as the root attribute ``reference``:
+        ``fsi-lab analyze`` uses it as the profile's ``[analysis] reference`` (base motion
+        removed by HVD, transfer functions, the modal model).
+    delays
+        Signal delay of a column's sensor, s, by column name (a vibrometer's); the column's
+        time origin ``t0`` is moved back by it, as a run does with the vibrometer's delay.
     """
     path, out = Path(path), Path(out)
+    delays = dict(delays or {})
     columns, data = read_csv(path)
-    names = [n for n, _ in columns]
+    _check_analysis_inputs(path, columns, reference, delays)
+    times = [i for i, (name, _) in enumerate(columns) if name.lower() == "time"]
+    if len(times) > 1:
+        raise InputFileError(f"{path}: header columns {times[0] + 1} and {times[1] + 1} are both "
+                             "time columns; expected at most one 'time [s]' column")
+    if len(times) == len(columns):
+        raise InputFileError(f"{path}: only a time column; expected data columns 'name [unit]' "
+                             "beside it")
     t0 = 0.0
-    if "time" in [n.lower() for n in names]:
-        index = [n.lower() for n in names].index("time")
-        rate = _rate_from_time(path, data[:, index])
-        t0 = float(data[0, index])
+    if times:
+        rate = _rate_from_time(path, data[:, times[0]])
+        t0 = float(data[0, times[0]])
+        if abs(t0) > MAX_T0_S:
+            raise InputFileError(f"{path}: line 2: the time column starts at {t0:g} s; "
+                                 f"expected a start within {MAX_T0_S:g} s of 0")
     elif rate is None:
         raise InputFileError(f"{path}: no 'time [s]' column; give the sample rate with --rate HZ")
-    elif not (np.isfinite(rate) and rate > 0):
-        raise InputFileError(f"--rate {rate}: expected a positive sample rate in Hz")
+    else:
+        _check_rate(rate, f"--rate {rate:g}")
+    values = {}
+    for col, (name, unit) in enumerate(columns):
+        if col in times:
+            continue
+        si_unit, factor = to_si(unit)
+        with np.errstate(over="ignore"):
+            values[name] = data[:, col] * factor
+        if not np.all(np.isfinite(values[name])):
+            line = int(np.argmax(~np.isfinite(values[name]))) + 2
+            raise InputFileError(f"{path}: line {line}, column {col + 1} ({name}): too large "
+                                 f"to convert from {unit} to {si_unit}; expected a finite value")
     if out.exists():
         raise InputFileError(f"{out}: already exists; choose another output file")
     _, run_uuid, started = new_run_path(out.parent)
     writer = RunFileWriter(out, {
         "uuid": run_uuid, "start_time": started, "kind": "imported",
         "source_file": str(path), "profile": "", "software_version": software_version(),
+        **({"reference": reference} if reference else {}),
     })
     try:
-        for col, (name, unit) in enumerate(columns):
-            if name.lower() == "time":
+        for name, unit in columns:
+            if name not in values:
                 continue
-            si_unit, factor = to_si(unit)
             writer.create_channel(name, {
-                "units": si_unit, "quantity": QUANTITY_OF_UNIT[unit], "sample_rate": rate,
-                "t0": t0, "sensitivity": 1.0, "source_instrument": f"imported from {path.name}",
-                "original_units": unit,
+                "units": to_si(unit)[0], "quantity": QUANTITY_OF_UNIT[unit],
+                "sample_rate": rate, "t0": t0 - delays.get(name, 0.0), "sensitivity": 1.0,
+                "source_instrument": f"imported from {path.name}", "original_units": unit,
+                "sensor_delay_s": delays.get(name, 0.0),
             })
-            writer.append(name, data[:, col] * factor)
+            writer.append(name, values[name])
         writer.set_attrs({"exit_status": "completed", "stop_time": utc_now()})
-    finally:
         writer.close()
+    except BaseException:  # interrupted or failed: no half-written file is left behind
+        writer.abandon()
+        out.unlink(missing_ok=True)
+        raise
     return out

@@ -21,10 +21,10 @@ from fsi_lab.shaker import ShakerModel
 
 MODEL_PARAMS: tuple[Param, ...] = (
     Param("modes", "int", "", 4, minimum=1, maximum=50, help="Number of beam modes kept."),
-    Param("c_i", "float", "kg/(m s)", None, minimum=0.0,
+    Param("c_i", "float", "kg/(m s)", None, minimum=0.0, maximum=1e4,
           help="Linear (material) damping per unit length C_i; unset means none, or the "
                "damping ratios when given."),
-    Param("c_f", "float", "kg/m^2", None, minimum=0.0,
+    Param("c_f", "float", "kg/m^2", None, minimum=0.0, maximum=1e4,
           help="Quadratic (fluid) damping per unit length C_f; unset means the theoretical "
                "rho_f C_d H / 2 (Eq. 26)."),
     Param("damping_ratios", "floats", "", None, minimum=0.0, maximum=1.0,

@@ -8,6 +8,7 @@ documentation and the GUI forms.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
@@ -31,6 +32,12 @@ class _Required:
 
 
 REQUIRED: Any = _Required()
+
+#: Integers are stored in run files as 64-bit attributes: larger ones are refused.
+INT_LIMIT = 2**63 - 1
+#: Control characters (NUL, line breaks, escape...) have no place in a parameter's text: they
+#: cannot be stored in a run file's attributes or shown in one line of a message.
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
 @dataclass(frozen=True)
@@ -128,16 +135,17 @@ class Param:
         # bool is an int subclass: refuse True where a number is expected, and vice versa.
         if isinstance(value, bool) != (self.type == "bool") or not isinstance(value, expected):
             raise ParameterError(
-                f"{where}: got {value!r} ({type(value).__name__}); expected {self.describe()}"
+                f"{where}: got {_short(value)} ({type(value).__name__}); expected "
+                f"{self.describe()}"
             )
         if self.type == "floats":
             items = []
             for i, item in enumerate(value):
                 if isinstance(item, bool) or not isinstance(item, (int, float)):
                     raise ParameterError(
-                        f"{where}[{i}]: got {item!r}; expected {self.describe()}"
+                        f"{where}[{i}]: got {_short(item)}; expected {self.describe()}"
                     )
-                items.append(self._check_number(float(item), f"{where}[{i}]"))
+                items.append(self._check_number(item, f"{where}[{i}]", as_float=True))
             return items
         if self.type == "strs":
             for i, item in enumerate(value):
@@ -145,18 +153,31 @@ class Param:
                     self.choices is not None and item not in self.choices
                 ):
                     raise ParameterError(
-                        f"{where}[{i}]: got {item!r}; expected {self.describe()}"
+                        f"{where}[{i}]: got {_short(item)}; expected {self.describe()}"
                     )
+                _check_text(item, f"{where}[{i}]")
             return list(value)
+        if self.type == "str":
+            _check_text(value, where)
         if self.choices is not None and value not in self.choices:
-            raise ParameterError(f"{where}: got {value!r}; expected {self.describe()}")
-        if self.type == "float":
-            value = float(value)
+            raise ParameterError(f"{where}: got {_short(value)}; expected {self.describe()}")
         if self.type in ("float", "int"):
-            value = self._check_number(value, where)
+            value = self._check_number(value, where, as_float=self.type == "float")
         return value
 
-    def _check_number(self, value: float, where: str) -> float:
+    def _check_number(self, value: int | float, where: str, as_float: bool) -> int | float:
+        """``value`` bounds-checked (as a float when ``as_float``); an integer too large for a
+        float or a 64-bit attribute is refused, not converted."""
+        try:
+            if as_float:
+                value = float(value)
+            elif abs(value) > INT_LIMIT:
+                raise OverflowError
+        except OverflowError:
+            raise ParameterError(
+                f"{where}: {_short(value)} is out of bounds; expected {self.describe()}"
+                + ("" if as_float else " (and of magnitude below 2^63)")
+            ) from None
         if not math.isfinite(value):
             raise ParameterError(f"{where}: got {value!r}; expected a finite number")
         too_low = self.minimum is not None and (
@@ -192,9 +213,27 @@ class Param:
                 value = text
         except ValueError:
             raise ParameterError(
-                f"{where}: cannot read {text!r}; expected {self.describe()}"
+                f"{where}: cannot read {_short(text)}; expected {self.describe()}"
             ) from None
         return self.check(value, where)
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    """``repr(value)``, cut to about ``limit`` characters for a one-line message."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**limit:
+        return f"an integer of {len(str(abs(value)))} digits"
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
+
+
+def _check_text(text: str, where: str) -> None:
+    """Refuse a string holding control characters (NUL, line breaks, escape)."""
+    bad = _CONTROL.search(text)
+    if bad:
+        raise ParameterError(
+            f"{where}: {_short(text)} holds the control character {bad.group()!r} at "
+            f"position {bad.start()}; expected printable text"
+        )
 
 
 Schema = Sequence[Param]

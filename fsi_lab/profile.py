@@ -17,6 +17,7 @@ from typing import Any, Mapping
 
 from fsi_lab.contract import ROLES
 from fsi_lab.errors import ParameterError, PluginError, ProfileError
+from fsi_lab.inputfiles import MAX_PROFILE_BYTES, nesting, read_text
 from fsi_lab.modelling import MODEL_PARAMS
 from fsi_lab.params import Param, Schema, find, validate
 from fsi_lab.registry import Registry
@@ -29,34 +30,35 @@ RUN_PARAMS: tuple[Param, ...] = (
           help="Length of the acquisition record."),
     Param("sample_rate", "float", "Hz", 10000.0, minimum=1.0, maximum=204800.0,
           help="Acquisition sample rate (the digitiser may round it)."),
-    Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=1.0,
-          help="Length of the blocks streamed from the digitiser into the run file."),
+    Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=0.5,
+          help="Length of the blocks streamed from the digitiser into the run file (at most "
+               "0.5 s: a crash loses at most 0.5 s of the record)."),
 )
 
 SAFETY_PARAMS: tuple[Param, ...] = (
     Param("max_drive_v", "float", "V", minimum=0.0, exclusive_minimum=True, maximum=10.0,
           help="Largest absolute source voltage the excitation may request."),
-    Param("max_gain", "float", "V/V", minimum=0.0, exclusive_minimum=True,
+    Param("max_gain", "float", "V/V", minimum=0.0, exclusive_minimum=True, maximum=100.0,
           help="Largest amplifier gain the bench may be set to."),
-    Param("max_stroke_mm", "float", "mm", minimum=0.0, exclusive_minimum=True,
+    Param("max_stroke_mm", "float", "mm", minimum=0.0, exclusive_minimum=True, maximum=100.0,
           help="Largest base displacement (zero to peak) predicted by the shaker model."),
 )
 
 SHAKER_PARAMS: tuple[Param, ...] = (
-    Param("suspension_hz", "float", "Hz", 30.0, minimum=0.1,
+    Param("suspension_hz", "float", "Hz", 30.0, minimum=0.1, maximum=2000.0,
           help="Resonance of the shaker armature on its suspension, loaded (about 30 Hz with "
                "the beam mount, 47 Hz unloaded)."),
     Param("damping_ratio", "float", "", 0.08, minimum=0.001, maximum=2.0,
           help="Damping ratio of the suspension resonance."),
     Param("mm_per_volt", "float", "mm/V", 0.5, minimum=0.0, exclusive_minimum=True,
-          help="Static base displacement per volt at the amplifier output."),
+          maximum=100.0, help="Static base displacement per volt at the amplifier output."),
 )
 
 CHANNEL_PARAMS: tuple[Param, ...] = (
     Param("quantity", "str", "", choices=QUANTITIES, help="What the channel measures."),
     Param("unit", "str", "", choices=tuple(QUANTITY_OF_UNIT),
           help="Unit the calibrated channel is stored in."),
-    Param("sensitivity", "float", "V/unit", 1.0, minimum=0.0, exclusive_minimum=True,
+    Param("sensitivity", "float", "V/unit", 1.0, minimum=1e-6, maximum=1e6,
           help="Sensor sensitivity: volts at the digitiser per unit of the quantity."),
     Param("input", "int", "", minimum=1, maximum=64, help="Digitiser input number."),
     Param("sensor", "str", "", "",
@@ -77,7 +79,7 @@ BENCH_PARAMS: tuple[Param, ...] = (
     Param("fault", "str", "", "none",
           choices=("none", "timeout", "drop", "garble", "interlock", "overload"),
           help="Simulated bench only: inject this fault (for rehearsing failures)."),
-    Param("fault_after_s", "float", "s", 1.0, minimum=0.0,
+    Param("fault_after_s", "float", "s", 1.0, minimum=0.0, maximum=86400.0,
           help="Simulated bench only: when the injected fault happens after the start."),
 )
 
@@ -142,6 +144,16 @@ class Profile:
     def can_run(self) -> bool:
         """True when the profile describes a bench and an excitation (not only an analysis)."""
         return bool(self.roles) and self.excitation_plugin is not None
+
+    def require_runnable(self) -> None:
+        """Raise ProfileError unless the profile describes a run (:attr:`can_run`): an empty,
+        comment-only or cut-short file is valid TOML but has nothing to run."""
+        if not self.can_run:
+            raise ProfileError(
+                f"{self.path}: nothing to run: no [bench.<role>] tables and no [excitation]; "
+                f"expected a profile with [safety], "
+                f"{', '.join('[bench.' + r + ']' for r in REQUIRED_ROLES)}, [channels.<name>] "
+                "and [excitation] (see profiles/wet-beam-sim.toml)")
 
 
 def _table(raw: Mapping[str, Any], key: str, where: str) -> dict[str, Any]:
@@ -269,12 +281,36 @@ def load_profile(path: str | Path, registry: Registry, overrides: list[str] = ()
     ProfileError
         With the file name, the key path and what is allowed.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ProfileError(f"{path}: cannot read the profile ({exc.strerror})") from None
+    text = read_text(path, "a profile (TOML text)", MAX_PROFILE_BYTES, error=ProfileError)
     return parse_profile(text, str(path), registry, overrides, sections=sections)
+
+
+#: Deepest nesting of tables and arrays a profile needs (``analysis.hvd.band_hz`` is 4 deep).
+MAX_DEPTH = 8
+
+
+def parse_toml(text: str, path: str) -> dict[str, Any]:
+    """The tables of profile ``text`` (``path`` names it in messages).
+
+    Raises
+    ------
+    ProfileError
+        A TOML syntax error, or tables and arrays nested deeper than :data:`MAX_DEPTH`.
+    """
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ProfileError(f"{path}: TOML syntax error: {exc}") from None
+    except RecursionError:
+        raw = None
+    depth, keys = nesting(raw) if raw is not None else (MAX_DEPTH + 1, [])
+    if depth > MAX_DEPTH:
+        where = ".".join(keys[:3]).replace(".[", "[") if keys else "the profile"
+        raise ProfileError(
+            f"{path}: {where}: tables or arrays nested more than {MAX_DEPTH} levels deep; "
+            f"a profile's sections nest at most {MAX_DEPTH} levels "
+            "(e.g. [analysis.hvd] band_hz = [10, 20])")
+    return raw
 
 
 def parse_profile(text: str, path: str, registry: Registry, overrides: list[str] = (),
@@ -285,10 +321,7 @@ def parse_profile(text: str, path: str, registry: Registry, overrides: list[str]
     ``analysis`` and ``specimen`` so that a run made with drivers not installed here can still
     be analysed), and ``--set`` may address only them.
     """
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ProfileError(f"{path}: TOML syntax error: {exc}") from None
+    raw = parse_toml(text, path)
     if sections is not None:
         raw = {key: value for key, value in raw.items() if key in sections}
         for item in overrides:
@@ -330,6 +363,32 @@ def _channel(name: str, table: Any, roles: Mapping[str, RoleConfig] | None) -> C
             f"empty or one of the roles with a [bench.<role>] table: {accepted}"
         )
     return ChannelConfig(name=name, **values)
+
+
+#: Fewest samples a record may hold (one period of the lowest frequency needs two).
+MIN_RECORD_SAMPLES = 2
+
+
+def _check_record(run: Mapping[str, Any]) -> None:
+    """The ``[run]`` record must hold :data:`MIN_RECORD_SAMPLES` samples at least."""
+    samples = round(run["duration"] * run["sample_rate"])
+    if samples < MIN_RECORD_SAMPLES:
+        raise ParameterError(
+            f"run.duration: {run['duration']:g} s at run.sample_rate = {run['sample_rate']:g} Hz "
+            f"records {samples} sample{'s' if samples != 1 else ''}; expected at least "
+            f"{MIN_RECORD_SAMPLES} (a duration of {MIN_RECORD_SAMPLES / run['sample_rate']:g} s "
+            "or more)")
+
+
+def _check_model(specimen: Specimen, model: Mapping[str, Any]) -> None:
+    """The beam model of ``[specimen]`` and ``[model]`` must be one the model can build (the
+    damping given one way, ratios for the modes)."""
+    from fsi_lab.modelling import beam_model
+
+    try:
+        beam_model(specimen, dict(model))
+    except ParameterError as exc:
+        raise ParameterError(f"model: {exc}") from None
 
 
 def _validate(raw, path, text, registry, overrides, complete=True, bench_kept=True) -> Profile:
@@ -425,6 +484,10 @@ def _validate(raw, path, text, registry, overrides, complete=True, bench_kept=Tr
             f"specimen.measurement_point: {specimen.measurement_point} m lies beyond the beam "
             f"(length {specimen.length} m); expected a point between 0 and the length"
         )
+    if specimen is not None:
+        _check_model(specimen, model)
+    if complete:
+        _check_record(run)
 
     return Profile(path=path, text=text, run=run, safety=safety, shaker=shaker,
                    specimen=specimen, model=model, bench=bench, roles=roles, channels=channels,

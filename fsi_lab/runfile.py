@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
-import time
 import uuid as _uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 from typing import Any, Mapping
@@ -15,13 +14,22 @@ import h5py
 import numpy as np
 
 from fsi_lab.contract import ChannelData
-from fsi_lab.errors import InputFileError
+from fsi_lab.errors import AnalysisError, InputFileError
+from fsi_lab.inputfiles import require_regular_file
+from fsi_lab.isolation import crash_or_hang
+from fsi_lab.runcheck import EXPECTED as RUN_FILE
+from fsi_lab.runcheck import (
+    CHANNEL_RATES_HZ, H5_ERRORS, MAX_T0_S, RunFileReader, decode_attr,
+)
+from fsi_lab.signals import INTERRUPTED  # noqa: F401 - the error recorded for Ctrl+C
+from fsi_lab.units import QUANTITIES
 
 FORMAT = "fsi-lab run"
 FORMAT_VERSION = 1
 EXIT_STATUSES = ("running", "completed", "aborted", "failed")
-INTERRUPTED = "interrupted (Ctrl+C)"  # the error recorded for a run ended by Ctrl+C
-FLUSH_INTERVAL_S = 0.5  # at most this long between flushes while data arrives
+#: A crash (even ``kill -9``) loses at most this much of the record delivered, s: the file is
+#: flushed before the samples not yet flushed, with the next block, would exceed it.
+FLUSH_SPAN_S = 0.5
 CHUNK_SAMPLES = 16384
 
 
@@ -71,30 +79,20 @@ def write_attrs(node: h5py.HLObject, values: Mapping[str, Any]) -> None:
 
 
 def read_attrs(node: h5py.HLObject) -> dict[str, Any]:
-    """Attributes of ``node`` as plain Python values."""
-    out = {}
-    for key, value in node.attrs.items():
-        if isinstance(value, bytes):
-            value = value.decode()
-        if isinstance(value, str) and (value[:1] in "{[" and value or value == "null"):
-            try:
-                value = json.loads(value)
-            except ValueError:
-                pass
-        if isinstance(value, np.ndarray):
-            value = value.tolist()
-        elif isinstance(value, np.generic):
-            value = value.item()
-        out[key] = value
-    return out
+    """Attributes of ``node`` as plain Python values (:func:`~fsi_lab.runcheck.decode_attr`)."""
+    return {key: decode_attr(value) for key, value in node.attrs.items()}
 
 
 class RunFileWriter:
     """Creates a run file and appends to it as blocks arrive.
 
-    Every append is followed by a flush when more than :data:`FLUSH_INTERVAL_S` passed since
-    the last one, so that a run killed at any moment leaves a file that opens with h5py and
-    h5dump and holds every block up to the last flush. The file uses the earliest HDF5 file
+    After each block (:meth:`flush_if_due`) the file is flushed when the samples not yet
+    flushed and a next block as long as this one would span more than :data:`FLUSH_SPAN_S`
+    of the record, so that a run killed at any moment (with the next block on its way) loses
+    at most that span, and leaves a file that opens with h5py and h5dump and holds every
+    block up to the last flush. The rule counts samples, not time, so it holds on a slow
+    machine and for a bench that runs faster than real time. Blocks must not be longer than
+    :data:`FLUSH_SPAN_S` (the profile's limits see to it). The file uses the earliest HDF5 file
     format (no SWMR): after a crash it opens without ``h5clear``.
     """
 
@@ -106,8 +104,9 @@ class RunFileWriter:
                                  "exit_status": "running", **attrs})
         for group in ("instruments", "channels", "analysis"):
             self._file.create_group(group)
-        self._last_flush = time.monotonic()
         self.samples_flushed: dict[str, int] = {}
+        self._rates: dict[str, float] = {}
+        self._last_block: dict[str, int] = {}
         self._file.flush()
 
     @property
@@ -146,6 +145,8 @@ class RunFileWriter:
         )
         write_attrs(dataset, attrs)
         self.samples_flushed[name] = 0
+        self._rates[name] = float(attrs["sample_rate"])
+        self._last_block[name] = 0
 
     def append(self, name: str, block: np.ndarray) -> None:
         """Append samples to ``/channels/<name>``."""
@@ -153,17 +154,26 @@ class RunFileWriter:
         start = dataset.shape[0]
         dataset.resize((start + block.size,))
         dataset[start:] = block
+        self._last_block[name] = block.size
+
+    def unflushed_s(self) -> float:
+        """The longest span of record, s, a crash would lose now with a next block as long
+        as the last on its way (what :meth:`flush_if_due` keeps within FLUSH_SPAN_S)."""
+        channels = self._file["channels"]
+        return max(((channels[name].shape[0] - flushed + self._last_block[name])
+                    / self._rates[name] for name, flushed in self.samples_flushed.items()),
+                   default=0.0)
 
     def flush_if_due(self) -> bool:
-        """Flush if the last flush is older than the interval; returns whether it flushed."""
-        if time.monotonic() - self._last_flush < FLUSH_INTERVAL_S:
+        """Flush when the record not yet flushed, with a next block as long as the last, would
+        exceed :data:`FLUSH_SPAN_S`; returns whether it flushed. Call it after every block."""
+        if self.unflushed_s() <= FLUSH_SPAN_S * (1 + 1e-9):
             return False
         self.flush()
         return True
 
     def flush(self) -> None:
         self._file.flush()
-        self._last_flush = time.monotonic()
         for name, dataset in self._file["channels"].items():
             self.samples_flushed[name] = dataset.shape[0]
 
@@ -186,7 +196,10 @@ class RunFileWriter:
 # --------------------------------------------------------------------------- reading
 @dataclass
 class RunData:
-    """A run file read back: root attributes, channels, and the excitation if any."""
+    """A run file read back: root attributes, channels, and the excitation if any.
+
+    ``channel_samples`` gives each channel's length (also when its data was not loaded).
+    """
 
     path: Path
     attrs: dict[str, Any]
@@ -194,22 +207,31 @@ class RunData:
     channel_attrs: dict[str, dict[str, Any]]
     instruments: dict[str, dict[str, Any]]
     excitation: dict[str, Any] | None
+    channel_samples: dict[str, int] = field(default_factory=dict)
 
     @property
     def profile_text(self) -> str:
         return self.attrs.get("profile", "") or ""
 
+    @property
+    def reference(self) -> str:
+        """Imported data: the base acceleration channel given on import, or empty."""
+        return self.attrs.get("reference", "") or ""
+
 
 def _open_checked(path: Path, mode: str) -> h5py.File:
-    if not path.exists():
-        raise InputFileError(f"{path}: no such file; expected a run file (.h5)")
+    require_regular_file(path, "a run file (.h5)")
     try:
         handle = h5py.File(path, mode)
     except OSError as exc:
         raise InputFileError(
             f"{path}: not a readable HDF5 file ({exc}); expected a run file written by fsi-lab"
         ) from None
-    if handle.attrs.get("format") != FORMAT:
+    try:
+        fmt = handle.attrs.get("format")
+    except H5_ERRORS:
+        fmt = None
+    if decode_attr(fmt) != FORMAT:
         handle.close()
         raise InputFileError(
             f"{path}: not an fsi-lab run file (root attribute format is missing or not "
@@ -218,46 +240,105 @@ def _open_checked(path: Path, mode: str) -> h5py.File:
     return handle
 
 
+#: Files a child has read without crashing, by (device, inode, size, mtime, with data): read
+#: again unchanged (``show`` reads the channels, then the analysis) they need no second child.
+_SURVIVED: set[tuple[int, int, int, int, bool]] = set()
+
+
+def _read_safely(path: Path, read, load_data: bool = False):
+    """``read(path)``, once a forked child has read the file (its nodes and analysis summary,
+    its data too with ``load_data``) without crashing or hanging the HDF5 library
+    (:func:`~fsi_lab.isolation.crash_or_hang`)."""
+    require_regular_file(path, "a run file (.h5)")
+    info = path.stat()
+    key = (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns)
+    if (*key, True) not in _SURVIVED and (*key, load_data) not in _SURVIVED:
+        problem = crash_or_hang(lambda: (_read_run(path, load_data), _read_summary(path)),
+                                info.st_size, hold=h5py._objects.phil)
+        if problem:
+            raise InputFileError(f"{path}: damaged: {problem}; expected {RUN_FILE}")
+        _SURVIVED.add((*key, load_data))
+    return read(path)
+
+
 def read_run(path: str | Path, load_data: bool = True) -> RunData:
     """Read a run file (channels fully loaded unless ``load_data`` is False).
 
     Raises
     ------
     InputFileError
-        Missing file, not HDF5, not an fsi-lab run file, or a channel without its attributes.
+        Missing file, not HDF5, not an fsi-lab run file, or a node or attribute that is not as
+        fsi-lab writes it (named in the message), including damage that would crash HDF5.
     """
-    path = Path(path)
+    return _read_safely(Path(path), lambda p: _read_run(p, load_data), load_data)
+
+
+def _read_run(path: Path, load_data: bool) -> RunData:
     with _open_checked(path, "r") as handle:
-        attrs = read_attrs(handle)
+        reader = RunFileReader(path)
+        attrs = reader.attrs(handle)
+        reader.text(attrs, "profile", "/", default="")
+        reference = reader.text(attrs, "reference", "/", default="")
+        overrides = attrs.get("overrides", [])
+        if not isinstance(overrides, list) or not all(isinstance(o, str) for o in overrides):
+            raise reader.refuse("/ attribute 'overrides'", "is not a list of texts",
+                                "a JSON list of the --set key=value overrides")
         channels: dict[str, ChannelData] = {}
         channel_attrs: dict[str, dict[str, Any]] = {}
-        for name, dataset in handle.get("channels", {}).items():
-            meta = read_attrs(dataset)
-            missing = [k for k in ("units", "quantity", "sample_rate") if k not in meta]
-            if missing:
-                raise InputFileError(
-                    f"{path}: /channels/{name} lacks attribute {missing[0]!r}; "
-                    "expected units, quantity and sample_rate on every channel"
-                )
+        samples: dict[str, int] = {}
+        group = reader.child(handle, "channels", h5py.Group)
+        for name in reader.names(group) if group is not None else []:
+            dataset = reader.child(group, name, h5py.Dataset, required=True)
+            where = dataset.name
+            meta = reader.attrs(dataset)
+            quantity = reader.text(meta, "quantity", where, choices=QUANTITIES)
+            unit = reader.text(meta, "units", where)
+            rate = reader.number(meta, "sample_rate", where, bounds=CHANNEL_RATES_HZ)
+            t0 = reader.number(meta, "t0", where, default=0.0, bounds=(-MAX_T0_S, MAX_T0_S))
+            samples[name], data = reader.samples(dataset, load_data)
             channel_attrs[name] = meta
-            data = dataset[()] if load_data else np.empty(0)
-            channels[name] = ChannelData(name, data, float(meta["sample_rate"]),
-                                         meta["quantity"], meta["units"],
-                                         float(meta.get("t0", 0.0)))
+            channels[name] = ChannelData(name, data, rate, quantity, unit, t0)
+        if reference and reference not in channels:
+            raise reader.refuse("/ attribute 'reference'", f"names {reference!r}, which is not "
+                                "a channel of the file", "one of " + (", ".join(channels) or "none"))
         instruments = {}
-        for role, group in handle.get("instruments", {}).items():
-            info = read_attrs(group)
+        group = reader.child(handle, "instruments", h5py.Group)
+        for role in reader.names(group) if group is not None else []:
+            node = reader.child(group, role, h5py.Group, required=True)
+            info = reader.attrs(node)
             for sub in ("settings", "final_state"):
-                if sub in group:
-                    info[sub] = read_attrs(group[sub])
+                child = reader.child(node, sub, h5py.Group)
+                if child is not None:
+                    info[sub] = reader.attrs(child)
             instruments[role] = info
         excitation = None
-        if "excitation" in handle:
-            group = handle["excitation"]
-            excitation = read_attrs(group)
-            excitation["params"] = read_attrs(group["params"]) if "params" in group else {}
-            excitation["waveform"] = group["waveform"][()] if load_data else np.empty(0)
-    return RunData(path, attrs, channels, channel_attrs, instruments, excitation)
+        group = reader.child(handle, "excitation", h5py.Group)
+        if group is not None:
+            excitation = reader.attrs(group)
+            params = reader.child(group, "params", h5py.Group)
+            excitation["params"] = reader.attrs(params) if params is not None else {}
+            waveform = reader.child(group, "waveform", h5py.Dataset, required=True)
+            excitation["waveform"] = reader.samples(waveform, load_data)[1]
+    return RunData(path, attrs, channels, channel_attrs, instruments, excitation, samples)
+
+
+def require_analysable(run: RunData, minimum: int = 2) -> None:
+    """Raise InputFileError unless ``run`` (read with its data) has channels of at least
+    ``minimum`` finite samples each (what ``fsi-lab analyze`` needs)."""
+    if not run.channels:
+        raise InputFileError(f"{run.path}: /channels holds no channel; expected recorded "
+                             "channels to analyse")
+    for name, channel in run.channels.items():
+        count = run.channel_samples[name]
+        if count < minimum:
+            raise InputFileError(
+                f"{run.path}: /channels/{name} holds {count} sample{'s' if count != 1 else ''}; "
+                f"expected at least {minimum} to analyse")
+        bad = np.flatnonzero(~np.isfinite(channel.data))
+        if bad.size:
+            raise InputFileError(
+                f"{run.path}: /channels/{name} holds {bad.size} NaN or infinite samples (the "
+                f"first at index {bad[0]}); expected finite samples to analyse")
 
 
 def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
@@ -267,29 +348,78 @@ def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
     ``groups`` maps ``"<channel>/<plugin>"`` to a dict with ``datasets``, ``units``, ``attrs``
     and ``params``. The new group is written beside the old one and swapped in at the end,
     so a failure while writing keeps the previous results.
+
+    Raises
+    ------
+    AnalysisError
+        A result HDF5 cannot store (named); the previous results stay.
+    InputFileError
+        The previous ``/analysis`` cannot be replaced (a damaged file).
     """
     path = Path(path)
     with _open_checked(path, "r+") as handle:
-        if "analysis.new" in handle:
+        where = "/analysis.new"
+        try:
+            if "analysis.new" in handle:
+                del handle["analysis.new"]
+            root = handle.create_group("analysis.new")
+        except H5_ERRORS as exc:
+            raise InputFileError(f"{path}: {where}: cannot be replaced ({exc}); expected "
+                                 f"{RUN_FILE}") from None
+        try:
+            write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
+            for key, content in groups.items():
+                where = f"/analysis/{key}"
+                group = root.create_group(key)
+                for name, array in content.get("datasets", {}).items():
+                    where = f"/analysis/{key}/{name}"
+                    dataset = group.create_dataset(name, data=np.asarray(array))
+                    unit = content.get("units", {}).get(name)
+                    if unit is not None:
+                        dataset.attrs["units"] = unit
+                write_attrs(group, content.get("attrs", {}))
+                write_attrs(group.create_group("params"), content.get("params", {}))
+        except BaseException as exc:  # the previous results stay; no half-written group is left
             del handle["analysis.new"]
-        root = handle.create_group("analysis.new")
-        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
-        for key, content in groups.items():
-            group = root.create_group(key)
-            for name, array in content.get("datasets", {}).items():
-                dataset = group.create_dataset(name, data=np.asarray(array))
-                unit = content.get("units", {}).get(name)
-                if unit is not None:
-                    dataset.attrs["units"] = unit
-            write_attrs(group, content.get("attrs", {}))
-            write_attrs(group.create_group("params"), content.get("params", {}))
-        if "analysis" in handle:
-            del handle["analysis"]
-        handle.move("analysis.new", "analysis")
+            if isinstance(exc, H5_ERRORS):
+                raise AnalysisError(f"{path}: {where}: the analysis result cannot be stored "
+                                    f"({type(exc).__name__}: {exc}); the previous results are "
+                                    "kept") from None
+            raise
+        try:
+            if "analysis" in handle:
+                del handle["analysis"]
+            handle.move("analysis.new", "analysis")
+        except H5_ERRORS as exc:
+            raise InputFileError(f"{path}: /analysis: the previous results cannot be replaced "
+                                 f"({exc}); expected {RUN_FILE}") from None
 
 
 def read_analysis_summary(path: str | Path) -> dict[str, Any] | None:
-    """The summary stored by the last analysis, or None if the run was never analysed."""
-    with _open_checked(Path(path), "r") as handle:
-        text = handle.get("analysis", {}).attrs.get("summary") if "analysis" in handle else None
-    return json.loads(text) if text else None
+    """The summary stored by the last analysis, or None if the run was never analysed.
+
+    Raises
+    ------
+    InputFileError
+        ``/analysis`` or its ``summary`` attribute is not as fsi-lab writes it.
+    """
+    return _read_safely(Path(path), _read_summary)
+
+
+def _read_summary(path: Path) -> dict[str, Any] | None:
+    with _open_checked(path, "r") as handle:
+        reader = RunFileReader(path)
+        group = reader.child(handle, "analysis", h5py.Group)
+        text = reader.attrs(group).get("summary") if group is not None else None
+        if group is not None:
+            reader.walk(group)  # analyze replaces it all: every member must open
+    if text is None or text == "":
+        return None
+    if not isinstance(text, dict):  # decode_attr parses what is JSON
+        raise reader.refuse("/analysis attribute 'summary'", f"is not a JSON object ({_kind(text)})",
+                            "the JSON object fsi-lab analyze writes")
+    return text
+
+
+def _kind(value: Any) -> str:
+    return f"a {type(value).__name__} starting {str(value)[:30]!r}"

@@ -28,6 +28,7 @@ from fsi_lab.errors import (
     FsiLabError, InstrumentError, PluginError, ProfileError, RunAborted,
 )
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
+from fsi_lab.preflight import check_instruments
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
 from fsi_lab.runfile import (
@@ -53,12 +54,16 @@ class RunOutcome:
     stopped_early: bool = False
     #: the run file could not be finalised and was given up (a full disk)
     file_abandoned: bool = False
+    #: Ctrl+C or SIGTERM arrived after the record was complete (while it was finalised, or
+    #: during its analysis): the run completed, the command was interrupted
+    interrupted: bool = False
 
     def as_json(self) -> dict[str, Any]:
         return {
             "run": str(self.path) if self.path else None,
             "exit_status": self.exit_status,
             "stopped_early": self.stopped_early,
+            "interrupted": self.interrupted,
             "error": self.error,
             "safety": self.safety.as_dict() if self.safety else None,
             "final_state": self.final_states,
@@ -66,10 +71,34 @@ class RunOutcome:
         }
 
 
+#: Most samples a drive waveform may have: the largest arb memory of the generators fsi-lab
+#: drives (a 33500B with its memory option); a longer one is refused before it is generated.
+MAX_WAVEFORM_POINTS = 16_000_000
+
+
+def _too_long(profile: Profile, points: float, rate: float) -> ProfileError:
+    return ProfileError(
+        f"{profile.path}: excitation: {profile.excitation_plugin!r} would make {points:,.0f} "
+        f"samples at {rate:g} Sa/s; a source holds at most {MAX_WAVEFORM_POINTS:,}: shorten "
+        "the excitation or lower bench.source.sample_rate (or run.sample_rate when it is unset)")
+
+
 def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray, float]:
-    """Generate the profile's drive waveform (V) and its sample rate (Hz)."""
+    """Generate the profile's drive waveform (V) and its sample rate (Hz).
+
+    Raises
+    ------
+    ProfileError
+        The waveform would have more than :data:`MAX_WAVEFORM_POINTS` samples, or none.
+    PluginError
+        The excitation plugin failed.
+    """
     descriptor = registry.get("excitation", profile.excitation_plugin)
     rate = float(profile.roles["source"].settings.get("sample_rate") or profile.run["sample_rate"])
+    if descriptor.duration is not None:
+        points = float(descriptor.duration(dict(profile.excitation))) * rate
+        if points > MAX_WAVEFORM_POINTS:
+            raise _too_long(profile, points, rate)
     try:
         waveform = np.asarray(descriptor.generate(dict(profile.excitation), rate), dtype=float)
     except Exception as exc:  # noqa: BLE001 - a plugin's failure, before anything is driven
@@ -77,6 +106,8 @@ def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray
             f"{profile.path}: excitation plugin {profile.excitation_plugin!r} failed to generate "
             f"its waveform with {profile.excitation} at {rate:g} Hz: {type(exc).__name__}: {exc}"
         ) from None
+    if waveform.size > MAX_WAVEFORM_POINTS:
+        raise _too_long(profile, waveform.size, rate)
     if waveform.ndim != 1 or waveform.size == 0:
         raise ProfileError(
             f"{profile.path}: excitation {profile.excitation_plugin!r} produced no samples "
@@ -86,8 +117,11 @@ def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray
 
 
 def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, float, SafetyReport]:
-    """Generate the waveform and assess it against ``[safety]`` (does not raise)."""
+    """Generate the waveform, check what the run asks of each instrument
+    (:func:`~fsi_lab.preflight.check_instruments`, which raises) and assess the waveform
+    against ``[safety]`` (the verdict is in the report, not raised)."""
     waveform, rate = prepare_excitation(profile, registry)
+    check_instruments(profile, registry, waveform, rate)
     gain = profile.roles["amplifier"].settings.get("gain")
     if gain is None:
         raise ProfileError(
@@ -120,8 +154,7 @@ class Runner:
 
     def __init__(self, profile: Profile, registry: Registry, out_dir: str | Path,
                  bus: EventBus | None = None, analyze: bool = True) -> None:
-        if not profile.can_run:
-            raise ProfileError(f"{profile.path}: describes no bench and excitation to run")
+        profile.require_runnable()
         self.profile = profile
         self.registry = registry
         self.out_dir = Path(out_dir)
@@ -184,31 +217,68 @@ class Runner:
                 f"{type(exc).__name__}: {exc}")
             outcome.traceback = traceback.format_exc()
         finally:
+            self._finish(signals, writer, outcome)
+        # From here to the end Ctrl+C and SIGTERM end only the analysis (the record is safe);
+        # the run's handlers also set the abort flag, checked at every progress event.
+        try:
+            self.bus.emit(StateChanged(outcome.exit_status, outcome.error or ""))
+            if signals.pending:
+                outcome.interrupted = True
+                self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
+            elif outcome.exit_status == "completed" and self.analyze \
+                    and self.profile.analysis["chain"]:
+                self._analyse_into(outcome)
+        except (KeyboardInterrupt, RunAborted) as exc:
+            outcome.interrupted = True
+            if outcome.exit_status == "completed" and outcome.summary is None:
+                outcome.error = (f"the analysis was stopped ({str(exc) or 'Ctrl+C'}); the record "
+                                 "is complete: run `fsi-lab analyze` on the file")
+                self.bus.log("WARNING", outcome.error)
+        finally:
+            signals.restore()
+        return outcome
+
+    def _finish(self, signals: RunSignals, writer: RunFileWriter | None,
+                outcome: RunOutcome) -> None:
+        """Safe state, then the run file finalised, with Ctrl+C and SIGTERM held back.
+
+        A signal that arrives in the instant before they are held back raises here: it is
+        noted as held and the safe state is carried out all the same (it is never skipped).
+        """
+        for _ in range(3):
             try:
                 with signals.held():
                     outcome.final_states = self._safe_state_all()
                     self._require_bench_safe(outcome)
                     self._finalize(writer, outcome)
-            finally:
-                signals.restore()
-        self.bus.emit(StateChanged(outcome.exit_status, outcome.error or ""))
-        if signals.pending:
-            self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
-        elif outcome.exit_status == "completed" and self.analyze and self.profile.analysis["chain"]:
-            analysis_signals = RunSignals()  # SIGTERM, like Ctrl+C, ends only the analysis
-            analysis_signals.install()
-            try:
-                outcome.summary = self._analyse(outcome.path)
-            except (FsiLabError, OSError) as exc:  # the record is safe; only the analysis is lost
-                outcome.error = f"analysis not stored: {exc}; run `fsi-lab analyze` on the file"
-                self.bus.log("ERROR", outcome.error)
+                return
             except (KeyboardInterrupt, RunAborted) as exc:
-                outcome.error = (f"the analysis was stopped ({str(exc) or 'Ctrl+C'}); the record "
-                                 "is complete: run `fsi-lab analyze` on the file")
-                self.bus.log("WARNING", outcome.error)
-            finally:
-                analysis_signals.restore()
-        return outcome
+                signals.pending.append(signal.SIGINT if isinstance(exc, KeyboardInterrupt)
+                                       else signal.SIGTERM)
+        raise RunAborted("the safe state was interrupted three times; check the bench by hand")
+
+    def _analyse_into(self, outcome: RunOutcome) -> None:
+        """Run the chain on the completed record into ``outcome.summary``; a signal ends it
+        (raised), also one whose exception a library swallowed (the abort flag is checked at
+        every progress event and at the end)."""
+        unsubscribe = self.bus.subscribe(self._checkpoint)
+        try:
+            outcome.summary = self._analyse(outcome.path)
+        except (FsiLabError, OSError) as exc:  # the record is safe; only the analysis is lost
+            outcome.error = f"analysis not stored: {exc}; run `fsi-lab analyze` on the file"
+            self.bus.log("ERROR", outcome.error)
+        finally:
+            unsubscribe()
+        if self._abort.is_set():
+            outcome.interrupted = True
+            outcome.error = (f"{self._abort_reason} at the end of the analysis"
+                             + ("; its results were stored" if outcome.summary else ""))
+            self.bus.log("WARNING", outcome.error)
+
+    def _checkpoint(self, event) -> None:
+        """Event-bus subscriber: raise the abort at every progress event once requested."""
+        if isinstance(event, Progress):
+            self._check_abort()
 
     def _root_attrs(self, run_uuid: str, started: str) -> dict[str, Any]:
         versions = {r.name: f"{r.distribution} {r.version}" for r in self.registry.records

@@ -33,6 +33,10 @@ BAND_LIMITED_MARGIN = 1.03
 #: Most points per source sample the output is modelled at: a source rate below
 #: STROKE_SAMPLES_PER_PERIOD x suspension_hz / MAX_OVERSAMPLING is refused.
 MAX_OVERSAMPLING = 4096
+#: Beyond this many samples per suspension period the shaker model's filter loses precision:
+#: the source output is averaged down to DECIMATED_SAMPLES_PER_PERIOD for it.
+MAX_STROKE_SAMPLES_PER_PERIOD = 10_000
+DECIMATED_SAMPLES_PER_PERIOD = 1_000
 #: Source samples of context on each side of a block (the reconstruction filter spans 10).
 CONTEXT = 16
 #: Output points modelled at a time (bounds the memory of a long waveform).
@@ -155,14 +159,38 @@ def output_stroke_mm(waveform: np.ndarray, sample_rate: float, reconstruction: s
     33500 in triggered burst mode idles at the first point): the worse of the two is kept.
     """
     # The shaker only needs STROKE_SAMPLES_PER_PERIOD points per period: at a source rate
-    # above that the samples serve as they are (the filter's overshoot is far above its band).
-    factor = output_oversampling(sample_rate, HOLD, shaker["suspension_hz"])
-    if factor == 1:
-        reconstruction = HOLD
+    # above that the samples serve as they are (the filter's overshoot is far above its band),
+    # and far above it they are averaged in groups (see stroke_model_input).
     rests = {0.0, float(waveform[0])} if waveform.size else {0.0}
-    return max(stroke_of_blocks_mm(source_output(waveform, factor, reconstruction),
-                                   sample_rate * factor, gain, shaker, rest)
-               for rest in rests)
+    factor = output_oversampling(sample_rate, HOLD, shaker["suspension_hz"])
+    if factor > 1:
+        blocks, rate = source_output(waveform, factor, reconstruction), sample_rate * factor
+        return max(stroke_of_blocks_mm(blocks, rate, gain, shaker, rest) for rest in rests)
+    drive, rate = stroke_model_input(waveform, sample_rate, shaker["suspension_hz"])
+    return max(stroke_of_blocks_mm([drive], rate, gain, shaker, rest) for rest in rests)
+
+
+def stroke_model_input(waveform: np.ndarray, sample_rate: float,
+                       suspension_hz: float) -> tuple[np.ndarray, float]:
+    """The held source output (``waveform`` in V at ``sample_rate`` Sa/s) at the rate the
+    shaker model runs at: itself, or, beyond :data:`MAX_STROKE_SAMPLES_PER_PERIOD` samples per
+    suspension period (``suspension_hz``, Hz), its averages over groups of samples, which keep
+    each group's area (what moves the armature) at :data:`DECIMATED_SAMPLES_PER_PERIOD` points
+    per period. The model's discrete filter loses its precision at millions of samples per
+    period (it would predict no stroke at all), and its tail would not fit in memory.
+
+    Returns
+    -------
+    drive, rate
+        Volts, and their rate in Sa/s.
+    """
+    if sample_rate <= MAX_STROKE_SAMPLES_PER_PERIOD * suspension_hz:
+        return waveform, sample_rate
+    group = int(sample_rate // (DECIMATED_SAMPLES_PER_PERIOD * suspension_hz))
+    starts = np.arange(0, waveform.size, group)
+    sums = np.add.reduceat(waveform, starts) if waveform.size else waveform
+    counts = np.diff(np.append(starts, waveform.size))
+    return sums / counts, sample_rate / group
 
 
 def assess(waveform: np.ndarray, sample_rate: float, gain: float, safety: dict,

@@ -1,5 +1,7 @@
-"""Ctrl+C and SIGTERM while the bench is driven: turned into an abort, or held back while the
-bench is being made safe and the run file finalised."""
+"""Ctrl+C and SIGTERM: from the first line of ``fsi-lab``'s main an exception (exit code 130),
+while the bench is driven an abort, held back while the bench is being made safe and the run
+file finalised, and noted so that one whose exception a library swallows is raised at the next
+checkpoint."""
 
 from __future__ import annotations
 
@@ -9,6 +11,45 @@ import threading
 from typing import Any, Callable
 
 from fsi_lab.errors import RunAborted
+from fsi_lab.events import Progress
+
+
+#: The error recorded for a run (or a command) ended by Ctrl+C.
+INTERRUPTED = "interrupted (Ctrl+C)"
+
+
+def exception_for(signum: int) -> BaseException:
+    """What a signal becomes: KeyboardInterrupt for Ctrl+C, :class:`RunAborted` otherwise."""
+    if signum == signal.SIGINT:
+        return KeyboardInterrupt()
+    return RunAborted(f"received {signal.Signals(signum).name}")
+
+
+class SignalNote:
+    """Remembers the first Ctrl+C or SIGTERM, to raise it again at a checkpoint.
+
+    The exception a signal handler raises can land inside a library's cleanup code (a
+    destructor, a callback), which swallows it; the note is not lost that way. Give it to
+    :class:`RunSignals` as ``on_signal`` and subscribe :meth:`checkpoint` to an event bus:
+    every progress event then raises a signal that was received.
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+
+    def __call__(self, signum: int) -> None:
+        if self.signum is None:
+            self.signum = signum
+
+    def check(self) -> None:
+        """Raise what :func:`exception_for` makes of the signal received, if any."""
+        if self.signum is not None:
+            raise exception_for(self.signum)
+
+    def checkpoint(self, event) -> None:
+        """An event-bus subscriber: :meth:`check` at every progress event."""
+        if isinstance(event, Progress):
+            self.check()
 
 
 class RunSignals:
@@ -31,6 +72,7 @@ class RunSignals:
         self._saved: dict[int, Any] = {}
         self.pending: list[int] = []
         self._on_signal = on_signal
+        self._silenced = False
 
     def install(self) -> None:
         """Keep the present handlers and turn SIGTERM into :class:`RunAborted` (and Ctrl+C
@@ -49,9 +91,15 @@ class RunSignals:
     def _raise(self, signum, frame):
         if self._on_signal is not None:
             self._on_signal(signum)
-        if signum == signal.SIGINT:
-            raise KeyboardInterrupt
-        raise RunAborted(f"received {signal.Signals(signum).name}")
+        if self._silenced:
+            self.pending.append(signum)
+            return
+        raise exception_for(signum)
+
+    def silence(self) -> None:
+        """From now on signals are only noted in ``pending`` (while an interruption is being
+        reported, a second Ctrl+C must not cut the report short)."""
+        self._silenced = True
 
     def _defer(self, signum, frame):
         self.pending.append(signum)
@@ -72,11 +120,8 @@ class RunSignals:
         """Raise what :meth:`held` noted, at a point the caller chose: KeyboardInterrupt for
         Ctrl+C, :class:`RunAborted` for SIGTERM. (Raised from the handler instead, the
         exception could land inside a library's cleanup code, which may swallow it.)"""
-        if not self.pending:
-            return
-        if self.pending[0] == signal.SIGINT:
-            raise KeyboardInterrupt
-        raise RunAborted(f"received {signal.Signals(self.pending[0]).name}")
+        if self.pending:
+            raise exception_for(self.pending[0])
 
     def restore(self) -> None:
         """Put back the handlers :meth:`install` found; ``pending`` keeps what was held."""

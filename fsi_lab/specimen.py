@@ -15,21 +15,21 @@ from fsi_lab.params import Param, validate
 FLUID_DENSITY = {"air": 1.26, "water": 997.0}
 
 SPECIMEN_PARAMS: tuple[Param, ...] = (
-    Param("length", "float", "m", 0.08, minimum=0.0, exclusive_minimum=True,
+    Param("length", "float", "m", 0.08, minimum=1e-3, maximum=10.0,
           help="Free length of the cantilever from the clamp to the tip."),
-    Param("width", "float", "m", 12.75e-3, minimum=0.0, exclusive_minimum=True,
+    Param("width", "float", "m", 12.75e-3, minimum=1e-4, maximum=1.0,
           help="Beam width H (the dimension facing the flow)."),
-    Param("thickness", "float", "m", 0.08e-3, minimum=0.0, exclusive_minimum=True,
+    Param("thickness", "float", "m", 0.08e-3, minimum=1e-6, maximum=0.1,
           help="Beam thickness in the direction of vibration."),
-    Param("youngs_modulus", "float", "Pa", 240e9, minimum=0.0, exclusive_minimum=True,
+    Param("youngs_modulus", "float", "Pa", 240e9, minimum=1e5, maximum=1.2e12,
           help="Young's modulus E of the beam material."),
-    Param("density", "float", "kg/m^3", 7200.0, minimum=0.0, exclusive_minimum=True,
+    Param("density", "float", "kg/m^3", 7200.0, minimum=10.0, maximum=25000.0,
           help="Density of the beam material."),
     Param("fluid", "str", "", "water", choices=tuple(FLUID_DENSITY),
           help="Fluid around the beam: 'air' (dry) or 'water' (wet)."),
-    Param("drag_coefficient", "float", "", 1.8, minimum=0.0,
+    Param("drag_coefficient", "float", "", 1.8, minimum=0.0, maximum=10.0,
           help="Drag coefficient C_d for the theoretical quadratic damping C_f = rho C_d H / 2."),
-    Param("measurement_point", "float", "m", 0.08, minimum=0.0,
+    Param("measurement_point", "float", "m", 0.08, minimum=0.0, maximum=10.0,
           help="Distance from the clamp to the point where the vibrometer measures."),
 )
 

@@ -154,21 +154,26 @@ class InProcessAcquisition(_Base, Acquisition):
         super().__init__(name, address, settings, context)
         self._context = context
 
-    def configure(self, inputs: Mapping[str, int], sample_rate: float, duration: float) -> float:
-        self._alive()
-        bad = {name: i for name, i in inputs.items() if i not in self.SIGNALS}
+    @classmethod
+    def record_problem(cls, inputs: Mapping[str, int], specimen: Any) -> str:
+        """What this digitiser cannot record of ``inputs`` (channel -> input number) for the
+        profile's ``specimen``, in words; empty when it can."""
+        bad = {name: i for name, i in inputs.items() if i not in cls.SIGNALS}
         if bad:
             name, number = next(iter(bad.items()))
-            raise InstrumentError(
-                f"{self._name}: channel {name!r} uses input {number}; this digitiser has inputs "
-                f"1 to {len(self.SIGNALS)}"
-            )
-        specimen = self._context.get("specimen")
+            return (f"channel {name!r} uses input {number}; this digitiser has inputs 1 to "
+                    f"{len(cls.SIGNALS)}")
         if specimen is None:
-            raise InstrumentError(
-                f"{self._name}: the simulated bench needs the profile's [specimen] (the beam "
-                "whose response it simulates)"
-            )
+            return ("the simulated bench needs the profile's [specimen] (the beam whose "
+                    "response it simulates)")
+        return ""
+
+    def configure(self, inputs: Mapping[str, int], sample_rate: float, duration: float) -> float:
+        self._alive()
+        specimen = self._context.get("specimen")
+        problem = self.record_problem(inputs, specimen)
+        if problem:
+            raise InstrumentError(f"{self._name}: {problem}")
         self._inputs = dict(inputs)
         self._rate = float(sample_rate)
         self._total = int(round(duration * sample_rate))
@@ -227,14 +232,26 @@ class InProcessAcquisition(_Base, Acquisition):
         return {"samples_sent": int(getattr(self, "_sent", 0))}
 
 
-FAIL = Param("fail_after_s", "float", "s", None, minimum=0.0,
+def check_acquisition(address: str, settings: dict[str, Any], plan: Mapping[str, Any]) -> None:
+    """The instrument check of :class:`~fsi_lab.contract.InstrumentPlugin` (ValueError): the
+    channels' inputs, the specimen, and a beam model the simulation resolves at the record's
+    sample rate."""
+    problem = InProcessAcquisition.record_problem(plan["inputs"], plan["specimen"])
+    if problem:
+        raise ValueError(problem)
+    from fsi_lab.modal_integrator import check_step
+
+    check_step(beam_model(plan["specimen"], plan["model"]), plan["sample_rate"])
+
+
+FAIL = Param("fail_after_s", "float", "s", None, minimum=0.0, maximum=86400.0,
              help="Simulated fault: stop answering once the record is this long (record time, "
                   "not wall-clock time).")
 
 PLUGINS = [
     InstrumentPlugin(
         "inprocess-source", "source",
-        (Param("sample_rate", "float", "Hz", None, minimum=1.0,
+        (Param("sample_rate", "float", "Hz", None, minimum=1.0, maximum=10e6,
                help="Playback rate of the waveform (default: the run's sample rate)."), FAIL),
         lambda address, settings, ctx: InProcessSource("source", address, settings, ctx),
         help="Simulated signal source inside the fsi-lab process."),
@@ -242,7 +259,7 @@ PLUGINS = [
         "inprocess-amplifier", "amplifier",
         (Param("gain", "float", "V/V", 1.0, minimum=0.0, maximum=100.0,
                help="Voltage gain of the amplifier."),
-         Param("interlock_after_s", "float", "s", None, minimum=0.0,
+         Param("interlock_after_s", "float", "s", None, minimum=0.0, maximum=86400.0,
                help="Simulated fault: trip the over-travel interlock once the record is this "
                     "long (record time, not wall-clock time)."),
          FAIL),
@@ -258,15 +275,18 @@ PLUGINS = [
         help="Simulated laser vibrometer."),
     InstrumentPlugin(
         "inprocess-acquisition", "acquisition",
-        (Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=1.0,
+        (Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=0.5,
                help="Length of each streamed block."),
          Param("realtime", "bool", "", False, help="Pace blocks at the real acquisition rate."),
-         Param("noise_v", "float", "V", 1e-4, minimum=0.0, help="RMS noise on every input."),
-         Param("seed", "int", "", 0, help="Seed of the noise generator."),
-         Param("accelerometer_v_per_ms2", "float", "V/(m/s^2)", 0.0102, minimum=0.0,
-               exclusive_minimum=True, help="Accelerometer sensitivity (100 mV/g)."), FAIL),
+         Param("noise_v", "float", "V", 1e-4, minimum=0.0, maximum=10.0,
+               help="RMS noise on every input."),
+         Param("seed", "int", "", 0, minimum=0, maximum=2**32 - 1,
+               help="Seed of the noise generator."),
+         Param("accelerometer_v_per_ms2", "float", "V/(m/s^2)", 0.0102, minimum=1e-6,
+               maximum=10.0, help="Accelerometer sensitivity (100 mV/g)."), FAIL),
         lambda address, settings, ctx: InProcessAcquisition("acquisition", address, settings, ctx),
-        help="Simulated digitiser with the bench physics behind its inputs."),
+        help="Simulated digitiser with the bench physics behind its inputs.",
+        check=check_acquisition),
 ]
 
 

@@ -15,7 +15,7 @@ simulated bench).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -160,6 +160,25 @@ class Keysight33500(SignalSource):
         self.link.close()
 
 
+def check_source(address: str, settings: dict[str, Any], plan: Mapping[str, Any]) -> None:
+    """The instrument check of :class:`~fsi_lab.contract.InstrumentPlugin` (ValueError): the
+    waveform must fit the arb memory, and the embedded bench's generator has one channel."""
+    points = plan["waveform_points"]
+    if points > MAX_POINTS:
+        raise ValueError(
+            f"the excitation has {points:,} samples at {plan['waveform_rate']:g} Sa/s; the arb "
+            f"memory holds {MIN_POINTS} to {MAX_POINTS:,} points: lower the source sample_rate "
+            "or the excitation duration")
+    from fsi_lab.instruments.sim.embedded import check_embedded
+
+    if check_embedded(address, plan):
+        from fsi_lab.instruments.sim.keysight import CHANNELS
+
+        if settings["channel"] > CHANNELS:
+            raise ValueError(f"channel: {settings['channel']}; the embedded simulated generator "
+                             f"has channel 1 only")
+
+
 def open_source(address: str, settings: dict[str, Any], context: dict[str, Any]) -> Keysight33500:
     """Connect, switch the output off, identify, clear the status and confirm the output off
     (the first ``OUTP<n> OFF`` goes out before the identity is known, so that the output goes
@@ -201,6 +220,7 @@ PLUGIN = InstrumentPlugin(
               help="Time allowed for each reply."),
     ),
     open=open_source,
+    check=check_source,
     help="Keysight 33500B-series arbitrary waveform generator over VISA (SCPI).",
 )
 

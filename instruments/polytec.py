@@ -16,7 +16,7 @@ Address: a serial device (``/dev/ttyUSB0``, ``COM3``), a pyserial URL (``rfc2217
 from __future__ import annotations
 
 import re
-from typing import Any
+from typing import Any, Mapping
 
 from fsi_lab.contract import InstrumentPlugin, Vibrometer
 from fsi_lab.errors import InstrumentError
@@ -174,6 +174,30 @@ def _discover(line: SerialLine) -> dict[int, str]:
     return found
 
 
+def check_vibrometer(address: str, settings: dict[str, Any], plan: Mapping[str, Any]) -> None:
+    """The instrument check of :class:`~fsi_lab.contract.InstrumentPlugin` (ValueError): the
+    range must read like a Polytec range, and the embedded bench's vibrometer offers only its
+    own ranges, decoder and line speed."""
+    try:
+        range_metres_per_volt(settings["range"])
+    except ValueError as exc:
+        raise ValueError(f"range: {exc}") from None
+    from fsi_lab.instruments.sim.embedded import check_embedded
+
+    if not check_embedded(address, plan):
+        return
+    from fsi_lab.instruments.sim.frontends import VIBROMETER_RANGES
+    from fsi_lab.instruments.sim.polytec import DECODER
+    from fsi_lab.instruments.sim.transport import SERIAL_BAUD
+
+    offered = {"range": tuple(VIBROMETER_RANGES), "decoder": ("auto", DECODER),
+               "baud_rate": (SERIAL_BAUD,)}
+    for key, accepted in offered.items():
+        if settings[key] not in accepted:
+            raise ValueError(f"{key}: {settings[key]!r} is not offered by the embedded simulated "
+                             f"vibrometer; expected {' or '.join(map(repr, accepted))}")
+
+
 def open_vibrometer(address: str, settings: dict[str, Any],
                     context: dict[str, Any]) -> PolytecVibrometer:
     """Open the port, take remote control, find the decoder, set and verify the range, read
@@ -237,6 +261,7 @@ PLUGIN = InstrumentPlugin(
               help="Time allowed for each reply."),
     ),
     open=open_vibrometer,
+    check=check_vibrometer,
     help="Polytec laser vibrometer over RS-232 (Get/Set/GetDevInfo grammar).",
 )
 

@@ -27,6 +27,8 @@ from fsi_lab.params import Param
 NAME = "scpi-daq"
 INPUTS = (1, 2, 3, 4)
 MAX_RATE = 204800.0
+#: Most samples per input a record may hold (``ACQ:POIN``, a 32-bit count).
+MAX_POINTS = 2**31 - 1
 SAFE_TIMEOUT_S = 1.0
 _STATUS = re.compile(r"^(IDLE|WTRG|RUN|DONE|OVER),(\d+),(\d+)$")
 
@@ -61,14 +63,9 @@ class ScpiDaq(Acquisition):
 
     def configure(self, inputs: Mapping[str, int], sample_rate: float, duration: float) -> float:
         """Enable the used inputs, set ranges, IEPE supply, rate, record length and trigger."""
-        bad = {name: n for name, n in inputs.items() if n not in INPUTS}
-        if bad:
-            name, number = next(iter(bad.items()))
-            raise InstrumentError(f"{self._where()}: channel {name!r} uses input {number}; "
-                                  f"this digitiser has inputs 1 to {len(INPUTS)}")
-        if not 0 < sample_rate <= MAX_RATE:
-            raise InstrumentError(f"{self._where()}: sample rate {sample_rate:g} Hz; this "
-                                  f"digitiser samples at up to {MAX_RATE:g} Hz")
+        problem = record_problem(inputs, sample_rate, duration)
+        if problem:
+            raise InstrumentError(f"{self._where()}: {problem}")
         names: dict[int, list[str]] = {}
         for name, number in inputs.items():
             names.setdefault(int(number), []).append(name)
@@ -192,17 +189,51 @@ class ScpiDaq(Acquisition):
         self.link.close()
 
 
+def record_problem(inputs: Mapping[str, int], sample_rate: float, duration: float) -> str:
+    """What this digitiser cannot record of ``inputs`` (channel name -> input number) at
+    ``sample_rate`` (Hz) for ``duration`` (s), in words; empty when it can."""
+    bad = {name: n for name, n in inputs.items() if n not in INPUTS}
+    if bad:
+        name, number = next(iter(bad.items()))
+        return f"channel {name!r} uses input {number}; this digitiser has inputs 1 to {len(INPUTS)}"
+    if not 0 < sample_rate <= MAX_RATE:
+        return f"sample rate {sample_rate:g} Hz; this digitiser samples at up to {MAX_RATE:g} Hz"
+    points = int(round(duration * sample_rate))
+    if points > MAX_POINTS:
+        return (f"{points:,} samples per input ({duration:g} s at {sample_rate:g} Hz); a record "
+                f"holds at most {MAX_POINTS:,}: shorten run.duration or lower run.sample_rate")
+    return ""
+
+
+def settings_problem(settings: Mapping[str, Any]) -> str:
+    """What is wrong with validated ``settings`` for this digitiser, in words; empty if nothing."""
+    if len(settings["ranges_v"]) != len(INPUTS):
+        return (f"ranges_v has {len(settings['ranges_v'])} values; expected one per input "
+                f"({len(INPUTS)})")
+    bad = [n for n in settings["iepe_inputs"] if n not in INPUTS]
+    if bad:
+        return f"iepe_inputs names input {bad[0]:g}; expected inputs 1 to {len(INPUTS)}"
+    return ""
+
+
+def check_daq(address: str, settings: dict[str, Any], plan: Mapping[str, Any]) -> None:
+    """The instrument check of :class:`~fsi_lab.contract.InstrumentPlugin` (ValueError)."""
+    problem = settings_problem(settings) or record_problem(
+        plan["inputs"], plan["sample_rate"], plan["duration"])
+    if problem:
+        raise ValueError(problem)
+    from fsi_lab.instruments.sim.embedded import check_embedded_record
+
+    check_embedded_record(address, plan)
+
+
 def open_daq(address: str, settings: dict[str, Any], context: dict[str, Any]) -> ScpiDaq:
     """Connect, identify, reset, clear the status and choose little-endian blocks."""
     from fsi_lab.instruments._visa import VisaLink
 
-    if len(settings["ranges_v"]) != len(INPUTS):
-        raise InstrumentError(f"{NAME}: ranges_v has {len(settings['ranges_v'])} values; "
-                              f"expected one per input ({len(INPUTS)})")
-    bad = [n for n in settings["iepe_inputs"] if n not in INPUTS]
-    if bad:
-        raise InstrumentError(f"{NAME}: iepe_inputs names input {bad[0]:g}; expected inputs "
-                              f"1 to {len(INPUTS)}")
+    problem = settings_problem(settings)
+    if problem:
+        raise InstrumentError(f"{NAME}: {problem}")
     if address.strip() in ("", "embedded"):
         from fsi_lab.instruments.sim.embedded import resolve_address
 
@@ -226,7 +257,7 @@ PLUGIN = InstrumentPlugin(
     name=NAME,
     role="acquisition",
     params=(
-        Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=1.0,
+        Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=0.5,
               help="Length of each block fetched and streamed into the run file."),
         Param("ranges_v", "floats", "V", [10.0, 10.0, 10.0, 10.0], minimum=0.001,
               maximum=10.0, help="Input range of inputs 1 to 4 (peak volts)."),
@@ -238,6 +269,7 @@ PLUGIN = InstrumentPlugin(
               help="Time allowed for each reply."),
     ),
     open=open_daq,
+    check=check_daq,
     help="4-input SCPI digitiser streaming int32 blocks (up to 204.8 kS/s) over VISA.",
 )
 

@@ -12,7 +12,7 @@ Address: a VISA resource, e.g. ``TCPIP0::192.168.1.20::5025::SOCKET`` or
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Mapping
 
 from fsi_lab.contract import Amplifier, InstrumentPlugin
 from fsi_lab.errors import InstrumentError
@@ -153,6 +153,14 @@ def open_amplifier(address: str, settings: dict[str, Any],
     return ShakerAmplifier(link, identity)
 
 
+def check_amplifier(address: str, settings: dict[str, Any], plan: Mapping[str, Any]) -> None:
+    """The instrument check of :class:`~fsi_lab.contract.InstrumentPlugin` (ValueError): an
+    embedded address needs the embedded bench."""
+    from fsi_lab.instruments.sim.embedded import check_embedded
+
+    check_embedded(address, plan)
+
+
 PLUGIN = InstrumentPlugin(
     name=NAME,
     role="amplifier",
@@ -168,6 +176,7 @@ PLUGIN = InstrumentPlugin(
               help="Time allowed for each reply."),
     ),
     open=open_amplifier,
+    check=check_amplifier,
     help="Shaker power amplifier with latched interlocks, SCPI over serial or TCP (VISA).",
 )
 

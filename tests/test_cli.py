@@ -172,7 +172,9 @@ def test_usage_and_file_system_errors_still_give_one_json_object(tmp_path):
     data, proc = cli_json("simulate", "profiles/wet-beam-sim.toml", "-o", str(tmp_path / "x.h5"))
     assert proc.returncode == 2
     assert data == {"error": "fsi-lab simulate: the following arguments are required: "
-                             "--duration, --rate", "exit_code": 2}
+                             "--duration, --rate (see fsi-lab simulate --help)", "exit_code": 2}
+    assert proc.stderr == ("fsi-lab: error: fsi-lab simulate: the following arguments are "
+                           "required: --duration, --rate (see fsi-lab simulate --help)\n")
     csv = tmp_path / "rec.csv"
     csv.write_text("time [s],tip [m/s]\n0,1\n0.001,2\n0.002,1\n")
     under_a_file = csv / "rec.h5"  # its folder is a file

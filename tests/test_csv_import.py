@@ -57,13 +57,30 @@ def test_time_column_replaces_rate(tmp_path):
     (["tip [m/s]", "b [V]"], [[1, 2], [2]], ["--rate", "10"],
      "line 3 has 1 values; the header has 2 columns"),
     (["tip [m/s]"], [[1], [2]], [], "no 'time [s]' column; give the sample rate with --rate HZ"),
-    (["tip [m/s]"], [[1], [2]], ["--rate", "-5"], "--rate -5.0: expected a positive sample rate"),
+    (["tip [m/s]"], [[1], [2]], ["--rate", "-5"],
+     "--rate -5: a sample rate of -5 Hz; expected 0.001 to 1e+09 Hz"),
     (["time [s]", "tip [m/s]"], [[0, 1], [0.1, 2], [0.25, 3]], [],
      "the time column is not uniformly sampled"),
     (["tip [m/s]"], [[1], ["nan"]], ["--rate", "10"], "expected a finite number"),
     (["tip/velocity [m/s]"], [[1], [2]], ["--rate", "10"],
      "header column 1: name 'tip/velocity' is not accepted; expected a letter followed by "
      "letters, digits, '_' or '-'"),
+    # time steps of 5e-324 s would store sample_rate = inf
+    (["time [s]", "tip [m/s]"], [[0, 1], ["5e-324", 2], ["1e-323", 3]], [],
+     "the time column (steps of 4.94066e-324 s) gives: a sample rate of inf Hz; expected "
+     "0.001 to 1e+09 Hz"),
+    (["tip [m/s]"], [[1], [2]], ["--rate", "1e-300"],
+     "--rate 1e-300: a sample rate of 1e-300 Hz; expected 0.001 to 1e+09 Hz"),
+    (["time [s]"], [[0], [1], [2]], [],
+     "only a time column; expected data columns 'name [unit]' beside it"),
+    (["time [s]", "Time [s]", "tip [m/s]"], [[0, 0, 1], [1, 1, 2]], [],
+     "header columns 1 and 2 are both time columns; expected at most one 'time [s]' column"),
+    (["time [s]", "tip [m/s]"], [["1e300", 1], ["1.0000000001e300", 2]], [],
+     "the time column (steps of"),
+    (["time [s]", "tip [m/s]"], [[2e9, 1], [2e9 + 0.001, 2]], [],
+     "line 2: the time column starts at 2e+09 s; expected a start within 1e+09 s of 0"),
+    (["tip [g]"], [["1e308"], [1]], ["--rate", "10"],
+     "line 2, column 1 (tip): too large to convert from g to m/s^2; expected a finite value"),
 ])
 def test_bad_csv_is_refused_with_file_and_place(tmp_path, header, rows, args, fragment):
     csv_path = _write(tmp_path / "bad.csv", header, rows)

@@ -127,8 +127,9 @@ def test_an_interrupted_simulation_is_aborted_without_a_traceback(tmp_path, regi
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_ends_simulate_as_an_aborted_run(tmp_path, signum):
     out = tmp_path / "long.h5"
-    # a day of simulated time: far longer than the test waits
-    proc = start_cli("simulate", str(WET), "--duration", "86400", "--rate", "1000",
+    # hours of simulated time (20 million samples, the most simulate holds): far longer than
+    # the test waits
+    proc = start_cli("simulate", str(WET), "--duration", "20000", "--rate", "1000",
                      "--modes", "1", "-o", str(out), "--json")
     try:
         deadline = time.monotonic() + 60

@@ -74,3 +74,37 @@ def test_describe_is_json_friendly():
 def test_unknown_type_is_refused():
     with pytest.raises(ParameterError, match="allowed types"):
         Param("x", "complex")
+
+
+@pytest.mark.parametrize("name, value, fragment", [
+    # an integer of more than 308 digits cannot become a float (OverflowError before)
+    ("amplitude", 10**400, "excitation.amplitude: an integer of 401 digits is out of bounds"),
+    ("ratios", [10**309], "excitation.ratios[0]: an integer of 310 digits is out of bounds"),
+    ("components", 10**400, "excitation.components: an integer of 401 digits is out of bounds"),
+    # nor can an integer beyond 64 bits be stored in a run file's attributes
+    ("components", 2**63, "excitation.components: 9223372036854775808 is out of bounds; "
+                          "expected an integer >= 1 (and of magnitude below 2^63)"),
+])
+def test_integers_too_large_for_a_float_or_a_run_file_are_refused(name, value, fragment):
+    with pytest.raises(ParameterError) as info:
+        validate(SCHEMA, {"gain": 1, name: value}, "excitation")
+    assert str(info.value).startswith(fragment), str(info.value)
+
+
+def test_the_largest_storable_integer_is_accepted():
+    assert validate(SCHEMA, {"gain": 1, "components": 2**63 - 1}, "x")["components"] == 2**63 - 1
+
+
+@pytest.mark.parametrize("value, fragment", [
+    ("a\x00b", r"'a\x00b' holds the control character '\x00' at position 1"),
+    ("two\nlines", r"'two\nlines' holds the control character '\n' at position 3"),
+])
+def test_control_characters_in_text_are_refused(value, fragment):
+    text = Param("name", "str", "", "")
+    words = Param("names", "strs", "", [])
+    with pytest.raises(ParameterError) as info:
+        text.check(value, "run.name")
+    assert str(info.value) == f"run.name: {fragment}; expected printable text"
+    with pytest.raises(ParameterError, match=r"analysis.names\[1\]: .*control character"):
+        words.check(["ok", value], "analysis.names")
+    assert text.check("wet beam, 5 \u00b5m", "run.name") == "wet beam, 5 \u00b5m"

@@ -50,7 +50,7 @@ BAD_CASES = [
     ("unknown analysis", 'chain = ["spectrum"', 'chain = ["hilbert"',
      "analysis.hilbert.plugin: unknown analysis plugin 'hilbert'"),
     ("negative geometry", "length = 0.08", "length = -0.08",
-     "specimen.length: -0.08 is out of bounds; expected a number > 0 m"),
+     "specimen.length: -0.08 is out of bounds; expected a number >= 0.001 m and <= 10 m"),
     ("unknown sensor", 'sensor = "vibrometer"', 'sensor = "vibrometr"',
      "channels.tip_velocity.sensor: 'vibrometr' is not an instrument of this bench; expected "
      "empty or one of the roles with a [bench.<role>] table: 'source', 'amplifier', "
@@ -87,7 +87,7 @@ def test_json_error_is_one_object(tmp_path):
 def test_missing_file_is_named(tmp_path):
     proc = cli("profile", "check", str(tmp_path / "nope.toml"))
     assert proc.returncode == 2
-    assert "nope.toml: cannot read the profile" in proc.stderr
+    assert "nope.toml: no such file; expected a profile (TOML text)" in proc.stderr
 
 
 def test_set_overrides_any_parameter_by_path(registry):
@@ -193,3 +193,22 @@ def test_sensor_is_not_checked_when_the_bench_is_left_out(registry):
         assert ("channels" in sections) == bool(profile.channels)
     with pytest.raises(ProfileError, match="'vibrometr' is not an instrument of this bench"):
         parse_profile(text, "p.toml", registry, sections=("bench", "channels"))
+
+
+def test_every_numeric_parameter_of_the_core_instruments_and_excitations_has_bounds(registry):
+    from fsi_lab.modelling import MODEL_PARAMS
+    from fsi_lab.profile import (
+        ANALYSIS_PARAMS, BENCH_PARAMS, CHANNEL_PARAMS, RUN_PARAMS, SAFETY_PARAMS, SHAKER_PARAMS,
+    )
+    from fsi_lab.specimen import SPECIMEN_PARAMS
+
+    schemas = {"run": RUN_PARAMS, "safety": SAFETY_PARAMS, "shaker": SHAKER_PARAMS,
+               "specimen": SPECIMEN_PARAMS, "model": MODEL_PARAMS, "bench": BENCH_PARAMS,
+               "channels.<name>": CHANNEL_PARAMS, "analysis": ANALYSIS_PARAMS}
+    for kind in ("instrument", "excitation"):
+        for name, descriptor in registry.descriptors[kind].items():
+            schemas[f"{kind} {name}"] = descriptor.params
+    unbounded = [f"{where}.{p.name}" for where, schema in schemas.items() for p in schema
+                 if p.type in ("float", "int", "floats") and p.choices is None
+                 and (p.minimum is None or p.maximum is None)]
+    assert len(schemas) >= 20 and unbounded == []

@@ -4,7 +4,7 @@ import h5py
 import numpy as np
 import pytest
 
-from fsi_lab.errors import InputFileError
+from fsi_lab.errors import AnalysisError, InputFileError
 from fsi_lab.runfile import (RunFileWriter, new_run_path, read_analysis_summary, read_run,
                              write_analysis)
 
@@ -47,7 +47,8 @@ def test_analysis_is_replaced_whole_and_a_failed_write_keeps_the_old(run_file):
                                       "params": {"n": 2}}},
                    {"run": str(run_file), "channels": {"v": {"f": 1.5}}})
     assert read_analysis_summary(run_file)["channels"]["v"]["f"] == 1.5
-    with pytest.raises(TypeError):
+    with pytest.raises(AnalysisError, match=r"/analysis/v/b/bad: the analysis result cannot be "
+                                            r"stored \(TypeError"):
         write_analysis(run_file, {"v/b": {"datasets": {"bad": np.array([object()])}}},
                        {"run": "x", "channels": {}})
     assert read_analysis_summary(run_file)["channels"]["v"]["f"] == 1.5
@@ -63,7 +64,8 @@ def test_channel_without_attributes_is_named(tmp_path):
     with h5py.File(path, "w") as handle:
         handle.attrs["format"] = "fsi-lab run"
         handle.create_dataset("channels/v", data=np.zeros(3))
-    with pytest.raises(InputFileError, match=r"/channels/v lacks attribute 'units'"):
+    with pytest.raises(InputFileError, match=r"/channels/v attribute 'quantity': is missing; "
+                                             r"expected one of 'displacement', 'velocity'"):
         read_run(path)
 
 

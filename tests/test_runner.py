@@ -394,6 +394,7 @@ def test_ctrl_c_during_the_analysis_keeps_the_completed_run(sim_profile, registr
     runner.bus.subscribe(ctrl_c_while_analysing)
     outcome = run()
     assert outcome.exit_status == "completed" and outcome.summary is None
+    assert outcome.interrupted  # the command exits 130: it did not finish its work
     assert outcome.error.startswith("the analysis was stopped (Ctrl+C); the record is "
                                     "complete"), outcome.error
     record = _assert_safe(outcome.path)

@@ -2,9 +2,10 @@
 
 It prints where each instrument answers (TCP on 127.0.0.1, pseudo-terminals for the serial
 ones) and the ``[bench.*]`` tables of a profile that uses them; such a profile runs unchanged
-against real hardware once the addresses are replaced. The physics comes from ``--profile``
-(its ``[specimen]``, ``[model]``, ``[shaker]`` and the ``fast``/``fault`` keys of ``[bench]``)
-or from the defaults (the paper's beam in water).
+against real hardware once the addresses are replaced. The physics is the profile's given on
+the command line (``fsi-lab bench PROFILE``): its ``[specimen]``, ``[model]`` and ``[shaker]``,
+and the ``fast``/``fault`` keys of ``[bench]``; run that profile (with the printed addresses)
+against the bench and the analysis finds the beam the profile describes.
 
 This module is imported to list the command: everything heavy is imported inside :func:`run`.
 """
@@ -21,8 +22,9 @@ from fsi_lab.instruments.sim.faults import FAULTS, ROLES
 
 def configure(parser: argparse.ArgumentParser) -> None:
     """Add the options of ``fsi-lab bench`` to ``parser``."""
-    parser.add_argument("--profile", type=Path, metavar="PROFILE",
-                        help="take the physics and the [bench] fast/fault keys from this profile")
+    parser.add_argument("profile", type=Path, metavar="PROFILE",
+                        help="the profile whose beam ([specimen], [model]), shaker and [bench] "
+                             "fast/fault keys the bench simulates")
     parser.add_argument("--fast", action="store_true", default=None,
                         help="simulate as fast as the client fetches (default: real time)")
     parser.add_argument("--fault", choices=FAULTS, help="inject this fault")
@@ -41,28 +43,18 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _profile_sections(path: Path):
-    """Specimen, model, shaker and the [bench] keys of a profile (ProfileError if invalid)."""
-    import tomllib
-
+    """Specimen, model, shaker and the [bench] keys of a profile (ProfileError if invalid or
+    without a [specimen])."""
     from fsi_lab.errors import ProfileError
-    from fsi_lab.params import validate
-    from fsi_lab.profile import BENCH_PARAMS, parse_profile
+    from fsi_lab.profile import load_profile
     from fsi_lab.registry import load_registry
 
-    try:
-        text = path.read_text(encoding="utf-8")
-        raw = tomllib.loads(text)
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise ProfileError(f"{path}: cannot read the profile ({exc})") from None
-    profile = parse_profile(text, str(path), load_registry(),
-                            sections=("specimen", "model", "shaker"))
-    keys = {p.name for p in BENCH_PARAMS}
-    bench_raw = {k: v for k, v in (raw.get("bench") or {}).items() if k in keys}
-    try:
-        bench = validate(BENCH_PARAMS, bench_raw, "bench")
-    except Exception as exc:  # ParameterError
-        raise ProfileError(f"{path}: {exc}") from None
-    return profile.specimen, profile.model, profile.shaker, bench
+    profile = load_profile(path, load_registry(),
+                           sections=("specimen", "model", "shaker", "bench"))
+    if profile.specimen is None:
+        raise ProfileError(f"{path}: specimen: missing; the simulated bench needs the beam whose "
+                           "response it simulates ([specimen], and [model] for its damping)")
+    return profile.specimen, profile.model, profile.shaker, profile.bench
 
 
 def run(args: argparse.Namespace) -> int:
@@ -74,13 +66,10 @@ def run(args: argparse.Namespace) -> int:
     from fsi_lab.errors import FsiLabError
     from fsi_lab.instruments.sim.bench import BenchOptions, SimBench
 
-    specimen = model = shaker = None
-    bench_keys = {"fast": False, "fault": "none", "fault_after_s": 1.0}
     try:
-        if args.profile is not None:
-            specimen, model, shaker, bench_keys = _profile_sections(args.profile)
+        specimen, model, shaker, bench_keys = _profile_sections(args.profile)
     except FsiLabError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"fsi-lab: error: {exc}", file=sys.stderr)
         return exc.exit_code
 
     def log(text: str) -> None:
@@ -104,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-        print(f"error: cannot start the simulated bench: {exc}", file=sys.stderr)
+        print(f"fsi-lab: error: cannot start the simulated bench: {exc}", file=sys.stderr)
         return 1
     try:
         addresses, snippet = bench.addresses, bench.profile_snippet()

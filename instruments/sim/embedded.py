@@ -26,9 +26,7 @@ def get_embedded_bench(context: dict[str, Any]):
     if bench is not None:
         return bench
     if context.get("specimen") is None:
-        raise InstrumentError(
-            "embedded simulated bench: the profile has no [specimen]; the bench needs the beam "
-            "whose response it simulates")
+        raise InstrumentError(f"embedded simulated bench: {NO_SPECIMEN}")
     section = context.get("bench") or {}
     options = BenchOptions(fast=bool(section.get("fast", False)),
                            fault=str(section.get("fault", "none")),
@@ -47,8 +45,38 @@ def resolve_address(role: str, plugin: str, address: str, context: dict[str, Any
     if address.strip() not in EMBEDDED:
         return address
     if not (context.get("bench") or {}).get("embedded"):
-        raise InstrumentError(
-            f"{plugin} ({role}): address {address!r} names the embedded simulated bench, but "
-            "the profile does not say [bench] embedded = true; give the instrument's address "
-            "or set embedded = true")
+        raise InstrumentError(f"{plugin} ({role}): {_not_started(address)}")
     return get_embedded_bench(context).addresses[key or role]
+
+
+NO_SPECIMEN = ("the profile has no [specimen]; the bench needs the beam whose response it "
+               "simulates")
+
+
+def _not_started(address: str) -> str:
+    return (f"address {address!r} names the embedded simulated bench, but the profile does not "
+            "say [bench] embedded = true; give the instrument's address or set embedded = true")
+
+
+def check_embedded(address: str, plan: dict[str, Any]) -> bool:
+    """For a driver's ``check``: whether ``address`` names the embedded bench, which the
+    profile must then start and give a ``[specimen]`` (ValueError otherwise)."""
+    if address.strip() not in EMBEDDED:
+        return False
+    if not (plan.get("bench") or {}).get("embedded"):
+        raise ValueError(_not_started(address))
+    if plan.get("specimen") is None:
+        raise ValueError(f"address {address!r} names the embedded simulated bench, but "
+                         f"{NO_SPECIMEN}")
+    return True
+
+
+def check_embedded_record(address: str, plan: dict[str, Any]) -> None:
+    """:func:`check_embedded`, and the bench's simulated world must resolve every mode of the
+    profile's beam model at the record's sample rate (ValueError naming the remedy)."""
+    if not check_embedded(address, plan):
+        return
+    from fsi_lab.instruments.sim.world import oversampling
+    from fsi_lab.modelling import beam_model
+
+    oversampling(beam_model(plan["specimen"], plan["model"]), plan["sample_rate"])

@@ -29,6 +29,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 IDENTITY = "fsi-lab,33521B-SIM,SIM33500,1.0 (simulated)"
 MAX_POINTS = 1_000_000
+#: Output channels of the simulated generator (a 33521B has one).
+CHANNELS = 1
 MIN_POINTS = 8
 DAC_LEVELS = 32767.0
 MAX_SAMPLE_RATE = 160e6
@@ -182,7 +184,7 @@ class KeysightSim:
     # ------------------------------------------------------------------ helpers
     @staticmethod
     def _channel(suffixes: list) -> None:
-        scpi.suffix(suffixes[0] if suffixes else None, range(1, 2))
+        scpi.suffix(suffixes[0] if suffixes else None, range(1, CHANNELS + 1))
 
     def _ch(self, answer):
         def handler(args, suffixes):

@@ -126,10 +126,14 @@ class TcpEndpoint:
             await asyncio.gather(*tasks, return_exceptions=True)
 
 
+#: Line speed of the simulated serial ports, baud (8N1).
+SERIAL_BAUD = 115200
+
+
 class PtyEndpoint:
     """A pseudo-terminal standing for an RS-232 port at ``baud`` 8N1."""
 
-    def __init__(self, exchange: Exchange, baud: int = 115200) -> None:
+    def __init__(self, exchange: Exchange, baud: int = SERIAL_BAUD) -> None:
         self.exchange = exchange
         self.baud = baud
         self.master = self.slave = -1

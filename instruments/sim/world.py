@@ -53,7 +53,7 @@ def oversampling(model, sample_rate: float) -> int:
             continue
     raise ParameterError(
         f"the simulated bench cannot resolve the highest mode at {sample_rate:g} Hz even "
-        f"oversampled {MAX_OVERSAMPLING} times; use fewer model modes")
+        f"oversampled {MAX_OVERSAMPLING} times; lower model.modes or raise run.sample_rate")
 
 
 class World:

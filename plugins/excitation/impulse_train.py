@@ -120,6 +120,7 @@ PLUGIN = ExcitationPlugin(
         p["order"], p["alternate_sign"], p["delay"], p["duration"], rate),
     help="Impulses of designed, geometrically spaced amplitudes, each decaying before the next; "
          "one record covers the backbone from large to small amplitude.",
+    duration=lambda p: p["duration"] or p["delay"] + p["count"] * p["spacing"],
 )
 
 

@@ -34,6 +34,7 @@ PLUGIN = ExcitationPlugin(
     generate=lambda p, rate: ramp_derivative(p["height"], p["ramp_duration"], p["delay"],
                                              p["duration"], rate),
     help="The derivative of a ramp (a rectangular pulse); excites the second wet mode strongly.",
+    duration=lambda p: p["duration"],
 )
 
 

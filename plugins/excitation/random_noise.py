@@ -66,18 +66,20 @@ PLUGIN = ExcitationPlugin(
     params=(
         Param("rms", "float", "V", 0.1, minimum=0.0, exclusive_minimum=True, maximum=10.0,
               help="RMS source voltage of the noise (its peak is about 4 times larger)."),
-        Param("f_low", "float", "Hz", 1.0, minimum=0.0,
+        Param("f_low", "float", "Hz", 1.0, minimum=0.0, maximum=1e6,
               help="Lowest frequency of the band."),
-        Param("f_high", "float", "Hz", 200.0, minimum=0.0, exclusive_minimum=True,
+        Param("f_high", "float", "Hz", 200.0, minimum=0.0, exclusive_minimum=True, maximum=1e6,
               help="Highest frequency of the band (below half the source sample rate)."),
         Param("taper", "float", "s", 0.05, minimum=0.0, maximum=60.0,
               help="Raised-cosine fade in and out, so the drive starts and ends at 0 V."),
-        Param("seed", "int", "", 0, minimum=0, help="Seed of the random phases."),
+        Param("seed", "int", "", 0, minimum=0, maximum=2**32 - 1,
+              help="Seed of the random phases."),
         DELAY, DURATION,
     ),
     generate=lambda p, rate: band_limited_noise(p["rms"], p["f_low"], p["f_high"], p["taper"],
                                                 p["seed"], p["delay"], p["duration"], rate),
     help="Band-limited random noise (flat spectrum, random phases) for the frequency response.",
+    duration=lambda p: p["duration"],
 )
 
 

@@ -33,6 +33,7 @@ PLUGIN = ExcitationPlugin(
     ),
     generate=lambda p, rate: step(p["amplitude"], p["rise_time"], p["delay"], p["duration"], rate),
     help="A step of the source voltage; the shaker base overshoots and rings on its suspension.",
+    duration=lambda p: p["duration"],
 )
 
 

@@ -34,7 +34,7 @@ def stop(proc: subprocess.Popen, signum: int) -> tuple[int, str]:
 
 
 def test_a_profile_runs_unchanged_against_the_bench_addresses(tmp_path):
-    proc = start_bench("--fast", "--json")
+    proc = start_bench(str(PROFILES / "dry-beam-sim.toml"), "--fast", "--json")
     try:
         line = LineReader(proc.stdout).wait_for(lambda text: text.startswith("{"), timeout=60)
         printed = json.loads(line)
@@ -57,7 +57,7 @@ def test_a_profile_runs_unchanged_against_the_bench_addresses(tmp_path):
 
 
 def test_the_bench_takes_its_physics_from_a_profile_and_stops_on_ctrl_c():
-    proc = start_bench("--profile", str(PROFILES / "dry-beam-sim.toml"), "--fault", "drop",
+    proc = start_bench(str(PROFILES / "dry-beam-sim.toml"), "--fault", "drop",
                        "--fault-after", "0.2")
     try:
         reader = LineReader(proc.stdout)
@@ -74,8 +74,8 @@ def test_the_bench_takes_its_physics_from_a_profile_and_stops_on_ctrl_c():
 def test_a_bad_profile_is_refused(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text('[specimen]\nfluid = "oil"\n')
-    proc = subprocess.run([sys.executable, "-m", "fsi_lab.instruments.sim.cli", "--profile",
-                           str(bad)], capture_output=True, text=True, timeout=60)
+    proc = subprocess.run([sys.executable, "-m", "fsi_lab.instruments.sim.cli", str(bad)],
+                          capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
     assert "specimen.fluid: got 'oil'" in proc.stderr and str(bad) in proc.stderr
 
@@ -88,8 +88,9 @@ def test_chosen_ports_are_used():
         with socket.socket() as probe:
             probe.bind(("127.0.0.1", 0))
             ports[role] = probe.getsockname()[1]
-    proc = start_bench("--fast", "--json", *[arg for role, port in ports.items()
-                                             for arg in (f"--{role}-port", str(port))])
+    proc = start_bench(str(PROFILES / "dry-beam-sim.toml"), "--fast", "--json",
+                       *[arg for role, port in ports.items()
+                         for arg in (f"--{role}-port", str(port))])
     try:
         line = LineReader(proc.stdout).wait_for(lambda text: text.startswith("{"), timeout=60)
         addresses = json.loads(line)["addresses"]
@@ -98,3 +99,18 @@ def test_chosen_ports_are_used():
     assert code == 0, stderr
     for role, port in ports.items():
         assert addresses[role] == f"TCPIP0::127.0.0.1::{port}::SOCKET"
+
+
+def test_the_bench_needs_the_profile_it_simulates(tmp_path):
+    usage = subprocess.run([sys.executable, "-m", "fsi_lab.instruments.sim.cli", "--fast"],
+                           capture_output=True, text=True, timeout=60)
+    assert usage.returncode == 2 and "the following arguments are required: PROFILE" \
+        in usage.stderr
+    beamless = tmp_path / "beamless.toml"
+    beamless.write_text("[shaker]\nsuspension_hz = 30.0\n")
+    proc = subprocess.run([sys.executable, "-m", "fsi_lab.instruments.sim.cli", str(beamless)],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr == (f"fsi-lab: error: {beamless}: specimen: missing; the simulated bench "
+                           "needs the beam whose response it simulates ([specimen], and [model] "
+                           "for its damping)\n")

@@ -45,20 +45,26 @@ def test_a_dropped_connection_fails_the_run_safely_from_the_command_line(tmp_pat
     assert 0 < read_run(data["run"]).channels["tip_velocity"].data.size < 20000
 
 
-def test_fsi_lab_bench_serves_a_profile_run_by_fsi_lab_run(tmp_path):
-    bench = start_cli("bench", "--fast", "--json")
+def test_fsi_lab_bench_takes_the_profile_whose_beam_the_run_identifies(tmp_path):
+    """The README's standalone bench: started with the wet profile, it simulates the profile's
+    beam (C_i = 0.65 and C_f = 33 per unit length), which the run against it identifies."""
+    wet = PROFILES / "wet-beam-sim.toml"
+    bench = start_cli("bench", str(wet), "--fast", "--json")
     try:
         line = LineReader(bench.stdout).wait_for(lambda text: text.startswith("{"), timeout=60)
         snippet = json.loads(line)["profile"]
-        text = DRY.read_text()
+        text = wet.read_text()
         head = text[:text.index("[bench]")]
         tail = text[text.index("[channels.drive]"):]
         profile = tmp_path / "lab.toml"
         profile.write_text(head + "[bench]\nembedded = false\n\n" + snippet + "\n" + tail)
         data, proc = cli_json("run", str(profile), "--out", str(tmp_path / "runs"),
-                              "--set", "run.duration=1")
+                              "--set", "run.duration=2")
         assert proc.returncode == 0, proc.stderr
         assert data["exit_status"] == "completed"
+        first = data["analysis"]["channels"]["tip_velocity"]["components"][0]
+        assert 16.5 < first["frequency_hz"] < 17.5  # the second wet mode
+        assert 0.55 < first["equivalent_damping"]["c_i"] < 0.75, first["equivalent_damping"]
     finally:
         bench.send_signal(signal.SIGINT)
         try:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from benchkit import bench_profile, bench_threads, lab_registry, run_profile
 
-from fsi_lab.errors import InstrumentError
+from fsi_lab.errors import InstrumentError, ProfileError
 from fsi_lab.profile import load_profile
 from fsi_lab.runfile import read_run
 from fsi_lab.runner import Runner
@@ -74,11 +74,13 @@ def test_embedded_address_needs_the_embedded_bench(tmp_path):
     path = bench_profile(tmp_path / "p.toml")
     path.write_text(path.read_text().replace("embedded = true", "embedded = false"))
     registry = lab_registry()
-    outcome = Runner(load_profile(path, registry), registry, tmp_path / "runs",
-                     analyze=False).run()
-    assert outcome.exit_status == "failed"
-    assert ("shaker-amplifier (amplifier): address 'embedded' names the embedded simulated "
-            "bench, but the profile does not say [bench] embedded = true") in outcome.error
+    runner = Runner(load_profile(path, registry), registry, tmp_path / "runs", analyze=False)
+    with pytest.raises(ProfileError) as info:  # refused before anything is opened or written
+        runner.run()
+    assert str(info.value).startswith(
+        f"{path}: bench.source: address 'embedded' names the embedded simulated bench, but the "
+        "profile does not say [bench] embedded = true"), str(info.value)
+    assert not (tmp_path / "runs").exists()
 
 
 def test_unreachable_instrument_is_named_with_its_address(tmp_path):

@@ -1,0 +1,199 @@
+"""Damaged run files, made by really damaging a real run file (h5py edits, truncation, a
+corrupted byte): ``show`` and ``analyze`` refuse each with one message naming the file and the
+node or attribute (exit 2), never a traceback, and the file is left as it was."""
+
+import shutil
+import signal
+
+import h5py
+import numpy as np
+import pytest
+
+from support import SIM_PROFILE, run_main
+
+from fsi_lab.errors import AnalysisError, InputFileError
+from fsi_lab.isolation import crash_or_hang
+from fsi_lab.runfile import read_run, write_analysis
+
+
+@pytest.fixture(scope="module")
+def measured_run(tmp_path_factory):
+    """A real run on the in-process bench, analysed with the spectrum (so it has a summary)."""
+    folder = tmp_path_factory.mktemp("measured")
+    profile = folder / "sim.toml"
+    profile.write_text(SIM_PROFILE.format(
+        duration=0.5, realtime="false", amplitude=0.5, amplifier_extra="", acquisition_extra="",
+        analysis='[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'))
+    code, out, err = run_main("run", str(profile), "--out", str(folder / "runs"))
+    assert code == 0, err
+    return next((folder / "runs").glob("*.h5"))
+
+
+def _damaged(measured_run, tmp_path, edit):
+    path = tmp_path / "damaged.h5"
+    shutil.copy(measured_run, path)
+    with h5py.File(path, "r+") as handle:
+        edit(handle)
+    return path
+
+
+def _replace_channel(data):
+    def edit(handle):
+        attrs = dict(handle["channels/tip_velocity"].attrs)
+        del handle["channels/tip_velocity"]
+        handle["channels"].create_dataset("tip_velocity", data=data)
+        handle["channels/tip_velocity"].attrs.update(attrs)
+    return edit
+
+
+def _set(node, key, value):
+    def edit(handle):
+        handle[node].attrs[key] = value
+    return edit
+
+
+def _refused(path, command, *fragments):
+    before = path.read_bytes()
+    code, out, err = run_main(*command, str(path))
+    assert code == 2, (command, out, err)
+    assert err.count("fsi-lab: error:") == 1 and "Traceback" not in err, err
+    assert err.startswith(f"fsi-lab: error: {path}:"), err  # (the stored profile: PATH:/profile)
+    for fragment in fragments:
+        assert fragment in err, err
+    assert path.read_bytes() == before  # nothing written to a refused file
+
+
+CHANNEL = "/channels/tip_velocity"
+# (case, edit, what the message must say): refused by show and by analyze
+DAMAGE = [
+    ("corrupted summary attribute", _set("analysis", "summary", '{"run": "x", "chan'),
+     "/analysis attribute 'summary': is not a JSON object"),
+    ("summary of another layout", _set("analysis", "summary", '{"channels": {"tip": 5}}'),
+     "/analysis attribute 'summary': not laid out as fsi-lab writes it"),
+    ("sample_rate = 0", _set("channels/tip_velocity", "sample_rate", 0.0),
+     f"{CHANNEL} attribute 'sample_rate': is 0.0; expected a finite number from 0.001 to 1e+09"),
+    ("sample_rate stored as a string", _set("channels/tip_velocity", "sample_rate", "2000"),
+     f"{CHANNEL} attribute 'sample_rate': is '2000'; expected a finite number"),
+    ("t0 stored as a string", _set("channels/tip_velocity", "t0", "soon"),
+     f"{CHANNEL} attribute 't0': is 'soon'; expected a finite number"),
+    ("a channel stored as a group",
+     lambda h: (h["channels"].__delitem__("base_acceleration"),
+                h["channels"].create_group("base_acceleration")),
+     "/channels/base_acceleration: is a group; expected a dataset"),
+    ("a dangling soft link", lambda h: h["channels"].__setitem__("ghost", h5py.SoftLink("/no")),
+     "/channels/ghost: is a soft link; expected a dataset stored in the file"),
+    ("an external link",
+     lambda h: h["channels"].__setitem__("far", h5py.ExternalLink("/etc/hostname", "/x")),
+     "/channels/far: is an external link"),
+    ("a missing /excitation/waveform", lambda h: h["excitation"].__delitem__("waveform"),
+     "/excitation/waveform: is missing; expected a dataset there"),
+    ("an integer profile attribute", _set("/", "profile", 5),
+     "/ attribute 'profile': is 5; expected text"),
+    ("overrides that are not texts", _set("/", "overrides", "[1, 2]"),
+     "/ attribute 'overrides': is not a list of texts"),
+    ("an unknown quantity", _set("channels/tip_velocity", "quantity", "speed"),
+     f"{CHANNEL} attribute 'quantity': is 'speed'; expected one of 'displacement'"),
+    ("an instrument stored as a dataset",
+     lambda h: (h["instruments"].__delitem__("source"),
+                h["instruments"].__setitem__("source", np.zeros(2))),
+     "/instruments/source: is a dataset; expected a group"),
+    ("2-D channel", _replace_channel(np.zeros((10, 2))),
+     f"{CHANNEL}: has shape (10, 2); expected a 1-D dataset of real numbers"),
+    ("string channel", _replace_channel(np.array([b"a", b"b"])),
+     f"{CHANNEL}: holds |S1 values; expected a 1-D dataset of real numbers"),
+    ("complex channel", _replace_channel(np.ones(100, complex)),
+     f"{CHANNEL}: holds complex128 values"),
+] + [(f"sample_rate = {value}", _set("channels/tip_velocity", "sample_rate", value),
+      f"{CHANNEL} attribute 'sample_rate': is {value!r}") for value in (-1.0, np.nan, np.inf)]
+
+
+@pytest.mark.parametrize("case, edit, fragment", DAMAGE, ids=[c[0] for c in DAMAGE])
+def test_show_and_analyze_refuse_a_damaged_run_file(measured_run, tmp_path, case, edit,
+                                                    fragment):
+    path = _damaged(measured_run, tmp_path, edit)
+    for command in (["show"], ["show", "--json"], ["analyze"]):
+        if "summary" in case and command == ["analyze"]:
+            continue  # analyze writes a new summary: the old one does not matter to it
+        _refused(path, command, fragment)
+
+
+# Files show can describe but analyze must refuse: nothing, or nothing usable, to analyse.
+UNANALYSABLE = [
+    ("no channels", lambda h: [h["channels"].__delitem__(n) for n in list(h["channels"])],
+     "/channels holds no channel; expected recorded channels to analyse"),
+    ("empty channels", lambda h: [h[f"channels/{n}"].resize((0,)) for n in h["channels"]],
+     "holds 0 samples; expected at least 2 to analyse"),
+    ("NaN samples", lambda h: h["channels/tip_velocity"].__setitem__(slice(5, 50), np.nan),
+     f"{CHANNEL} holds 45 NaN or infinite samples (the first at index 5); expected finite"),
+    ("a deeply nested stored profile",  # RecursionError in tomllib before
+     _set("/", "profile", "x = " + "[" * 5000 + "]" * 5000),
+     ":/profile: the profile: tables or arrays nested more than 8 levels deep"),
+]
+
+
+@pytest.mark.parametrize("case, edit, fragment", UNANALYSABLE, ids=[c[0] for c in UNANALYSABLE])
+def test_analyze_refuses_a_run_file_with_nothing_to_analyse(measured_run, tmp_path, case, edit,
+                                                            fragment):
+    path = _damaged(measured_run, tmp_path, edit)
+    code, out, err = run_main("show", str(path))
+    assert code == 0 and "Traceback" not in err, err
+    _refused(path, ["analyze"], fragment)
+
+
+def test_a_truncated_run_file_is_refused(measured_run, tmp_path):
+    path = tmp_path / "cut.h5"
+    path.write_bytes(measured_run.read_bytes()[:measured_run.stat().st_size // 2])
+    for command in (["show"], ["analyze"]):
+        _refused(path, command, "expected")
+
+
+def test_a_byte_that_crashes_the_hdf5_library_is_refused(measured_run, tmp_path):
+    """The variable-length string type of the root attribute ``kind`` given an invalid kind:
+    reading it crashes the HDF5 library (SIGSEGV) in the version fsi-lab installs."""
+    data = bytearray(measured_run.read_bytes())
+    name = data.index(b"kind\x00")
+    vlen = data.index(0x19, name, name + 24)  # the datatype message: class 9 (vlen), version 1
+    assert data[vlen + 1] == 1  # a string
+    data[vlen + 1] = 3
+    path = tmp_path / "flipped.h5"
+    path.write_bytes(bytes(data))
+    for command in (["show"], ["analyze"]):
+        _refused(path, command)
+
+
+def test_a_task_that_crashes_or_hangs_comes_back_as_a_message():
+    assert crash_or_hang(lambda: None) is None
+    assert crash_or_hang(lambda: 1 / 0) is None  # an ordinary error is the caller's to raise
+    crashed = crash_or_hang(lambda: signal.raise_signal(signal.SIGSEGV))
+    assert crashed == "the HDF5 library crashed reading it (SIGSEGV)"
+
+
+def test_a_task_that_hangs_is_stopped(monkeypatch):
+    import fsi_lab.isolation as isolation
+
+    monkeypatch.setattr(isolation, "TIMEOUT_S", 0.2)
+    assert crash_or_hang(signal.pause) == "reading it did not finish within 0.2 s"
+
+
+def test_a_failed_analysis_write_keeps_the_previous_results(measured_run, tmp_path):
+    path = tmp_path / "run.h5"
+    shutil.copy(measured_run, path)
+    before = read_run(path)
+    with pytest.raises(AnalysisError, match=r"/analysis/tip_velocity/bad/x: the analysis "
+                                            r"result cannot be stored \(TypeError"):
+        write_analysis(path, {"tip_velocity/bad": {"datasets": {"x": np.array([object()])}}},
+                       {"channels": {}})
+    with h5py.File(path, "r") as handle:
+        assert "analysis.new" not in handle  # no orphan group left behind
+        assert "tip_velocity/spectrum" in handle["analysis"]
+    after = read_run(path)
+    np.testing.assert_array_equal(after.channels["tip_velocity"].data,
+                                  before.channels["tip_velocity"].data)
+
+
+def test_read_run_names_the_damaged_node(measured_run, tmp_path):
+    path = _damaged(measured_run, tmp_path,
+                    _set("channels/base_acceleration", "sample_rate", "fast"))
+    with pytest.raises(InputFileError, match=r"/channels/base_acceleration attribute "
+                                             r"'sample_rate': is 'fast'; expected a finite"):
+        read_run(path)
