@@ -120,8 +120,12 @@ def _rate_from_time(path: Path, time: np.ndarray) -> float:
             f"line {worst + 3} against a median of {step:.6g} s); expected uniform sampling "
             f"within {TIME_TOLERANCE:.1%}"
         )
-    with np.errstate(over="ignore"):
-        rate = 1.0 / step
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        rate = (time.size - 1) / float(time[-1] - time[0])
+    # A time column printed in decimal misses the sample clock by its rounding (10 kHz read
+    # back as 10000.0000000011 Hz); no clock is stable to 10 significant digits.
+    if np.isfinite(rate):
+        rate = float(f"{rate:.10g}")
     return _check_rate(rate, f"{path}: the time column (steps of {step:.6g} s) gives")
 
 

@@ -90,7 +90,7 @@ CASES = [
      "run.sample_rate: got inf; expected a finite number"),
     ("analysis.hvd.components = 10**40", WET, ["analysis.hvd.components=" + "1" + "0" * 40],
      "analysis.hvd.components: 10000000000000000000000000000000000000000 is out of bounds; "
-     "expected an integer >= 1 (and of magnitude below 2^63)"),
+     "expected an integer >= 1 and <= 64 (and of magnitude below 2^63)"),
 ]
 
 

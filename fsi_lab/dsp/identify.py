@@ -429,6 +429,18 @@ def _band_quiet(reference: np.ndarray, fs: float, bands: ModeBands) -> list[np.n
             for row in parts]
 
 
+def _too_short(windows: list[tuple[int, int, int]], modes: list[_Mode], fs: float) -> str:
+    """Why no mode has a usable free decay, and how long the decays must be."""
+    longest = max(c - b for _, b, c in windows) / fs
+    lowest = min(m.frequency for m in modes)
+    need = MIN_CYCLES / lowest
+    spacing = (f"; an impulse train's impulses must be more than {need:.2g} s apart (plus "
+               "the time its decays take to fall below the noise)" if len(windows) > 1 else "")
+    return (f"no spectral peak has a free decay of {MIN_CYCLES} cycles above the noise floor: "
+            f"the longest free decay lasts {longest:.3g} s, and the mode at {lowest:.4g} Hz "
+            f"needs at least {need:.2g} s of free decay above the noise{spacing}; ")
+
+
 def _unlifted(amplitude: np.ndarray, lift: float) -> np.ndarray:
     """Extremum amplitudes less the noise's average lift ``lift / A`` (U^2 / U)."""
     return amplitude - lift / amplitude
@@ -987,8 +999,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                      f"{MIN_CYCLES} cycles above the noise floor: not a mode of the record")
     modes = [m for m in modes if m.decays]
     if not modes:
-        raise fail(func, "no spectral peak has a free decay of "
-                         f"{MIN_CYCLES} cycles above the noise floor; " + "; ".join(notes))
+        raise fail(func, _too_short(windows, dropped, fs) + "; ".join(notes))
     # Step 5: first fits, then the floor judged on the fitted envelope.
     for mode in modes:
         half = [_span_period(d["crossings"], d["times"][0], d["times"][-1]) for d in mode.decays]
@@ -1011,8 +1022,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                      f"{MIN_CYCLES} cycles above the noise floor: not a mode of the record")
     modes = [m for m in modes if m.decays]
     if not modes:
-        raise fail(func, "no spectral peak has a free decay of "
-                         f"{MIN_CYCLES} cycles above the noise floor; " + "; ".join(notes))
+        raise fail(func, _too_short(windows, lost, fs) + "; ".join(notes))
     for mode in modes:
         mode.fits = {}
         _fit_all(mode, follow, laws)
