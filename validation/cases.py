@@ -77,16 +77,74 @@ class Case:
         return self.modes[0]
 
 
-def _rhs(mode: Mode, mass: float, impulses, t: float, y: np.ndarray) -> tuple[float, float]:
-    x, v = y
-    w = 2.0 * math.pi * mode.frequency
+def _force(mode: Mode, impulses, t: float) -> float:
+    """The impulses' force on the mode per unit mass, m/s^2."""
     force = 0.0
     for start, width, peak in impulses:
         if start <= t < start + width:
             force += mode.gain * peak * math.sin(math.pi * (t - start) / width)
-    friction = mode.friction * (1.0 if v > 0 else -1.0 if v < 0 else 0.0)
-    return (v, -(mode.c_i / mass) * v - (mode.c_f / mass) * abs(v) * v - friction
-            - w * w * x - mode.alpha * x ** 3 + force)
+    return force
+
+
+def _rhs(mode: Mode, mass: float, impulses, sliding: float, t: float,
+         y: np.ndarray) -> tuple[float, float]:
+    """The oscillator with the friction's direction held at ``sliding`` (+1, -1 or 0)."""
+    x, v = y
+    w = 2.0 * math.pi * mode.frequency
+    return (v, -(mode.c_i / mass) * v - (mode.c_f / mass) * abs(v) * v
+            - mode.friction * sliding - w * w * x - mode.alpha * x ** 3
+            + _force(mode, impulses, t))
+
+
+def _spring(mode: Mode, impulses, t: float, x: float) -> float:
+    """Every force but damping and friction at displacement ``x``, per unit mass, m/s^2."""
+    w = 2.0 * math.pi * mode.frequency
+    return -w * w * x - mode.alpha * x ** 3 + _force(mode, impulses, t)
+
+
+def _solve(mode: Mode, case: Case, lo: float, hi: float, y: np.ndarray,
+           times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity at ``times`` in [lo, hi) and the state at ``hi``.
+
+    Friction's sign changes with the velocity's: each stretch of one sliding direction is
+    integrated on its own (a smooth right-hand side), ended by the event v = 0; there the mass
+    sticks while the other forces stay within the friction force, else it slides on (a stuck
+    mass stays at rest to the end of the piece: no case has friction and impulses together).
+    """
+    step = 0.05 / mode.frequency
+    v = np.empty(times.size)
+    t, y = lo, np.array(y, dtype=float)
+    while True:
+        sliding = float(np.sign(y[1]))
+        if sliding == 0.0 and mode.friction > 0.0:
+            push = _spring(mode, case.impulses, t, y[0])
+            if abs(push) <= mode.friction:      # stuck: at rest until the forces grow
+                sel = times >= t
+                v[sel] = 0.0
+                return v, np.array([y[0], 0.0])
+            sliding = float(np.sign(push))
+        events = None
+        if mode.friction > 0.0:
+            def stop(s, yy, sliding=sliding, begin=t):
+                return yy[1] if s > begin else sliding
+            stop.terminal, stop.direction = True, -sliding
+            events = stop
+        sel = (times >= t) & (times < hi)
+        sol = solve_ivp(lambda s, yy, sliding=sliding: _rhs(mode, case.mass, case.impulses,
+                                                            sliding, s, yy),
+                        (t, hi), y, t_eval=np.append(times[sel], hi) if events is None
+                        else times[sel], method="DOP853", rtol=1e-10, atol=1e-14,
+                        max_step=step, events=events, dense_output=events is not None)
+        if events is None or sol.status == 0:
+            if events is None:
+                v[sel] = sol.y[1][:-1]
+                return v, sol.y[:, -1]
+            v[sel] = sol.y[1]
+            return v, sol.sol(hi)
+        stop_t = float(sol.t_events[0][0])
+        sel_done = sel & (times < stop_t)
+        v[sel_done] = sol.sol(times[sel_done])[1] if np.any(sel_done) else v[sel_done]
+        t, y = stop_t, np.array([float(sol.y_events[0][0][0]), 0.0])
 
 
 def _mode_velocity(mode: Mode, case: Case) -> np.ndarray:
@@ -100,11 +158,7 @@ def _mode_velocity(mode: Mode, case: Case) -> np.ndarray:
     v = np.empty(n)
     for lo, hi in zip(edges[:-1], edges[1:]):
         sel = np.flatnonzero((t >= lo) & (t < hi))
-        sol = solve_ivp(lambda s, yy: _rhs(mode, case.mass, case.impulses, s, yy), (lo, hi), y,
-                        t_eval=np.append(t[sel], hi), method="DOP853", rtol=1e-10,
-                        atol=1e-14, max_step=0.05 / mode.frequency)
-        v[sel] = sol.y[1][:-1]
-        y = sol.y[:, -1]
+        v[sel], y = _solve(mode, case, lo, hi, y, t[sel])
     v[-1] = y[1]
     return v
 

@@ -405,9 +405,11 @@ class Whitener:
             sg = signs if signs is not None else (-1.0) ** np.arange(n)
             for k in range(1, min(n, MAX_BAND + 1)):
                 rho = correlation(times[k:] - times[:-k]) * sg[k:] * sg[:-k]
-                if float(np.max(np.abs(rho))) < 1e-4:
-                    break
                 bands.append(np.concatenate((rho * s[k:] * s[:-k], np.zeros(k))))
+            # The correlation's envelope has sidelobes: cut after the last lag that matters,
+            # not at its first zero.
+            keep = [k for k in range(1, len(bands)) if np.max(np.abs(bands[k])) >= 1e-4]
+            bands = bands[:max(keep, default=0) + 1]
         self.band = len(bands) - 1
         ab = np.array(bands)
         try:
