@@ -199,7 +199,9 @@ class ModeIdentification:
         ``dropped``: first extrema of each decay left out because the law did not hold there
         yet (:func:`_stable_start`); ``a`` and ``beta``: how far the quadratic law's
         coefficients still move, in standard errors, when more are left out (its covariance
-        is widened when more than chance allows).
+        is widened when more than chance allows); ``split_a``, ``split_beta``: how far they
+        differ between the larger and the smaller half of the extrema, in standard errors
+        (:func:`_one_law`).
     warnings
         Sentences on how far to trust the numbers; empty when every check passed.
     """
@@ -804,6 +806,55 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
     return {**z, "dropped": float(tried)}
 
 
+def _halves(decays: list[dict]) -> tuple[list[dict], list[dict]] | None:
+    """Each decay's larger and smaller half of extrema (None if a half is too short)."""
+    early, late = [], []
+    for d in decays:
+        n = d["amplitude"].size
+        if n < 4 * MIN_CYCLES:
+            return None
+        cut = n // 2
+        for out, sel in ((early, slice(0, cut)), (late, slice(cut, n))):
+            out.append({key: (val[sel] if key in ("times", "values", "amplitude", "scale")
+                              else val) for key, val in d.items()})
+    return early, late
+
+
+def _one_law(mode: _Mode, follow: str) -> dict[str, float]:
+    """Step 8b: the quadratic law fitted to the larger and to the smaller half of every decay's
+    extrema on its own. One law holds over the whole amplitude range only if the two agree
+    within their (independent) errors; if they differ by more than :data:`DRIFT_Z` combined
+    standard errors, the quadratic fit's covariance is widened by the square of the excess
+    (beyond what the start's drift already widened). Returns ``split_a`` and ``split_beta``
+    (z of the differences, the larger half's minus the smaller's)."""
+    halves = _halves(mode.decays)
+    if halves is None:
+        return {}
+    fits = []
+    for part in halves:
+        trial = dataclasses.replace(mode, decays=part, fits={})
+        try:
+            _fit_all(trial, follow, ("quadratic",))
+        except AnalysisError:
+            return {}
+        fits.append(trial.fits["quadratic"])
+    large, small = fits
+    out = {}
+    for i, name in enumerate(large.names):
+        var = float(large.cov[i, i] + small.cov[i, i])
+        if not (math.isfinite(var) and var > 0.0):      # a half the law cannot pin down
+            return {}
+        out[f"split_{name}"] = float(large.params[i] - small.params[i]) / math.sqrt(var)
+    worst = max(abs(out["split_a"]), abs(out["split_beta"]))
+    applied = max((abs(v) for k, v in mode.drift.items() if k in ("a", "beta")),
+                  default=0.0)
+    if worst > DRIFT_Z and worst > applied:
+        widen = (worst / max(applied, DRIFT_Z)) ** 2
+        quad = mode.fits["quadratic"]
+        mode.fits["quadratic"] = dataclasses.replace(quad, cov=quad.cov * widen)
+    return out
+
+
 def _warnings(m: ModeIdentification) -> list[str]:
     """Sentences on how far to trust the mode's numbers."""
     out = []
@@ -838,12 +889,20 @@ def _warnings(m: ModeIdentification) -> list[str]:
     if cycles < 5:
         out.append(f"only {cycles:.1f} cycles above the noise floor: too few for a reliable "
                    "damping law")
-    drift = max((abs(v) for k, v in m.start_drift.items() if k != "dropped"), default=0.0)
+    drift = max((abs(v) for k, v in m.start_drift.items() if k in ("a", "beta")), default=0.0)
     if drift > DRIFT_Z:
         out.append(f"C_i and C_f move by up to {drift:.1f} standard errors when the first "
                    "cycles of each decay are left out: the decay's start is not a free decay "
                    "with this law (a base still moving, a law that misfits the large cycles); "
                    f"their intervals are widened {drift / DRIFT_Z:.1f}-fold")
+    split = max(abs(m.start_drift.get("split_a", 0.0)), abs(m.start_drift.get("split_beta", 0.0)))
+    if split > DRIFT_Z:
+        widened = split / max(drift, DRIFT_Z)
+        out.append(f"the larger and the smaller half of the cycles give C_i and C_f that differ "
+                   f"by up to {split:.1f} standard errors: the damping is not one law over "
+                   "this amplitude range (coupling with other modes, an amplitude-dependent "
+                   "drag)" + (f"; their intervals are widened {widened:.1f}-fold"
+                              if widened > 1.0 else ""))
     if m.correction > CORRECTION_WARNING:
         out.append(f"the band filters smear this mode's first cycles by up to "
                    f"{100 * m.correction:.0f} % (modes close together or heavily damped); "
@@ -1036,6 +1095,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     results = []
     for mode in modes:
         mode.drift = _stable_start(mode, follow, laws)
+        mode.drift.update(_one_law(mode, follow))
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])
