@@ -16,7 +16,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from fsi_lab.bench_access import unsafe_roles
 from fsi_lab.errors import FsiLabError, InputFileError, ProfileError, RunAborted
@@ -33,6 +33,11 @@ from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "interrupted": 130, "running": 1}
 #: The settle wait is slept in slices this long, s (progress is reported after each).
 SETTLE_SLICE_S = 0.5
+
+
+def settle_wait(seconds: float) -> None:
+    """One slice of the settle wait (Ctrl+C and SIGTERM end it at once)."""
+    time.sleep(seconds)
 
 
 def interlocks_tripped(final_states: dict[str, dict[str, Any]]) -> list[str]:
@@ -71,8 +76,6 @@ class SequenceRunner:
     note
         The command's note of a signal, checked before each run (one whose exception a library
         swallowed between two runs still stops the sequence).
-    sleep
-        ``time.sleep``, or a stand-in in tests.
     """
 
     plan: Plan
@@ -81,7 +84,6 @@ class SequenceRunner:
     bus: EventBus
     signals: RunSignals
     note: SignalNote
-    sleep: Callable[[float], None] = time.sleep
     #: a run's file could not be finalised (a full disk): HDF5 may crash at exit
     file_abandoned: bool = False
 
@@ -133,7 +135,7 @@ class SequenceRunner:
                              f"{planned.index}")
         deadline = time.monotonic() + planned.settle_s
         while (left := deadline - time.monotonic()) > 0:
-            self.sleep(min(left, SETTLE_SLICE_S))
+            settle_wait(min(left, SETTLE_SLICE_S))
             self.bus.emit(Progress("settle", 1.0 - max(0.0, deadline - time.monotonic())
                                    / planned.settle_s, f"settling before run {planned.index}"))
 
