@@ -147,6 +147,64 @@ def cmd_run(args) -> int:
     return code
 
 
+def cmd_sequence(args) -> int:
+    """``fsi-lab sequence PLAN --out DIR`` and ``fsi-lab sequence --resume DIR``."""
+    from fsi_lab import sequence as seq
+    from fsi_lab.seqfile import SEQUENCE_FILE, locked
+
+    if (args.plan is None) == (args.resume is None) or (args.resume and args.out):
+        raise InputFileError("fsi-lab sequence: give a plan and --out DIR, or --resume DIR "
+                             "alone (see fsi-lab sequence --help)")
+    if args.plan is not None and args.out is None:
+        raise InputFileError(f"fsi-lab sequence {args.plan}: --out DIR is needed (the "
+                             "directory of the run files and the sequence record)")
+    registry = _registry()
+    if args.resume is not None:
+        directory = args.resume
+        if not (directory / SEQUENCE_FILE).is_file():
+            raise InputFileError(f"{directory}: holds no {SEQUENCE_FILE}; expected the --out "
+                                 "directory of an earlier fsi-lab sequence")
+    else:
+        directory = args.out
+        plan, safety = seq.prepare(args.plan, registry)  # every run checked, nothing written
+        if directory.exists() and not directory.is_dir():
+            raise InputFileError(f"{directory}: is not a directory; expected the directory of "
+                                 "the sequence's run files and record (--out)")
+        directory.mkdir(parents=True, exist_ok=True)
+    bus = EventBus()
+    console = Console(args.quiet or args.json, args.verbose)
+    bus.subscribe(console)
+    try:
+        with locked(directory):
+            if args.resume is not None:
+                plan, record = seq.resume(directory, registry)
+                if record.attrs["status"] == "completed":
+                    bus.log("INFO", f"[sequence] every run of {directory} completed already; "
+                                    "nothing to resume")
+            else:
+                record = seq.create(plan, safety, directory)
+            runner = seq.SequenceRunner(plan, record, registry, bus, args.signals,
+                                        args.signal_note)
+            status = record.attrs["status"]
+            if status != "completed":
+                with args.signals.held():
+                    record.save()
+                args.signals.raise_pending()
+                status = runner.run()
+    finally:
+        console.close()
+    if args.json:
+        _emit_json(record.as_json())
+    else:
+        print(seq.format_record(record))
+    code = seq.EXIT_FOR_STATUS[status]
+    if runner.file_abandoned:  # as for fsi-lab run: HDF5 may crash in its own shutdown
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
+
+
 def cmd_analyze(args) -> int:
     from fsi_lab.chain import DEFAULT_CHAIN, analyse_and_store, channels_to_analyse
     from fsi_lab.profile import parse_profile
@@ -217,6 +275,8 @@ def cmd_import(args) -> int:
 def cmd_show(args) -> int:
     from fsi_lab.runfile import read_analysis_summary, read_run
 
+    if args.run.is_dir() or args.run.name == "sequence.h5":
+        return _show_sequence(args)
     run = read_run(args.run, load_data=False)
     summary = read_analysis_summary(args.run)
     summary_text = _summary_text(args.run, summary) if summary else ""
@@ -248,6 +308,22 @@ def cmd_show(args) -> int:
         print(f"{'reference:':<18}{run.reference}")
     if summary_text:
         print(summary_text)
+    return 0
+
+
+def _show_sequence(args) -> int:
+    """``fsi-lab show DIR``: the sequence record in DIR (or the sequence.h5 named)."""
+    from fsi_lab.seqfile import load_record
+    from fsi_lab.sequence import format_record, running_note
+
+    record = load_record(args.run)
+    if args.json:
+        info = record.as_json()
+        if record.attrs["status"] == "running":
+            info["note"] = running_note(record)
+        _emit_json(info)
+    else:
+        print(format_record(record))
     return 0
 
 
@@ -634,6 +710,17 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     common(p)
     p.set_defaults(func=cmd_run)
 
+    p = sub.add_parser("sequence", help="run a sequence plan (sweeps, repeats) run after run, "
+                                        "or resume one")
+    p.add_argument("plan", type=Path, nargs="?", metavar="PLAN.toml",
+                   help="the plan: a base profile and its steps (see README, Sequences)")
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="directory of the run files and the sequence record (sequence.h5)")
+    p.add_argument("--resume", type=Path, metavar="DIR",
+                   help="continue the sequence in DIR with its first run that did not complete")
+    common(p)
+    p.set_defaults(func=cmd_sequence)
+
     p = sub.add_parser("analyze", help="(re)run the analysis chain on a run file")
     p.add_argument("run", type=Path)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -657,7 +744,7 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     common(p)
     p.set_defaults(func=cmd_import)
 
-    p = sub.add_parser("show", help="describe a run file")
+    p = sub.add_parser("show", help="describe a run file, or the sequence in a directory")
     p.add_argument("run", type=Path)
     common(p)
     p.set_defaults(func=cmd_show)

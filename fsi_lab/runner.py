@@ -163,10 +163,19 @@ class Runner:
         self._abort = threading.Event()
         self._abort_reason = "aborted by the operator"
         self._stop = threading.Event()
+        self._file: tuple[Path, str, str] | None = None
         self.instruments: dict[str, Instrument] = {}
         # Shared by the instruments of this run; simulated ones find the physics here, and
         # register in "cleanup" what must be stopped once every instrument is closed.
         self.bench_context: dict[str, Any] = bench_context(profile)
+
+    def reserve_file(self) -> Path:
+        """The run file this run will write, chosen now (a sequence records it before the
+        run starts, so that a run killed mid-way is found again); the file is created by
+        :meth:`run`."""
+        if self._file is None:
+            self._file = new_run_path(self.out_dir)
+        return self._file[0]
 
     def abort(self) -> None:
         """Ask the run to stop as soon as possible and go to the safe state (thread-safe)."""
@@ -195,7 +204,7 @@ class Runner:
         outcome = RunOutcome(path=None, exit_status="failed", safety=report)
         writer: RunFileWriter | None = None
         try:
-            path, run_uuid, started = new_run_path(self.out_dir)
+            path, run_uuid, started = self._file or new_run_path(self.out_dir)
             writer = RunFileWriter(path, self._root_attrs(run_uuid, started))
             outcome.path = path
             self.bus.log("INFO", f"writing {path}")

@@ -1,0 +1,364 @@
+"""Headless test sequences: a plan's runs one after the other, each as ``fsi-lab run`` does it.
+
+Every run's profile is validated and safety-checked before the first run starts
+(:func:`~fsi_lab.plan.check_plan`). Each run is carried out by :class:`~fsi_lab.runner.Runner`,
+which leaves the bench in its safe state (amplifier output off, source at 0 V, read back) at
+the end of every run, however it ends; the next run starts only from that confirmed state. The
+sequence stops when a run fails (unless the plan says ``on_failure = "continue"``), and always
+when an interlock tripped, when the bench was not confirmed safe, or on Ctrl+C or SIGTERM (the
+run in progress ends as ``fsi-lab run`` ends it). The record (:mod:`fsi_lab.seqfile`) is
+rewritten before and after every run, so :func:`resume` continues with the first run that did
+not complete, also after ``kill -9``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fsi_lab.bench_access import unsafe_roles
+from fsi_lab.errors import FsiLabError, InputFileError, ProfileError, RunAborted
+from fsi_lab.events import EventBus, Progress
+from fsi_lab.plan import Plan, PlannedRun, check_plan, load_plan
+from fsi_lab.registry import Registry
+from fsi_lab.runfile import read_analysis_summary, read_run, utc_now
+from fsi_lab.seqfile import (
+    SEQUENCE_FILE, SequenceRecord, compact_results, holder, load_record,
+)
+from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
+
+#: Exit code of ``fsi-lab sequence`` for each final status.
+EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "interrupted": 130, "running": 1}
+#: The settle wait is slept in slices this long, s (progress is reported after each).
+SETTLE_SLICE_S = 0.5
+
+
+def settle_wait(seconds: float) -> None:
+    """One slice of the settle wait (Ctrl+C and SIGTERM end it at once)."""
+    time.sleep(seconds)
+
+
+def interlocks_tripped(final_states: dict[str, dict[str, Any]]) -> list[str]:
+    """``role: name`` of every interlock an instrument reported active after the run."""
+    tripped = []
+    for role, state in final_states.items():
+        locks = state.get("interlocks") if isinstance(state, dict) else None
+        if isinstance(locks, dict):
+            tripped.extend(f"{role}: {name}" for name, on in locks.items() if on)
+    return tripped
+
+
+def summarise_safety(report) -> dict[str, Any]:
+    """The figures of a safety report a sequence's record keeps for each run."""
+    data = report.as_dict()
+    return {key: data[key] for key in ("peak_drive_v", "gain", "predicted_stroke_mm")}
+
+
+@dataclass
+class SequenceRunner:
+    """Carries out the pending runs of a sequence and keeps its record.
+
+    Parameters
+    ----------
+    plan
+        The plan, checked (:func:`~fsi_lab.plan.check_plan`).
+    record
+        Its record, saved in the directory of the run files.
+    registry
+        Loaded plugins.
+    bus
+        Events of the runs and of the sequence (``[sequence]`` log lines, ``settle`` progress).
+    signals
+        The command's Ctrl+C and SIGTERM handling (installed, raising): held while the record
+        is written, so that it is never cut short.
+    note
+        The command's note of a signal, checked before each run (one whose exception a library
+        swallowed between two runs still stops the sequence).
+    """
+
+    plan: Plan
+    record: SequenceRecord
+    registry: Registry
+    bus: EventBus
+    signals: RunSignals
+    note: SignalNote
+    #: a run's file could not be finalised (a full disk): HDF5 may crash at exit
+    file_abandoned: bool = False
+
+    def run(self) -> str:
+        """Run every run not completed yet, in order; returns the final status
+        (``completed``, ``failed`` or ``interrupted``), also recorded."""
+        status, error = "failed", "the sequence ended unexpectedly"
+        try:
+            status, error = self._loop()
+        except (KeyboardInterrupt, RunAborted) as exc:
+            reason = str(exc) or INTERRUPTED
+            for entry in self.record.runs:
+                if entry["status"] == "running":  # outside the run: its file says how it ended
+                    settle_unfinished(self.record, entry)
+            status, error = "interrupted", f"interrupted between runs: {reason}"
+        except BaseException as exc:
+            error = f"{type(exc).__name__}: {exc}"
+            raise
+        finally:
+            self.record.attrs.update(status=status, error=error, stop_time=utc_now())
+            with self.signals.held():
+                self.record.save()
+            self.bus.log("INFO" if status == "completed" else "WARNING",
+                         f"[sequence] {status}" + (f": {error}" if error else ""))
+        return status
+
+    def _loop(self) -> tuple[str, str]:
+        ran = 0
+        for entry, planned in zip(self.record.runs, self.plan.runs):
+            if entry["status"] == "completed":
+                continue
+            if ran and planned.settle_s > 0:
+                self._settle(planned)
+            self.note.check()
+            ran += 1
+            stop = self._run_one(entry, planned)
+            if stop is not None:
+                return stop
+        failed = [e["index"] for e in self.record.runs if e["status"] != "completed"]
+        if failed:
+            return "failed", (f"{len(failed)} of {len(self.record.runs)} runs did not complete "
+                              f"(run {', '.join(map(str, failed))}); fsi-lab sequence --resume "
+                              f"{self.record.directory} runs them again")
+        return "completed", ""
+
+    def _settle(self, planned: PlannedRun) -> None:
+        """Wait ``settle_s`` before ``planned``; the bench is in the safe state meanwhile."""
+        self.bus.log("INFO", f"[sequence] settling {planned.settle_s:g} s before run "
+                             f"{planned.index}")
+        deadline = time.monotonic() + planned.settle_s
+        while (left := deadline - time.monotonic()) > 0:
+            settle_wait(min(left, SETTLE_SLICE_S))
+            self.bus.emit(Progress("settle", 1.0 - max(0.0, deadline - time.monotonic())
+                                   / planned.settle_s, f"settling before run {planned.index}"))
+
+    def _save(self) -> None:
+        """Write the record with Ctrl+C and SIGTERM held back, then raise one that came."""
+        with self.signals.held():
+            self.record.save()
+        self.signals.raise_pending()
+
+    def _run_one(self, entry: dict[str, Any], planned: PlannedRun) -> tuple[str, str] | None:
+        """Carry out one run; None to go on, or the sequence's final status and why."""
+        from fsi_lab.runner import Runner
+
+        if entry["run_file"] or entry["status"] != "pending":
+            entry["attempts"].append({key: entry[key] for key in (
+                "run_file", "status", "start_time", "stop_time", "error")})
+        profile = self.plan.profile_for(planned, self.registry)
+        runner = Runner(profile, self.registry, self.record.directory, bus=self.bus)
+        path = runner.reserve_file()
+        entry.update(status="running", run_file=path.name, start_time=utc_now(), stop_time="",
+                     error="", interrupted=False, results={})
+        self._save()
+        self.bus.log("INFO", f"[sequence] {planned.label}: {path.name}")
+        try:
+            outcome = runner.run()
+        except FsiLabError as exc:  # refused before anything was driven
+            entry.update(status="failed", error=str(exc), stop_time=utc_now(), run_file="")
+            self._save()
+            return "failed", f"{planned.label}: refused: {exc}"
+        entry.update(status=outcome.exit_status, stop_time=utc_now(),
+                     error=outcome.error or "", interrupted=outcome.interrupted,
+                     run_file=outcome.path.name if outcome.path else "",
+                     results=compact_results(outcome.summary))
+        self.file_abandoned = self.file_abandoned or outcome.file_abandoned
+        with self.signals.held():
+            self.record.save()
+        label = planned.label
+        if outcome.exit_status == "aborted" or outcome.interrupted:
+            return "interrupted", f"{label}: {outcome.error or INTERRUPTED}"
+        unsafe = unsafe_roles(outcome.final_states)
+        if unsafe:
+            return "failed", (f"{label}: the bench was NOT confirmed safe after the run ("
+                              + "; ".join(f"{r}: {why}" for r, why in unsafe.items())
+                              + "); check it by hand before resuming")
+        tripped = interlocks_tripped(outcome.final_states)
+        if tripped:
+            return "failed", (f"{label}: interlock tripped ({', '.join(tripped)}); clear it "
+                              "and check the bench before resuming")
+        if outcome.file_abandoned:
+            return "failed", f"{label}: {outcome.error}"
+        if outcome.exit_status == "failed":
+            if self.plan.on_failure == "stop":
+                return "failed", f"{label} failed: {outcome.error}"
+            self.bus.log("WARNING", f"[sequence] {label} failed ({outcome.error}); continuing "
+                                    "(on_failure = \"continue\")")
+        self.signals.raise_pending()
+        return None
+
+
+def prepare(plan_path: Path, registry: Registry) -> tuple[Plan, dict[int, dict[str, Any]]]:
+    """Read ``plan_path`` and check every run's profile (nothing is written).
+
+    Returns
+    -------
+    tuple
+        The plan, and the safety figures of each run by index.
+
+    Raises
+    ------
+    ProfileError
+        A run is refused (:func:`~fsi_lab.plan.check_plan`), or the plan itself.
+    """
+    plan = load_plan(plan_path)
+    reports = check_plan(plan, registry)
+    return plan, {index: summarise_safety(report) for index, report in reports.items()}
+
+
+def create(plan: Plan, safety: dict[int, dict[str, Any]], directory: Path) -> SequenceRecord:
+    """A new record of ``plan`` in ``directory`` (call it holding the directory's lock).
+
+    Raises
+    ------
+    InputFileError
+        ``directory`` already holds a sequence.
+    """
+    if (directory / SEQUENCE_FILE).exists():
+        raise InputFileError(
+            f"{directory}: holds a sequence already ({SEQUENCE_FILE}); continue it with "
+            f"fsi-lab sequence --resume {directory}, or choose another --out directory")
+    return SequenceRecord.new(plan, directory, safety)
+
+
+def resume(directory: Path, registry: Registry) -> tuple[Plan, SequenceRecord]:
+    """The plan and record of the sequence in ``directory``, ready to continue: the plan and
+    its base profile unchanged, the runs that did not complete checked again, the run that a
+    killed process left behind settled from its run file.
+
+    Raises
+    ------
+    InputFileError
+        No record, or a damaged one.
+    ProfileError
+        The plan or the base profile changed since the sequence started, or a run to come is
+        refused.
+    """
+    record = load_record(directory)
+    attrs = record.attrs
+    plan_path = Path(attrs["plan_path"])
+    try:
+        plan = load_plan(plan_path)
+    except ProfileError as exc:
+        raise ProfileError(f"{exc} (the plan of the sequence in {directory}; the record "
+                           "holds its text)") from None
+    for what, path, key in (("plan", plan.path, "plan"),
+                            ("base profile", plan.profile_path, "profile")):
+        text = plan.text if key == "plan" else plan.profile_text
+        if text != attrs[key]:
+            raise ProfileError(
+                f"{path}: the sequence's {what} changed since the sequence in {directory} "
+                f"started ({attrs['start_time']}); resuming would not carry out the plan it "
+                f"recorded: put the file back as it was (the record holds it: fsi-lab show "
+                f"{directory} --json) or start a new sequence in another directory")
+    if [list(r.overrides) for r in plan.runs] != [e["overrides"] for e in record.runs]:
+        raise ProfileError(f"{plan.path}: expands into other runs than the sequence in "
+                           f"{directory} recorded; start a new sequence in another directory")
+    for entry in record.runs:
+        if entry["status"] == "running":
+            settle_unfinished(record, entry)
+    if all(entry["status"] == "completed" for entry in record.runs):
+        return plan, record  # nothing to resume: the record stays as it is
+    remaining = tuple(r for r, e in zip(plan.runs, record.runs) if e["status"] != "completed")
+    reports = check_plan(plan, registry, remaining)
+    for entry in record.runs:
+        if entry["index"] in reports:
+            entry["safety"] = summarise_safety(reports[entry["index"]])
+    attrs["resumed"] = [*attrs.get("resumed", []), utc_now()]
+    attrs.update(status="running", error="", stop_time="")
+    return plan, record
+
+
+def settle_unfinished(record: SequenceRecord, entry: dict[str, Any]) -> None:
+    """A run recorded as running whose end was not recorded (the process was killed, or
+    interrupted just before or after the run): its run file says how it ended, completed (the
+    record was not updated in time) or not; without one nothing was driven."""
+    path = record.directory / entry["run_file"] if entry["run_file"] else None
+    if path is None or not path.exists():
+        entry.update(status="aborted", run_file="", stop_time=entry["stop_time"] or utc_now(),
+                     error=entry["error"] or "ended before its run file was created (nothing "
+                     "was driven)")
+        return
+    summary = None
+    try:
+        status = read_run(path, load_data=False).attrs.get("exit_status", "running")
+        summary = read_analysis_summary(path) if status == "completed" else None
+        error = ""
+    except InputFileError as exc:
+        status, error = "running", f"its run file cannot be read: {exc}"
+    if status == "completed":
+        entry.update(status="completed", results=compact_results(summary),
+                     error="" if summary else "the sequence ended before the run's analysis "
+                     "was stored; run fsi-lab analyze on the run file")
+        return
+    if status not in ("aborted", "failed"):
+        status = "running"
+        error = error or ("the sequence's process ended during the run (killed?); the run "
+                          "file holds the record up to then")
+    entry.update(status=status, error=error or entry["error"])
+
+
+def running_note(record: SequenceRecord) -> str:
+    """For a record whose status is ``running``: whether a process is running it now."""
+    pid = holder(record.directory)
+    if pid is not None:
+        return f"running now (pid {pid})"
+    return (f"its process ended without finishing it (killed?): fsi-lab sequence --resume "
+            f"{record.directory} continues it")
+
+
+def _describe_run(entry: dict[str, Any], total: int) -> str:
+    details = [f"{path}={value}" for path, value in (entry.get("point") or {}).items()]
+    if entry.get("repeats", 1) > 1:
+        details.append(f"repeat {entry['repeat']} of {entry['repeats']}")
+    name = entry.get("step_name") or ""
+    step = f"step {entry['step']}" + (f" ({name!r})" if name else "")
+    return f"run {entry['index']} of {total}: {step}" + (f", {', '.join(details)}"
+                                                         if details else "")
+
+
+def format_record(record: SequenceRecord) -> str:
+    """The record in a few readable lines: the sequence, then one line per run with its
+    status, run file and identified C_i and C_f (component 0 of each analysed channel)."""
+    attrs = record.attrs
+    counts = record.counts()
+    total = len(record.runs)
+    lines = [f"{'sequence:':<13}{record.path}" + (f" ({attrs['name']})" if attrs.get("name")
+                                                   else ""),
+             f"{'plan:':<13}{attrs['plan_path']} (profile {attrs['profile_path']})"]
+    status = f"{attrs['status']}: {counts['completed']} of {total} runs completed"
+    if attrs["status"] == "running":
+        status += f"; {running_note(record)}"
+    lines.append(f"{'status:':<13}{status}")
+    if attrs.get("error"):
+        lines.append(f"{'why:':<13}{attrs['error']}")
+    times = f"started {attrs['start_time']}"
+    if attrs.get("resumed"):
+        times += f", resumed {', '.join(attrs['resumed'])}"
+    if attrs.get("stop_time"):
+        times += f", ended {attrs['stop_time']}"
+    lines.append(f"{'times:':<13}{times}")
+    for entry in record.runs:
+        text = f"  {_describe_run(entry, total)}: {entry['status']}"
+        if entry["run_file"]:
+            text += f", {entry['run_file']}"
+        if entry.get("attempts"):
+            text += f" ({len(entry['attempts'])} earlier attempt(s))"
+        lines.append(text)
+        for channel, components in (entry.get("results") or {}).items():
+            for c in components[:1]:
+                if c.get("c_i") is None:
+                    continue
+                lines.append(f"      {channel} component {c['index']} at "
+                             f"{c['frequency_hz']:.3f} Hz: C_i = {c['c_i']:.4g} kg/(m s), "
+                             f"C_f = {c['c_f']:.4g} kg/m^2")
+        if entry["error"] and entry["status"] != "pending":
+            lines.append(f"      {entry['error']}")
+    return "\n".join(lines)
