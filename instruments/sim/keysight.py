@@ -22,7 +22,7 @@ import numpy as np
 from scipy import signal
 
 from fsi_lab.instruments.sim import scpi
-from fsi_lab.instruments.sim.scpi import CommandSet, ErrorQueue, ScpiError
+from fsi_lab.instruments.sim.scpi import ScpiError, ScpiInstrument
 
 if TYPE_CHECKING:  # pragma: no cover
     from fsi_lab.instruments.sim.bench import SimBench
@@ -124,22 +124,18 @@ def resample_arb(points: np.ndarray, arb_rate: float, world_rate: float,
     return np.interp(t, np.arange(points.size) / arb_rate, points)
 
 
-class KeysightSim:
+class KeysightSim(ScpiInstrument):
     """The generator's SCPI command set, acting on the bench."""
 
+    identity = IDENTITY
+
     def __init__(self, bench: "SimBench") -> None:
-        self.bench = bench
+        super().__init__(bench)
         self.state = SourceState()
-        self.errors = ErrorQueue()
         self.little_endian = False
-        c = self.commands = CommandSet(self.errors)
-        c.add("*IDN?", lambda a, s: IDENTITY)
-        c.add("*RST", self._rst)
-        c.add("*CLS", lambda a, s: self.errors.clear())
-        c.add("*OPC?", lambda a, s: "1")
+        c = self.commands
         c.add("*TRG", self._trigger)
         c.add("TRIGger#", self._trigger)
-        c.add("SYSTem:ERRor[:NEXT]?", lambda a, s: self.errors.pop())
         c.add("FORMat:BORDer", self._border)
         c.add("FORMat:BORDer?", lambda a, s: "SWAP" if self.little_endian else "NORM")
         c.add("[SOURce#:]DATA:VOLatile:CLEar", self._clear)
@@ -175,12 +171,6 @@ class KeysightSim:
         c.add("OUTPut:TRIGger?", lambda a, s: "1" if self.state.trigger_out else "0")
         c.add("ABORt", self._abort)
 
-    def handle(self, message: bytes) -> bytes | None:
-        """Run one program message; the reply bytes (with newline) or None."""
-        with self.bench.lock:
-            self.bench.catch_up()
-            return self.commands.run(message)
-
     # ------------------------------------------------------------------ helpers
     @staticmethod
     def _channel(suffixes: list) -> None:
@@ -200,7 +190,7 @@ class KeysightSim:
                                   f"exceeds +-{peak:g} V into the set load")
 
     # ------------------------------------------------------------------ commands
-    def _rst(self, args, suffixes):
+    def reset(self) -> None:
         self.state.reset()
         self.little_endian = False
 
@@ -219,11 +209,12 @@ class KeysightSim:
         self._channel(suffixes)
         name_bytes, comma, block = args.partition(b",")
         name = scpi.text(name_bytes).upper()
-        if not comma or not block.strip():
+        block = block.lstrip()
+        if not comma or not block:
             raise ScpiError(-109, "expected DATA:ARB <name>,<block>")
         if not name or not name[0].isalpha() or len(name) > 12:
             raise ScpiError(-224, f"arb name {name!r}: 1 to 12 characters starting with a letter")
-        payload = scpi.parse_ieee_block(block.strip())
+        payload = scpi.parse_ieee_block(block)
         if len(payload) % 4:
             raise ScpiError(-160, f"{len(payload)} bytes is not a whole number of float32 points")
         points = np.frombuffer(payload, dtype="<f4" if self.little_endian else ">f4")
