@@ -172,11 +172,9 @@ def check_source(address: str, settings: dict[str, Any], plan: Mapping[str, Any]
     from fsi_lab.instruments.sim.embedded import check_embedded
 
     if check_embedded(address, plan):
-        from fsi_lab.instruments.sim.keysight import CHANNELS
-
-        if settings["channel"] > CHANNELS:
-            raise ValueError(f"channel: {settings['channel']}; the embedded simulated generator "
-                             f"has channel 1 only")
+        if settings["channel"] != 1:
+            raise ValueError(f"channel: {settings['channel']}; the embedded simulated "
+                             "generator's channel 1 is wired to the amplifier")
 
 
 def open_source(address: str, settings: dict[str, Any], context: dict[str, Any]) -> Keysight33500:

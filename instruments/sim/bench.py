@@ -64,6 +64,8 @@ class BenchOptions:
         Index of the velocity decoder among the controller's slots 0 to 3.
     accelerometer_mv_per_g
         Sensitivity of the IEPE accelerometer on the base, mV/g.
+    source_channel
+        The generator's channel (1 or 2) wired to the amplifier and the digitiser's input 1.
     log
         Called with a line of text for each notable event (record start, trips, faults).
     """
@@ -81,6 +83,7 @@ class BenchOptions:
     vibrometer_delay_s: float = 1.1e-3
     vibrometer_decoder_index: int = 0
     accelerometer_mv_per_g: float = 100.0
+    source_channel: int = 1
     log: Callable[[str], None] | None = None
 
 

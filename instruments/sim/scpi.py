@@ -29,6 +29,7 @@ ERRORS = {
     -131: "Invalid suffix",
     -160: "Block data error",
     -200: "Execution error",
+    -211: "Trigger ignored",
     -221: "Settings conflict",
     -222: "Data out of range",
     -223: "Too much data",
@@ -570,7 +571,8 @@ class ScpiInstrument:
     empty in bit 2, message available in bit 4, event summary in bit 5, master summary in
     bit 6), ``*OPC`` (sets the operation complete bit: commands here finish before the next
     one is read, so at once), ``*OPC?`` (``1``), ``*WAI`` and ``*TST?`` (``0``: self-test
-    passed). SCPI's own: ``SYST:ERR[:NEXT]?``, ``SYST:ERR:COUN?``, ``SYST:VERS?``.
+    passed); also ``*OPT?`` (``0``: no options). SCPI's own: ``SYST:ERR[:NEXT]?``,
+    ``SYST:ERR:COUN?``, ``SYST:VERS?``.
 
     Subclasses set :attr:`identity`, add their commands to :attr:`commands` and override
     :meth:`reset`; :meth:`handle` runs one message under the bench's lock.
@@ -597,6 +599,7 @@ class ScpiInstrument:
         c.add("*OPC?", lambda a, s: "1")
         c.add("*WAI", lambda a, s: None)
         c.add("*TST?", lambda a, s: "0")
+        c.add("*OPT?", lambda a, s: "0")
         c.add("SYSTem:ERRor[:NEXT]?", lambda a, s: self.errors.pop())
         c.add("SYSTem:ERRor:COUNt?", lambda a, s: str(len(self.errors)))
         c.add("SYSTem:VERSion?", lambda a, s: "1999.0")

@@ -78,7 +78,7 @@ def _pulse(rate, duration=1.0, level=0.5, start=0.1, width=0.02):
 
 def test_each_driver_identifies_itself_over_its_wire(drivers):
     lab = drivers()
-    assert "33521B-SIM" in lab.source.identify()
+    assert "33522B,SIMULATED" in lab.source.identify()
     assert "PA25E-SIM" in lab.amplifier.identify()
     assert lab.vibrometer.identify() == "Polytec PDV-100, velocity decoder VD-PDV (VeloDec,0)"
     assert "DSA4-SIM" in lab.daq.identify()
