@@ -13,9 +13,9 @@ control (``Set,Controller,0,Remote,LLO``, the value public OFV-5000 clients use;
 the panel back and is sent on closing), discovers the velocity decoders at indices 0 to 3
 (``GetDevInfo,VeloDec,<i>,Name``), checks the requested range against the decoder's list
 (``GetDevInfo,VeloDec,<i>,Range``, read with or without a leading count of entries), sets it
-(``Set,VeloDec,<i>,Range,125mm/s/V``) and reads every ``Set`` back with ``Get``. The range gives the velocity channel's sensitivity (1/125 mm/s
-per V = 8 V/(m/s)); the decoder's ``SignalDelay`` is recorded and the run shifts the velocity
-channel's time origin by it.
+(``Set,VeloDec,<i>,Range,125mm/s/V``) and reads every ``Set`` back with ``Get``. The range
+gives the velocity channel's sensitivity (1/125 mm/s per V = 8 V/(m/s)); the decoder's
+``SignalDelay`` is recorded and the run shifts the velocity channel's time origin by it.
 
 Address: a serial device (``/dev/ttyUSB0``, ``COM3``), a pyserial URL (``rfc2217://host:port``,
 ``socket://host:port``) or ``embedded``.
