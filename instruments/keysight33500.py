@@ -155,6 +155,12 @@ class Keysight33500(SignalSource):
         self.link.send_checked(f"OUTP{self.channel} ON")
         self.link.send_checked("*TRG", "a bus trigger needs BURS:STAT ON and TRIG:SOUR BUS")
 
+    def monitor(self) -> None:
+        """During the record: the output must still answer ``OUTP<n>?`` with on."""
+        if not self.link.query_bool(f"OUTP{self.channel}?"):
+            raise InstrumentError(f"{NAME} at {self.link.address}: the output went off during "
+                                  "the record (front panel, or a reset?)")
+
     def safe_state(self) -> None:
         """Output relay open, burst aborted, offset 0 V; confirmed by reading ``OUTP?`` back.
 

@@ -165,6 +165,14 @@ class PolytecVibrometer(Vibrometer):
                 "sensitivity_v_per_m_s": self.sensitivity(), "signal_delay_s": self._delay,
                 "signal_delay_source": self._delay_source}
 
+    def monitor(self) -> None:
+        """During the record: the decoder must still answer with the range the run set (the
+        calibration of the velocity channel depends on it)."""
+        got = self.line.ask(f"Get,VeloDec,{self.index},Range")
+        if got != self.range_name:
+            raise InstrumentError(f"{NAME} at {self.line.port}: the range reads {got!r} during "
+                                  f"the record; the run set {self.range_name!r}")
+
     def safe_state(self) -> None:
         """A vibrometer has no output that can move the shaker: there is nothing to switch
         off, and nothing is sent (a dead serial link cannot delay the safe state)."""

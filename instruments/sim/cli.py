@@ -32,7 +32,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="record time at which the fault happens (default 1 s)")
     parser.add_argument("--fault-target", choices=ROLES,
                         help="instrument whose link a timeout, drop or garble hits "
-                             "(default: acquisition)")
+                             "(default: the profile's [bench] fault_target, acquisition)")
     for role in ("source", "amplifier", "acquisition"):
         parser.add_argument(f"--{role}-port", type=int, default=0, metavar="PORT",
                             help=f"TCP port of the {role} on 127.0.0.1 (default: any free port)")
@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         fast=bench_keys["fast"] if args.fast is None else True,
         fault=args.fault or bench_keys["fault"],
         fault_after_s=bench_keys["fault_after_s"] if args.fault_after is None else args.fault_after,
-        fault_target=args.fault_target, seed=args.seed, source_channel=args.source_channel,
+        fault_target=args.fault_target or bench_keys.get("fault_target"), seed=args.seed, source_channel=args.source_channel,
         ports={"source": args.source_port, "amplifier": args.amplifier_port,
                "acquisition": args.acquisition_port},
         log=log)
