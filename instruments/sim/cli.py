@@ -82,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
         fast=bench_keys["fast"] if args.fast is None else True,
         fault=args.fault or bench_keys["fault"],
         fault_after_s=bench_keys["fault_after_s"] if args.fault_after is None else args.fault_after,
-        fault_target=args.fault_target or bench_keys.get("fault_target"), seed=args.seed, source_channel=args.source_channel,
+        fault_target=args.fault_target or bench_keys.get("fault_target"), seed=args.seed,
+        source_channel=args.source_channel,
         ports={"source": args.source_port, "amplifier": args.amplifier_port,
                "acquisition": args.acquisition_port},
         log=log)
