@@ -43,6 +43,17 @@ class Instrument(abc.ABC):
         """Snapshot of the settings in force, stored in the run file."""
         return {}
 
+    def monitor(self) -> None:
+        """Check, while a record runs, that the instrument still answers and still holds the
+        state the run set (a source's output on, a vibrometer's range); raise
+        :class:`~fsi_lab.errors.InstrumentError` naming what went wrong otherwise.
+
+        The runner calls it every fraction of a second during the record and once more at its
+        end, so a timeout, a dropped connection or a garbled reply on an instrument the record
+        does not otherwise talk to fails the run instead of passing unnoticed. The default
+        checks nothing: a driver whose instrument can be asked should override it.
+        """
+
     @abc.abstractmethod
     def close(self) -> None:
         """Release the connection. Must not raise if already closed."""

@@ -81,6 +81,10 @@ BENCH_PARAMS: tuple[Param, ...] = (
           help="Simulated bench only: inject this fault (for rehearsing failures)."),
     Param("fault_after_s", "float", "s", 1.0, minimum=0.0, maximum=86400.0,
           help="Simulated bench only: when the injected fault happens after the start."),
+    Param("fault_target", "str", "", "acquisition",
+          choices=("source", "amplifier", "vibrometer", "acquisition"),
+          help="Simulated bench only: the instrument whose link a timeout, drop or garble "
+               "fault hits."),
 )
 
 ROLE_KEYS = ("plugin", "address")

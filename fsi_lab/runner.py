@@ -403,13 +403,16 @@ class Runner:
             if now - last_poll >= INTERLOCK_POLL_S:
                 last_poll = now
                 self._check_interlocks(amplifier)
+                self._monitor()
             if self._stop.is_set() and samples < round(duration * sample_rate):
                 self.bus.log("INFO", f"stopped by the operator after {samples / sample_rate:.3g} s "
                                      f"of {duration:g} s")
                 stopped = True
                 break
-        # A fast bench can finish between two polls: a trip must never pass as completed.
+        # A fast bench can finish between two polls: a trip or a fault must never pass as
+        # completed.
         self._check_interlocks(amplifier)
+        self._monitor()
         writer.flush()
         return stopped
 
@@ -430,6 +433,18 @@ class Runner:
                 f"({', '.join(f'{n} {k}' for n, k in sizes.items())}); expected equal lengths"
             )
         return next(iter(sizes.values()), 0)
+
+    def _monitor(self) -> None:
+        """Every instrument the record does not read (all but the acquisition) must still
+        answer and hold its state (:meth:`~fsi_lab.contract.Instrument.monitor`)."""
+        for role in ("source", "amplifier", "vibrometer"):
+            instrument = self.instruments.get(role)
+            if instrument is None:
+                continue
+            try:
+                instrument.monitor()
+            except InstrumentError as exc:
+                raise InstrumentError(f"{role} failed during the record: {exc}") from None
 
     @staticmethod
     def _check_interlocks(amplifier) -> None:

@@ -4,7 +4,12 @@ The drive waveform is uploaded as an arbitrary waveform: the samples divided by 
 an IEEE 488.2 definite-length block of float32 in little-endian order (``FORM:BORD SWAP``),
 played at ``FUNC:ARB:SRAT`` with an amplitude of twice the peak (Vpp, high-impedance load; a peak
 below 1 mV is played at the smallest amplitude, 2 mVpp, with the points scaled down) and no
-offset, as one triggered burst. ``start`` switches the output on and sends a bus trigger
+offset, as one triggered burst. Between bursts a 33500 holds the arb's first point, so a waveform
+that does not start at 0 V gets one 0 V point in front of it (one sample later; the settings say
+so): the output rests at 0 V before and after the burst. The upload and the error check after it
+are given the reply timeout plus the payload's transfer time (:func:`upload_timeout`). The trigger
+output follows the channel in use (``OUTP:TRIG:SOUR CH<n>``; a one-channel model that does not
+know the command is accepted on channel 1). ``start`` switches the output on and sends a bus trigger
 (``*TRG``); the generator's trigger output marks t = 0 for a digitiser waiting for it.
 ``SYST:ERR?`` is read after every configuration step and any error stops the run with the
 instrument's own message.
@@ -31,6 +36,15 @@ MAX_POINTS = 1_000_000
 MIN_VPP = 0.002
 FILTERS = {"normal": "NORM", "step": "STEP", "off": "OFF"}
 SAFE_TIMEOUT_S = 1.0
+#: Slowest rate at which a 33500B takes in arb data (LAN, memory write), bytes/s: the time
+#: allowed for an upload and its error check grows by the payload's size over this.
+UPLOAD_BYTES_PER_S = 250e3
+
+
+def upload_timeout(timeout_s: float, payload_bytes: int) -> float:
+    """Time allowed for an arb upload and the ``SYST:ERR?`` after it, s: the reply timeout
+    plus the payload's transfer at :data:`UPLOAD_BYTES_PER_S`."""
+    return float(timeout_s) + payload_bytes / UPLOAD_BYTES_PER_S
 
 
 def arb_points(wave: np.ndarray) -> tuple[np.ndarray, float]:
@@ -82,6 +96,14 @@ class Keysight33500(SignalSource):
             raise InstrumentError(
                 f"{where}: {wave.size:,} samples; the arb memory holds {MIN_POINTS} to "
                 f"{MAX_POINTS:,} points: lower the source sample_rate or the excitation duration")
+        lead = 1 if wave[0] != 0.0 else 0
+        if lead:  # the burst rests at the first point: make it 0 V
+            wave = np.concatenate([[0.0], wave])
+        if wave.size > MAX_POINTS:
+            raise InstrumentError(
+                f"{where}: {wave.size:,} samples with the 0 V point the burst rests at; the arb "
+                f"memory holds {MIN_POINTS} to {MAX_POINTS:,} points: lower the source "
+                "sample_rate or the excitation duration")
         if wave.size < MIN_POINTS:
             wave = np.concatenate([wave, np.zeros(MIN_POINTS - wave.size)])
         points, amplitude = arb_points(wave)
@@ -92,9 +114,10 @@ class Keysight33500(SignalSource):
         payload = points.tobytes()
         length = str(len(payload))
         header = f"{src}DATA:ARB {ARB_NAME},#{len(length)}{length}"
-        link.write_raw(header, header.encode("ascii") + payload + b"\n")
-        link.check(f"the upload of {points.size} points ({header[:40]}...)",
-                   f"the arb memory takes {MIN_POINTS} to {MAX_POINTS:,} points in -1..1")
+        with link.timeout(upload_timeout(link.timeout_s, len(payload))):
+            link.write_raw(header, header.encode("ascii") + payload + b"\n")
+            link.check(f"the upload of {points.size} points ({header[:40]}...)",
+                       f"the arb memory takes {MIN_POINTS} to {MAX_POINTS:,} points in -1..1")
         for command, accepted in (
                 (f"{src}FUNC ARB", ""),
                 (f"{src}FUNC:ARB {ARB_NAME}", ""),
@@ -112,8 +135,14 @@ class Keysight33500(SignalSource):
                 (f"{src}BURS:STAT ON", ""),
                 ("OUTP:TRIG ON", "")):
             link.send_checked(command, accepted)
+        link.write(f"OUTP:TRIG:SOUR CH{ch}")
+        refused = link.errors()
+        if refused and not (ch == 1 and all(e.startswith("-113") for e in refused)):
+            raise InstrumentError(f"{where}: routing the trigger output to channel {ch} "
+                                  f"(OUTP:TRIG:SOUR CH{ch}) was refused: {'; '.join(refused)}")
         self._loaded = {
             "arb_points": int(points.size),
+            "leading_zero_points": lead,
             "arb_sample_rate": link.query_float(f"{src}FUNC:ARB:SRAT?"),
             "amplitude_vpp": link.query_float(f"{src}VOLT?"),
             "offset_v": link.query_float(f"{src}VOLT:OFFS?"),
@@ -125,6 +154,12 @@ class Keysight33500(SignalSource):
             raise InstrumentError(f"{NAME} at {self.link.address}: start before load_waveform")
         self.link.send_checked(f"OUTP{self.channel} ON")
         self.link.send_checked("*TRG", "a bus trigger needs BURS:STAT ON and TRIG:SOUR BUS")
+
+    def monitor(self) -> None:
+        """During the record: the output must still answer ``OUTP<n>?`` with on."""
+        if not self.link.query_bool(f"OUTP{self.channel}?"):
+            raise InstrumentError(f"{NAME} at {self.link.address}: the output went off during "
+                                  "the record (front panel, or a reset?)")
 
     def safe_state(self) -> None:
         """Output relay open, burst aborted, offset 0 V; confirmed by reading ``OUTP?`` back.
@@ -172,11 +207,9 @@ def check_source(address: str, settings: dict[str, Any], plan: Mapping[str, Any]
     from fsi_lab.instruments.sim.embedded import check_embedded
 
     if check_embedded(address, plan):
-        from fsi_lab.instruments.sim.keysight import CHANNELS
-
-        if settings["channel"] > CHANNELS:
-            raise ValueError(f"channel: {settings['channel']}; the embedded simulated generator "
-                             f"has channel 1 only")
+        if settings["channel"] != 1:
+            raise ValueError(f"channel: {settings['channel']}; the embedded simulated "
+                             "generator's channel 1 is wired to the amplifier")
 
 
 def open_source(address: str, settings: dict[str, Any], context: dict[str, Any]) -> Keysight33500:

@@ -1,13 +1,21 @@
 """Polytec laser vibrometer over RS-232 (pyserial), Polytec's command grammar.
 
 Lines ``Get|Set|GetDevInfo,<Device>,<index>,<Property>[,<value>]`` at 115200 baud 8N1,
-terminated by LF; ``Get`` and ``GetDevInfo`` answer one line, ``Set`` answers nothing. On opening
-the driver puts the controller in remote mode, discovers the velocity decoders at indices 0 to 3
+terminated by LF; ``Get`` and ``GetDevInfo`` answer one line, ``Set`` answers nothing.
+
+The controller's interface has two modes that add lines: ``Interface,0,Echo`` (every line
+received is sent back before the answer) and ``Interface,0,Acknowledge`` (every ``Set`` is
+answered). On opening the driver switches both off (``Set,Interface,0,Echo,Off``,
+``Set,Interface,0,Acknowledge,Off``) and reads ``Get,Interface,0,Echo`` until it answers, so
+that lines the modes produced before they went off are read and dropped; an echoed line is
+recognised and skipped on every question anyway. It then locks the front panel for remote
+control (``Set,Controller,0,Remote,LLO``, the value public OFV-5000 clients use; ``Local`` gives
+the panel back and is sent on closing), discovers the velocity decoders at indices 0 to 3
 (``GetDevInfo,VeloDec,<i>,Name``), checks the requested range against the decoder's list
-(``GetDevInfo,VeloDec,<i>,Range``), sets it (``Set,VeloDec,<i>,Range,125mm/s/V``) and reads
-every ``Set`` back with ``Get``. The range gives the velocity channel's sensitivity (1/125 mm/s
-per V = 8 V/(m/s)); the decoder's ``SignalDelay`` is recorded and the run shifts the velocity
-channel's time origin by it.
+(``GetDevInfo,VeloDec,<i>,Range``, read with or without a leading count of entries), sets it
+(``Set,VeloDec,<i>,Range,125mm/s/V``) and reads every ``Set`` back with ``Get``. The range
+gives the velocity channel's sensitivity (1/125 mm/s per V = 8 V/(m/s)); the decoder's
+``SignalDelay`` is recorded and the run shifts the velocity channel's time origin by it.
 
 Address: a serial device (``/dev/ttyUSB0``, ``COM3``), a pyserial URL (``rfc2217://host:port``,
 ``socket://host:port``) or ``embedded``.
@@ -25,6 +33,11 @@ from fsi_lab.params import Param
 
 NAME = "polytec"
 DECODER_SLOTS = 4
+#: ``Controller,0,Remote`` values: remote control with the front panel locked, and local.
+REMOTE = "LLO"
+LOCAL = "Local"
+#: Most lines read while waiting for the answer that shows echo and acknowledge are off.
+SYNC_LINES = 8
 ABSENT = ("Not Installed", "Not Available", "")
 _RANGE = re.compile(r"^(\d+(?:\.\d+)?)(m|mm|um|µm)/s/V$")
 _DELAY = re.compile(r"^\s*([-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)\s*(s|ms|us|µs|ns)\s*$")
@@ -80,15 +93,10 @@ class SerialLine:
         except (serial.SerialException, OSError) as exc:
             raise self._error(line, f"the serial port failed ({exc})") from None
 
-    def ask(self, line: str) -> str:
-        """Send ``line`` and return the reply line."""
+    def read_line(self, line: str) -> str:
+        """One reply line (stripped) to the question ``line`` just sent."""
         import serial
 
-        try:
-            self.serial.reset_input_buffer()  # a late reply to an interrupted question
-        except (serial.SerialException, OSError) as exc:
-            raise self._error(line, f"the serial port failed ({exc})") from None
-        self.send(line)
         try:
             raw = self.serial.read_until(b"\n")
         except (serial.SerialException, OSError) as exc:
@@ -103,6 +111,20 @@ class SerialLine:
                                     "115200 baud 8N1 and the cable") from None
         if not text.isprintable():
             raise self._error(line, f"garbled reply {raw!r}")
+        return text
+
+    def ask(self, line: str) -> str:
+        """Send ``line`` and return the reply line (an echo of ``line`` is skipped)."""
+        import serial
+
+        try:
+            self.serial.reset_input_buffer()  # a late reply to an interrupted question
+        except (serial.SerialException, OSError) as exc:
+            raise self._error(line, f"the serial port failed ({exc})") from None
+        self.send(line)
+        text = self.read_line(line)
+        if text == line:  # the controller's echo mode
+            text = self.read_line(line)
         return text
 
     def close(self) -> None:
@@ -143,6 +165,14 @@ class PolytecVibrometer(Vibrometer):
                 "sensitivity_v_per_m_s": self.sensitivity(), "signal_delay_s": self._delay,
                 "signal_delay_source": self._delay_source}
 
+    def monitor(self) -> None:
+        """During the record: the decoder must still answer with the range the run set (the
+        calibration of the velocity channel depends on it)."""
+        got = self.line.ask(f"Get,VeloDec,{self.index},Range")
+        if got != self.range_name:
+            raise InstrumentError(f"{NAME} at {self.line.port}: the range reads {got!r} during "
+                                  f"the record; the run set {self.range_name!r}")
+
     def safe_state(self) -> None:
         """A vibrometer has no output that can move the shaker: there is nothing to switch
         off, and nothing is sent (a dead serial link cannot delay the safe state)."""
@@ -151,7 +181,45 @@ class PolytecVibrometer(Vibrometer):
         return {"range": self.line.ask(f"Get,VeloDec,{self.index},Range")}
 
     def close(self) -> None:
+        """Give the front panel back (``Remote,Local``, best effort) and close the port."""
+        try:
+            self.line.send(f"Set,Controller,0,Remote,{LOCAL}")
+        except InstrumentError:
+            pass
         self.line.close()
+
+
+def _quiet_interface(line: SerialLine) -> None:
+    """Echo and acknowledge off, and every line they produced meanwhile read and dropped: the
+    answer to ``Get,Interface,0,Echo`` is awaited among at most :data:`SYNC_LINES` lines."""
+    line.send("Set,Interface,0,Echo,Off")
+    line.send("Set,Interface,0,Acknowledge,Off")
+    question = "Get,Interface,0,Echo"
+    line.send(question)
+    for _ in range(SYNC_LINES):
+        answer = line.read_line(question)
+        if answer in ("Off", "Not Available"):  # a controller without the echo mode
+            return
+        if answer == "On":
+            raise InstrumentError(f"{NAME} at {line.port}: the controller's echo stays on after "
+                                  "Set,Interface,0,Echo,Off")
+    raise InstrumentError(f"{NAME} at {line.port}: no answer to {question!r} among "
+                          f"{SYNC_LINES} lines; is this a Polytec controller?")
+
+
+def parse_range_list(reply: str) -> list[str]:
+    """The ranges of ``GetDevInfo,VeloDec,<i>,Range``: ``3,5mm/s/V,25mm/s/V,125mm/s/V`` or
+    the same without the count; ValueError if an entry is not a range."""
+    fields = [f.strip() for f in reply.split(",") if f.strip()]
+    if fields and fields[0].isdigit():
+        if int(fields[0]) != len(fields) - 1:
+            raise ValueError(f"it announces {fields[0]} ranges and lists {len(fields) - 1}")
+        fields = fields[1:]
+    if not fields:
+        raise ValueError("it lists no range")
+    for field in fields:
+        range_metres_per_volt(field)
+    return fields
 
 
 def _set_and_verify(line: SerialLine, target: str, value: str) -> None:
@@ -208,8 +276,9 @@ def open_vibrometer(address: str, settings: dict[str, Any],
         address = resolve_address("vibrometer", NAME, address, context)
     line = SerialLine(address, settings["baud_rate"], settings["timeout_s"])
     try:
+        _quiet_interface(line)
         controller = line.ask("GetDevInfo,Controller,0,Name")
-        _set_and_verify(line, "Controller,0,Remote", "On")
+        _set_and_verify(line, "Controller,0,Remote", REMOTE)
         decoders = _discover(line)
         wanted = settings["decoder"]
         chosen = [i for i, name in decoders.items() if wanted in ("auto", name)]
@@ -219,11 +288,11 @@ def open_vibrometer(address: str, settings: dict[str, Any],
                                   f"installed: {listing}")
         index = chosen[0]
         reply = line.ask(f"GetDevInfo,VeloDec,{index},Range")
-        fields = [f.strip() for f in reply.split(",")]
-        if not fields[0].isdigit() or int(fields[0]) != len(fields) - 1:
-            raise InstrumentError(f"{NAME} at {address}: unexpected range list {reply!r}; "
-                                  "expected <count>,<range>,...")
-        ranges = fields[1:]
+        try:
+            ranges = parse_range_list(reply)
+        except ValueError as exc:
+            raise InstrumentError(f"{NAME} at {address}: unexpected range list {reply!r} "
+                                  f"({exc}); expected [<count>,]<range>,...") from None
         if settings["range"] not in ranges:
             raise InstrumentError(f"{NAME} at {address}: range {settings['range']!r} is not "
                                   f"offered by {decoders[index]}; it offers {', '.join(ranges)}")

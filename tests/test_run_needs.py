@@ -72,8 +72,9 @@ CASES = [
     ("a waveform longer than any source", WET, ["bench.source.sample_rate=160e6"],
      "excitation: 'ramp-derivative' would make 160,000,000 samples at 1.6e+08 Sa/s; a source "
      "holds at most 16,000,000"),
-    ("a second channel the embedded generator lacks", WET, ["bench.source.channel=2"],
-     "bench.source: channel: 2; the embedded simulated generator has channel 1 only"),
+    ("a channel the embedded bench does not wire to the amplifier", WET, ["bench.source.channel=2"],
+     "bench.source: channel: 2; the embedded simulated generator's channel 1 is wired to the "
+     "amplifier"),
     ("input ranges not one per input", WET, ["bench.acquisition.ranges_v=10,10"],
      "bench.acquisition: ranges_v has 2 values; expected one per input (4)"),
     ("IEPE supply on an input the digitiser lacks", WET, ["bench.acquisition.iepe_inputs=2.5"],

@@ -1,6 +1,7 @@
 """Simulated shaker power amplifier (PA25E class) with a SCPI command set.
 
-Commands: ``*IDN?``, ``*RST``, ``*CLS``, ``SYST:ERR?``, ``OUTP 0|1|ON|OFF``, ``OUTP?``,
+Commands: the IEEE 488.2 common commands (``*IDN?``, ``*RST``, ``*CLS``, ``*ESR?``, ``*OPC?``...,
+see :class:`~.scpi.ScpiInstrument`), ``SYST:ERR?``, ``OUTP 0|1|ON|OFF``, ``OUTP?``,
 ``GAIN <V/V>`` (0 to 50), ``GAIN?``, ``STAT:INTL?`` (interlock bitfield, see
 :data:`INTERLOCK_BITS`), ``INTL:RES`` and ``MEAS:CURR?`` (RMS output current over the last
 simulated block, A).
@@ -15,7 +16,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from fsi_lab.instruments.sim import scpi
-from fsi_lab.instruments.sim.scpi import CommandSet, ErrorQueue, ScpiError
+from fsi_lab.instruments.sim.scpi import ScpiError, ScpiInstrument
 
 if TYPE_CHECKING:  # pragma: no cover
     from fsi_lab.instruments.sim.bench import SimBench
@@ -52,18 +53,16 @@ class AmplifierState:
         return sum(1 << INTERLOCK_BITS[name] for name in self.latched)
 
 
-class AmplifierSim:
-    """The amplifier's command set, acting on the bench."""
+class AmplifierSim(ScpiInstrument):
+    """The amplifier's command set (with the IEEE 488.2 common commands), acting on the
+    bench."""
+
+    identity = IDENTITY
 
     def __init__(self, bench: "SimBench") -> None:
-        self.bench = bench
+        super().__init__(bench)
         self.state = AmplifierState()
-        self.errors = ErrorQueue()
-        c = self.commands = CommandSet(self.errors)
-        c.add("*IDN?", lambda a, s: IDENTITY)
-        c.add("*RST", self._rst)
-        c.add("*CLS", lambda a, s: self.errors.clear())
-        c.add("SYSTem:ERRor[:NEXT]?", lambda a, s: self.errors.pop())
+        c = self.commands
         c.add("OUTPut[:STATe]", self._output)
         c.add("OUTPut[:STATe]?", lambda a, s: "1" if self.state.output_on else "0")
         c.add("GAIN", self._gain)
@@ -71,12 +70,6 @@ class AmplifierSim:
         c.add("STATus:INTLock?", lambda a, s: str(self.state.bits))
         c.add("INTLock:RESet", self._reset_interlocks)
         c.add("MEASure:CURRent?", lambda a, s: f"{self.state.current_rms_a:.6E}")
-
-    def handle(self, message: bytes) -> bytes | None:
-        """Run one program message; the reply bytes (with newline) or None."""
-        with self.bench.lock:
-            self.bench.catch_up()
-            return self.commands.run(message)
 
     def set_cause(self, name: str, present: bool) -> None:
         """Press or release the e-stop, or raise or clear a supply or temperature fault."""
@@ -90,7 +83,8 @@ class AmplifierSim:
             else:
                 self.state.causes.discard(name)
 
-    def _rst(self, args, suffixes):
+    def reset(self) -> None:
+        """``*RST``: output off, gain 0 (latched interlocks stay latched)."""
         self.state.output_on = False
         self.state.gain = 0.0
 

@@ -62,8 +62,13 @@ class BenchOptions:
         Signal delay of the vibrometer, s.
     vibrometer_decoder_index
         Index of the velocity decoder among the controller's slots 0 to 3.
+    vibrometer_echo, vibrometer_acknowledge
+        The vibrometer controller's interface modes at power-up (echo every line, answer
+        every ``Set``).
     accelerometer_mv_per_g
         Sensitivity of the IEPE accelerometer on the base, mV/g.
+    source_channel
+        The generator's channel (1 or 2) wired to the amplifier and the digitiser's input 1.
     log
         Called with a line of text for each notable event (record start, trips, faults).
     """
@@ -80,7 +85,10 @@ class BenchOptions:
     amp_input_limit_v: float = 5.0
     vibrometer_delay_s: float = 1.1e-3
     vibrometer_decoder_index: int = 0
+    vibrometer_echo: bool = False
+    vibrometer_acknowledge: bool = False
     accelerometer_mv_per_g: float = 100.0
+    source_channel: int = 1
     log: Callable[[str], None] | None = None
 
 

@@ -32,10 +32,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="record time at which the fault happens (default 1 s)")
     parser.add_argument("--fault-target", choices=ROLES,
                         help="instrument whose link a timeout, drop or garble hits "
-                             "(default: acquisition)")
+                             "(default: the profile's [bench] fault_target, acquisition)")
     for role in ("source", "amplifier", "acquisition"):
         parser.add_argument(f"--{role}-port", type=int, default=0, metavar="PORT",
                             help=f"TCP port of the {role} on 127.0.0.1 (default: any free port)")
+    parser.add_argument("--source-channel", type=int, choices=(1, 2), default=1,
+                        help="the generator's channel wired to the amplifier (default 1)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the noise generators")
     parser.add_argument("--json", action="store_true",
                         help="print the addresses and the profile snippet as one JSON line")
@@ -80,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
         fast=bench_keys["fast"] if args.fast is None else True,
         fault=args.fault or bench_keys["fault"],
         fault_after_s=bench_keys["fault_after_s"] if args.fault_after is None else args.fault_after,
-        fault_target=args.fault_target, seed=args.seed,
+        fault_target=args.fault_target or bench_keys.get("fault_target"), seed=args.seed,
+        source_channel=args.source_channel,
         ports={"source": args.source_port, "amplifier": args.amplifier_port,
                "acquisition": args.acquisition_port},
         log=log)

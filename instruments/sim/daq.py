@@ -3,7 +3,8 @@
 Commands (short forms; long forms and any case are accepted):
 
 ==========================  =================================================================
-``*IDN?`` ``*RST`` ``*CLS``  identity, reset, clear the error queue
+``*IDN?`` ``*RST`` ``*CLS``  identity, reset, clear the status (and the other IEEE 488.2
+                             common commands, see :class:`~.scpi.ScpiInstrument`)
 ``SYST:ERR?``                next error, ``+0,"No error"`` when empty
 ``FORM:BORD NORM|SWAP``      byte order of the data blocks (big- or little-endian)
 ``ACQ:SRAT <Hz>``            sample rate, 1 to 204800 (``ACQ:SRAT?`` reads it back)
@@ -35,7 +36,7 @@ import numpy as np
 
 from fsi_lab.instruments.sim import scpi
 from fsi_lab.instruments.sim.frontends import DIGITISER_RANGES, Digitiser
-from fsi_lab.instruments.sim.scpi import CommandSet, ErrorQueue, ScpiError
+from fsi_lab.instruments.sim.scpi import ScpiError, ScpiInstrument
 
 if TYPE_CHECKING:  # pragma: no cover
     from fsi_lab.instruments.sim.bench import SimBench
@@ -73,18 +74,16 @@ class DigitiserState:
         return [n for n in INPUTS if self.enabled[n]]
 
 
-class DigitiserSim:
-    """The digitiser's command set, acting on the bench."""
+class DigitiserSim(ScpiInstrument):
+    """The digitiser's command set (with the IEEE 488.2 common commands), acting on the
+    bench."""
+
+    identity = IDENTITY
 
     def __init__(self, bench: "SimBench") -> None:
-        self.bench = bench
+        super().__init__(bench)
         self.state = DigitiserState()
-        self.errors = ErrorQueue()
-        c = self.commands = CommandSet(self.errors)
-        c.add("*IDN?", lambda a, s: IDENTITY)
-        c.add("*RST", self._rst)
-        c.add("*CLS", lambda a, s: self.errors.clear())
-        c.add("SYSTem:ERRor[:NEXT]?", lambda a, s: self.errors.pop())
+        c = self.commands
         c.add("FORMat:BORDer", self._border)
         c.add("FORMat:BORDer?", lambda a, s: "SWAP" if self.state.little_endian else "NORM")
         c.add("ACQuire:SRATe", self._rate)
@@ -107,12 +106,6 @@ class DigitiserSim:
         c.add("INITiate[:IMMediate]", self._init)
         c.add("ABORt", self._abort)
         c.add("FETCh?", self._fetch)
-
-    def handle(self, message: bytes) -> bytes | None:
-        """Run one program message; the reply bytes (with newline) or None."""
-        with self.bench.lock:
-            self.bench.catch_up()
-            return self.commands.run(message)
 
     # ------------------------------------------------------------------ record
     def store(self, codes: np.ndarray) -> None:
@@ -173,7 +166,8 @@ class DigitiserSim:
             return answer(scpi.suffix(suffixes[0], INPUTS))
         return handler
 
-    def _rst(self, args, suffixes):
+    def reset(self) -> None:
+        """``*RST``: the record ends and every setting takes its reset value."""
         self.bench.end_record()
         self.state.reset()
 

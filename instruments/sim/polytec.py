@@ -2,10 +2,16 @@
 
 Lines are ``Get|Set|GetDevInfo,<Device>,<index>,<Property>[,<value>]`` terminated by LF, at
 115200 baud 8N1. ``Get`` and ``GetDevInfo`` answer one line; ``Set`` answers nothing (read it
-back with ``Get``). Settings change only while the controller is in remote mode
-(``Set,Controller,0,Remote,On``); otherwise a ``Set`` is silently ignored, as on the front panel
-lock of the real instrument. Unknown properties answer ``Not Available``; a decoder index with
-nothing installed answers ``Not Installed`` to ``GetDevInfo,VeloDec,<i>,Name``.
+back with ``Get``). ``Controller,0,Remote`` is ``Local`` (front panel in control) or ``LLO``
+(remote control, panel locked out), as public OFV-5000 clients use it; decoder settings change
+only in ``LLO``, otherwise a ``Set`` is silently ignored. Unknown properties answer
+``Not Available``; a decoder index with nothing installed answers ``Not Installed`` to
+``GetDevInfo,VeloDec,<i>,Name``.
+
+The interface modes: with ``Interface,0,Echo`` ``On`` every line received is sent back first;
+with ``Interface,0,Acknowledge`` ``On`` every ``Set`` is answered with :data:`ACKNOWLEDGE` (the
+text is this simulation's: the references at hand do not give it). Both power up as the bench
+options say (off by default).
 
 The velocity decoder sits at ``decoder_index`` (0 by default) among indices 0 to 3; its ranges
 are those of :data:`~.frontends.VIBROMETER_RANGES`; it powers up in ``25mm/s/V``.
@@ -27,13 +33,18 @@ DECODER_SLOTS = 4
 POWER_UP_RANGE = "25mm/s/V"
 MAX_FREQUENCY = "22kHz"
 NOT_AVAILABLE = "Not Available"
+ACKNOWLEDGE = "OK"
+REMOTE_VALUES = ("Local", "LLO")
 
 
 class VibrometerState:
     """Remote mode, decoder range and signal delay."""
 
-    def __init__(self, delay_s: float, decoder_index: int) -> None:
-        self.remote = False
+    def __init__(self, delay_s: float, decoder_index: int, echo: bool = False,
+                 acknowledge: bool = False) -> None:
+        self.remote = "Local"
+        self.echo = bool(echo)
+        self.acknowledge = bool(acknowledge)
         self.range_name = POWER_UP_RANGE
         self.delay_s = float(delay_s)
         self.decoder_index = int(decoder_index)
@@ -45,14 +56,22 @@ class PolytecSim:
     def __init__(self, bench: "SimBench") -> None:
         self.bench = bench
         opts = bench.options
-        self.state = VibrometerState(opts.vibrometer_delay_s, opts.vibrometer_decoder_index)
+        self.state = VibrometerState(opts.vibrometer_delay_s, opts.vibrometer_decoder_index,
+                                     getattr(opts, "vibrometer_echo", False),
+                                     getattr(opts, "vibrometer_acknowledge", False))
 
     def handle(self, line: bytes) -> bytes | None:
-        """Answer one line; the reply line (with LF) or None."""
+        """Answer one line; the reply (with LF, after the echo in echo mode) or None."""
         with self.bench.lock:
             self.bench.catch_up()
+            echo = self.state.echo  # the line is echoed as received, before it takes effect
             reply = self._run(line)
-        return None if reply is None else reply.encode("ascii") + b"\n"
+            if reply is None and self.state.acknowledge and line.startswith(b"Set,"):
+                reply = ACKNOWLEDGE
+        out = (line.rstrip(b"\r") + b"\n") if echo else b""
+        if reply is not None:
+            out += reply.encode("ascii") + b"\n"
+        return out or None
 
     def _run(self, line: bytes) -> str | None:
         try:
@@ -77,7 +96,11 @@ class PolytecSim:
 
     def _dev_info(self, device: str, index: int, prop: str) -> str:
         if device == "Controller" and index == 0:
-            return {"Name": CONTROLLER, "Version": VERSION}.get(prop, NOT_AVAILABLE)
+            return {"Name": CONTROLLER, "Version": VERSION,
+                    "Remote": ",".join([str(len(REMOTE_VALUES)), *REMOTE_VALUES])}.get(
+                prop, NOT_AVAILABLE)
+        if device == "Interface" and index == 0 and prop in ("Echo", "Acknowledge"):
+            return "2,Off,On"
         if device == "VeloDec" and 0 <= index < DECODER_SLOTS:
             if not self._decoder(device, index):
                 return "Not Installed" if prop == "Name" else NOT_AVAILABLE
@@ -89,7 +112,11 @@ class PolytecSim:
 
     def _get(self, device: str, index: int, prop: str) -> str:
         if device == "Controller" and index == 0 and prop == "Remote":
-            return "On" if self.state.remote else "Off"
+            return self.state.remote
+        if device == "Interface" and index == 0 and prop == "Echo":
+            return "On" if self.state.echo else "Off"
+        if device == "Interface" and index == 0 and prop == "Acknowledge":
+            return "On" if self.state.acknowledge else "Off"
         if device == "Controller" and index == 0 and prop == "Name":
             return CONTROLLER
         if self._decoder(device, index):
@@ -104,10 +131,14 @@ class PolytecSim:
         return NOT_AVAILABLE
 
     def _set(self, device: str, index: int, prop: str, value: str) -> None:
-        if device == "Controller" and index == 0 and prop == "Remote" and value in ("On", "Off"):
-            self.state.remote = value == "On"
+        if device == "Controller" and index == 0 and prop == "Remote" and value in REMOTE_VALUES:
+            self.state.remote = value
             return
-        if not self.state.remote:
+        if device == "Interface" and index == 0 and prop in ("Echo", "Acknowledge") \
+                and value in ("On", "Off"):
+            setattr(self.state, prop.lower(), value == "On")
+            return
+        if self.state.remote != "LLO":
             return
         if self._decoder(device, index) and prop == "Range" and value in VIBROMETER_RANGES:
             self.state.range_name = value

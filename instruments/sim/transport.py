@@ -1,7 +1,7 @@
 """The wires of the simulated bench: TCP sockets on 127.0.0.1 and pseudo-terminals.
 
 One asyncio event loop on one background thread serves every connection of a bench. Messages
-are framed by :func:`~.scpi.take_messages` (newline-terminated, binary blocks kept whole) and
+are framed by :class:`~.scpi.Framer` (newline-terminated, binary blocks kept whole) and
 handed to an ``exchange(message) -> (reply, drop)`` callable, which applies fault injection and
 returns the reply bytes (or None) and whether to close the connection instead.
 
@@ -22,7 +22,7 @@ import threading
 import tty
 from typing import Awaitable, Callable
 
-from fsi_lab.instruments.sim.scpi import take_messages
+from fsi_lab.instruments.sim.scpi import Framer
 
 Exchange = Callable[[bytes], "tuple[bytes | None, bool]"]
 HOST = "127.0.0.1"
@@ -79,14 +79,13 @@ class TcpEndpoint:
         task = asyncio.current_task()
         self._tasks.add(task)
         self._writers.add(writer)
-        buffer = bytearray()
+        framer = Framer()
         try:
             while True:
                 data = await reader.read(1 << 16)
                 if not data:
                     break
-                buffer += data
-                for message in take_messages(buffer):
+                for message in framer.feed(data):
                     reply, drop = self.exchange(message)
                     if drop:
                         self._drop_all()
@@ -139,7 +138,7 @@ class PtyEndpoint:
         self.master = self.slave = -1
         self.path = ""
         self._loop: asyncio.AbstractEventLoop | None = None
-        self._inbox = bytearray()
+        self._framer = Framer()
         self._outbox = bytearray()
 
     async def start(self) -> None:
@@ -164,8 +163,7 @@ class PtyEndpoint:
             return
         except OSError:
             return
-        self._inbox += data
-        for message in take_messages(self._inbox):
+        for message in self._framer.feed(data):
             if not self.line_settings_ok():
                 self._send(FRAMING_GARBAGE)
                 continue

@@ -110,8 +110,7 @@ class World:
     def _advance(self, n: int) -> np.ndarray:
         """Simulate ``n`` world samples; rows drive (V), base acceleration, tip velocity."""
         start = self.world_done
-        source = self.bench.source.state
-        drive = source.volts(start, n, self.world_rate)
+        drive = self.bench.source.output_volts(start, n, self.world_rate)
         u = self._amplify(drive, start)
         motion = self.physics.advance(u)
         self.world_done += n

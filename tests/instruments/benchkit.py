@@ -31,7 +31,8 @@ from fsi_lab.runner import Runner
 LAB_MODULES = (keysight33500, shaker_amplifier, polytec, scpi_daq)
 EXCITATION_MODULES = (impulse_train, random_noise)
 BENCH_THREAD = "fsi-lab-sim-bench"
-Script = list[tuple[bytes, bytes | None]]
+#: (expected bytes, reply): the reply is None, bytes, or (delay s, bytes) for a slow instrument.
+Script = list[tuple[bytes, "bytes | tuple[float, bytes] | None"]]
 
 
 def lab_registry():
@@ -80,6 +81,9 @@ class _Peer:
                 if got != expected:
                     self.errors.append(f"step {step}: expected {expected!r}, got {got!r}")
                     return
+                if isinstance(reply, tuple):  # (seconds, bytes): a slow instrument
+                    self._stop.wait(reply[0])
+                    reply = reply[1]
                 if reply:
                     self._send(reply)
             self.received += self._read(1 << 20, quiet=0.2)  # anything sent after the script

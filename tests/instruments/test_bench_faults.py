@@ -97,3 +97,46 @@ def test_unreachable_instrument_is_named_with_its_address(tmp_path):
     with pytest.raises(InstrumentError, match=rf"shaker-amplifier at {address}: nothing answers "
                                               r"at this address \(connection refused\)"):
         shaker_amplifier.PLUGIN.open(address, settings(shaker_amplifier, timeout_s=0.5), {})
+
+
+#: What each link fault says, by the instrument it hits (besides the role named first).
+TARGET_CASES = {
+    ("source", "timeout"): r"keysight33500 at TCPIP0::127\.0\.0\.1::\d+::SOCKET: no reply within "
+                           r"0\.5 s \(after sending 'OUTP1\?'\)",
+    ("source", "drop"): r"keysight33500 at TCPIP0::127\.0\.0\.1::\d+::SOCKET: the connection was "
+                        r"lost",
+    ("source", "garble"): r"keysight33500 at TCPIP0::127\.0\.0\.1::\d+::SOCKET: "
+                          r"(garbled reply|unexpected reply)",
+    ("vibrometer", "timeout"): r"polytec at /dev/pts/\d+: no reply within 0\.5 s \(after sending "
+                               r"'Get,VeloDec,0,Range'\)",
+    ("vibrometer", "drop"): r"polytec at /dev/pts/\d+: the serial port failed",
+    ("vibrometer", "garble"): r"polytec at /dev/pts/\d+: garbled reply",
+    ("amplifier", "timeout"): r"shaker-amplifier at TCPIP0::127\.0\.0\.1::\d+::SOCKET: no reply "
+                              r"within 0\.5 s",
+    ("amplifier", "drop"): r"shaker-amplifier at TCPIP0::127\.0\.0\.1::\d+::SOCKET: the "
+                           r"connection was lost",
+    ("amplifier", "garble"): r"shaker-amplifier at TCPIP0::127\.0\.0\.1::\d+::SOCKET: "
+                             r"(garbled reply|unexpected reply)",
+}
+
+
+@pytest.mark.parametrize("target, fault", list(TARGET_CASES))
+def test_a_link_fault_on_any_instrument_fails_the_run_naming_it(tmp_path, target, fault):
+    path = bench_profile(tmp_path / f"{target}-{fault}.toml", duration=1.0, fault=fault,
+                         fault_after_s=0.3, timeout_s=0.5)
+    text = path.read_text().replace("fault_after_s = 0.3", 'fault_after_s = 0.3\n'
+                                    f'fault_target = "{target}"')
+    for role in ("source", "amplifier", "vibrometer"):
+        text = text.replace(f"[bench.{role}]\n", f"[bench.{role}]\ntimeout_s = 0.5\n")
+    path.write_text(text)
+    outcome = run_profile(path, lab_registry(), tmp_path / "runs")
+    assert outcome.exit_status == "failed"
+    assert re.search(TARGET_CASES[target, fault], outcome.error or ""), outcome.error
+    if target != "amplifier":  # the amplifier's link is read through its interlocks
+        assert outcome.error.startswith(f"{target} failed during the record: "), outcome.error
+    assert not bench_threads()
+    run = read_run(outcome.path)
+    assert run.attrs["exit_status"] == "failed"
+    assert run.instruments["amplifier"]["final_state"].get("output_enabled") is not True
+    data = run.channels["tip_velocity"].data
+    assert 0 < data.size <= RECORD and np.all(np.isfinite(data))  # the data so far is kept

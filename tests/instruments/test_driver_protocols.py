@@ -53,7 +53,7 @@ def test_keysight_uploads_a_float32_block_and_checks_each_step(tcp_peer):
                       b"SOUR1:FUNC:ARB:FILT STEP", b"OUTP1:LOAD INF", b"SOUR1:VOLT:UNIT VPP",
                       b"SOUR1:VOLT:OFFS 0", b"SOUR1:VOLT 1", b"SOUR1:BURS:MODE TRIG",
                       b"SOUR1:BURS:NCYC 1", b"TRIG1:SOUR BUS", b"SOUR1:BURS:STAT ON",
-                      b"OUTP:TRIG ON")
+                      b"OUTP:TRIG ON", b"OUTP:TRIG:SOUR CH1")
     script += [(b"SOUR1:FUNC:ARB:SRAT?\n", b"+1.000000000000000E+03\n"),
                (b"SOUR1:VOLT?\n", b"+1.000000000000000E+00\n"),
                (b"SOUR1:VOLT:OFFS?\n", b"+0.000000000000000E+00\n")]
@@ -75,11 +75,57 @@ def test_keysight_uploads_a_float32_block_and_checks_each_step(tcp_peer):
     peer.expect_all()
 
 
+def test_keysight_waits_for_a_big_upload_in_proportion_to_its_size(tcp_peer):
+    points = 500_000  # 2 MB: the instrument takes 1 s to check it, 5 times the reply timeout
+    wave = np.zeros(points)
+    wave[1] = 0.5
+    payload = np.zeros(points, "<f4")
+    payload[1] = 1.0
+    script = KEYSIGHT_OPEN + checked(b"OUTP1 OFF", b"FORM:BORD SWAP", b"SOUR1:DATA:VOL:CLE")
+    script += [(b"SOUR1:DATA:ARB FSILAB,#7" + str(points * 4).encode() + payload.tobytes()
+                + b"\n", None),
+               (b"SYST:ERR?\n", (1.0, b'-223,"Too much data"\n')), NO_ERROR]
+    peer = tcp_peer(script)
+    source = _keysight(peer, timeout_s=0.2)
+    assert keysight33500.upload_timeout(0.2, points * 4) > 8.0
+    try:
+        with pytest.raises(InstrumentError, match=r"the upload of 500000 points .* was refused: "
+                                                  r"-223,\"Too much data\""):
+            source.load_waveform(wave, 1000.0)
+    finally:
+        source.close()
+    peer.expect_all()
+
+
+def test_keysight_on_channel_2_routes_the_trigger_output_and_needs_it(tcp_peer):
+    wave = np.array([0.0, 0.25, 0.5, -0.5, 0.0, 0.0, 0.0, 0.0])
+    payload = struct.pack("<8f", 0.0, 0.5, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0)
+    script = [(b"OUTP2 OFF\n", None), (b"*IDN?\n", IDN), (b"*CLS\n", None)]
+    script += checked(b"OUTP2 OFF", b"OUTP2 OFF", b"FORM:BORD SWAP", b"SOUR2:DATA:VOL:CLE")
+    script += [(b"SOUR2:DATA:ARB FSILAB,#232" + payload + b"\n", None), NO_ERROR]
+    script += checked(b"SOUR2:FUNC ARB", b"SOUR2:FUNC:ARB FSILAB", b"SOUR2:FUNC:ARB:SRAT 1000",
+                      b"SOUR2:FUNC:ARB:FILT STEP", b"OUTP2:LOAD INF", b"SOUR2:VOLT:UNIT VPP",
+                      b"SOUR2:VOLT:OFFS 0", b"SOUR2:VOLT 1", b"SOUR2:BURS:MODE TRIG",
+                      b"SOUR2:BURS:NCYC 1", b"TRIG2:SOUR BUS", b"SOUR2:BURS:STAT ON",
+                      b"OUTP:TRIG ON")
+    script += [(b"OUTP:TRIG:SOUR CH2\n", None),
+               (b"SYST:ERR?\n", b'-113,"Undefined header"\n'), NO_ERROR]
+    peer = tcp_peer(script)
+    source = _keysight(peer, channel=2)
+    try:
+        with pytest.raises(InstrumentError, match=r"routing the trigger output to channel 2 "
+                                                  r"\(OUTP:TRIG:SOUR CH2\) was refused"):
+            source.load_waveform(wave, 1000.0)
+    finally:
+        source.close()
+    peer.expect_all()
+
+
 def test_keysight_reports_a_refused_step_with_the_instruments_error(tcp_peer):
     wave = np.full(8, 0.5)
-    payload = struct.pack("<8f", *[1.0] * 8)
+    payload = struct.pack("<9f", 0.0, *[1.0] * 8)  # a 0 V point first: the burst rests there
     script = KEYSIGHT_OPEN + checked(b"OUTP1 OFF", b"FORM:BORD SWAP", b"SOUR1:DATA:VOL:CLE")
-    script += [(b"SOUR1:DATA:ARB FSILAB,#232" + payload + b"\n", None), NO_ERROR]
+    script += [(b"SOUR1:DATA:ARB FSILAB,#236" + payload + b"\n", None), NO_ERROR]
     script += checked(b"SOUR1:FUNC ARB", b"SOUR1:FUNC:ARB FSILAB")
     script += [(b"SOUR1:FUNC:ARB:SRAT 500000000\n", None),
                (b"SYST:ERR?\n", b'-222,"Data out of range"\n'), NO_ERROR]
@@ -293,9 +339,12 @@ def test_daq_refuses_an_input_it_does_not_have(tcp_peer):
 
 # --------------------------------------------------------------------------- Polytec
 def _polytec_open(decoder_reply=b"VD-09\n", readback=b"25mm/s/V\n", delay=b"8.16 us\n"):
-    script = [(b"GetDevInfo,Controller,0,Name\n", b"OFV-5000\n"),
-              (b"Set,Controller,0,Remote,On\n", None),
-              (b"Get,Controller,0,Remote\n", b"On\n"),
+    script = [(b"Set,Interface,0,Echo,Off\n", None),
+              (b"Set,Interface,0,Acknowledge,Off\n", None),
+              (b"Get,Interface,0,Echo\n", b"Off\n"),
+              (b"GetDevInfo,Controller,0,Name\n", b"OFV-5000\n"),
+              (b"Set,Controller,0,Remote,LLO\n", None),
+              (b"Get,Controller,0,Remote\n", b"LLO\n"),
               (b"GetDevInfo,VeloDec,0,Name\n", b"Not Installed\n"),
               (b"GetDevInfo,VeloDec,1,Name\n", decoder_reply),
               (b"GetDevInfo,VeloDec,2,Name\n", b"Not Installed\n"),
@@ -308,13 +357,44 @@ def _polytec_open(decoder_reply=b"VD-09\n", readback=b"25mm/s/V\n", delay=b"8.16
     return script
 
 
+LOCAL = b"Set,Controller,0,Remote,Local\n"  # the front panel given back on closing
+
+
+def test_polytec_tolerates_echo_and_acknowledge_and_reads_a_plain_range_list(pty_peer):
+    echoed = [(b"Set,Interface,0,Echo,Off\n", b"Set,Interface,0,Echo,Off\nOK\n"),
+              (b"Set,Interface,0,Acknowledge,Off\n", None),
+              (b"Get,Interface,0,Echo\n", b"Off\n")]
+    script = echoed + _polytec_open()[3:]
+    script[10] = (b"GetDevInfo,VeloDec,1,Range\n", b"5mm/s/V,25mm/s/V,125mm/s/V\n")
+    peer = pty_peer(script + [(LOCAL, None)])
+    vibrometer = _vibrometer(peer)
+    try:
+        assert vibrometer.settings()["available_ranges"] == ["5mm/s/V", "25mm/s/V", "125mm/s/V"]
+    finally:
+        vibrometer.close()
+    peer.expect_all()
+
+
+def test_polytec_skips_an_echo_of_its_question(pty_peer):
+    script = _polytec_open()
+    script[3] = (b"GetDevInfo,Controller,0,Name\n", b"GetDevInfo,Controller,0,Name\nOFV-5000\n")
+    peer = pty_peer(script + [(LOCAL, None)])
+    vibrometer = _vibrometer(peer)
+    try:
+        assert vibrometer.controller == "OFV-5000"
+    finally:
+        vibrometer.close()
+    peer.expect_all()
+
+
 def _vibrometer(peer, **values):
     values.setdefault("range", "25mm/s/V")
     return polytec.PLUGIN.open(peer.address, settings(polytec, **values), {})
 
 
 def test_polytec_discovers_the_decoder_sets_and_reads_back_the_range(pty_peer):
-    peer = pty_peer(_polytec_open() + [(b"Get,VeloDec,1,Range\n", b"25mm/s/V\n")])
+    peer = pty_peer(_polytec_open() + [(b"Get,VeloDec,1,Range\n", b"25mm/s/V\n"),
+                                       (LOCAL, None)])
     vibrometer = _vibrometer(peer)
     try:
         assert vibrometer.identify() == "Polytec OFV-5000, velocity decoder VD-09 (VeloDec,1)"
@@ -338,7 +418,7 @@ def test_polytec_reports_a_set_that_did_not_take(pty_peer):
 
 
 def test_polytec_names_the_decoders_it_found(pty_peer):
-    script = _polytec_open()[:7]
+    script = _polytec_open()[:10]
     peer = pty_peer(script)
     with pytest.raises(InstrumentError, match=r"no velocity decoder 'VD-07'; installed: VD-09 "
                                               r"\(VeloDec,1\)"):
@@ -347,7 +427,7 @@ def test_polytec_names_the_decoders_it_found(pty_peer):
 
 
 def test_polytec_takes_the_delay_from_the_profile_when_given(pty_peer):
-    peer = pty_peer(_polytec_open(delay=None))
+    peer = pty_peer(_polytec_open(delay=None) + [(LOCAL, None)])
     vibrometer = _vibrometer(peer, delay_s=0.002)
     try:
         assert vibrometer.delay() == 0.002

@@ -78,7 +78,7 @@ def _pulse(rate, duration=1.0, level=0.5, start=0.1, width=0.02):
 
 def test_each_driver_identifies_itself_over_its_wire(drivers):
     lab = drivers()
-    assert "33521B-SIM" in lab.source.identify()
+    assert "33522B,SIMULATED" in lab.source.identify()
     assert "PA25E-SIM" in lab.amplifier.identify()
     assert lab.vibrometer.identify() == "Polytec PDV-100, velocity decoder VD-PDV (VeloDec,0)"
     assert "DSA4-SIM" in lab.daq.identify()
@@ -111,7 +111,47 @@ def test_vibrometer_range_and_delay_come_from_the_controller(drivers):
     assert lab.vibrometer.sensitivity() == pytest.approx(200.0)
     assert lab.vibrometer.delay() == pytest.approx(1.1e-3)
     assert lab.bench.vibrometer.state.range_name == "5mm/s/V"
-    assert lab.bench.vibrometer.state.remote
+    assert lab.bench.vibrometer.state.remote == "LLO"
+
+
+def test_vibrometer_in_echo_and_acknowledge_modes_is_quietened_and_given_back(sim_bench):
+    bench = sim_bench(vibrometer_echo=True, vibrometer_acknowledge=True)
+    vibrometer = polytec.PLUGIN.open(bench.addresses["vibrometer"],
+                                     settings(polytec, range="25mm/s/V"), {})
+    state = bench.vibrometer.state
+    try:
+        assert (state.echo, state.acknowledge, state.remote) == (False, False, "LLO")
+        assert state.range_name == "25mm/s/V"
+        assert vibrometer.read_state() == {"range": "25mm/s/V"}
+    finally:
+        vibrometer.close()
+    deadline = time.monotonic() + 5.0  # the pseudo-terminal delivers "Local" asynchronously
+    while state.remote != "Local" and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert state.remote == "Local"
+
+
+def test_the_source_on_channel_2_routes_its_trigger_output(sim_bench, drivers):
+    lab = drivers(sim_bench(source_channel=2), source={"channel": 2})
+    rate = 10000.0
+    out = lab.record(_pulse(rate, duration=0.3, start=0.05), rate, {"drive": 1}, 0.3)
+    assert lab.bench.source.trigger_out_channel == 2
+    assert np.argmax(out["drive"] > 0.25) == pytest.approx(0.05 * rate, abs=3)
+
+
+def test_a_waveform_not_starting_at_0_v_rests_at_0_v_around_its_burst(drivers):
+    lab = drivers()
+    rate = 10000.0
+    wave = np.full(int(0.05 * rate), 0.4)  # starts (and ends) at 0.4 V
+    lab.source.load_waveform(wave, rate)
+    assert lab.source.settings()["leading_zero_points"] == 1
+    lab.source.link.send_checked("OUTP1 ON")  # armed, not triggered: the resting level
+    assert np.allclose(lab.bench.source.output_volts(0, 100, rate), 0.0)
+    lab.source.link.send_checked("OUTP1 OFF")
+    out = lab.record(wave, rate, {"drive": 1}, 0.2)
+    drive = out["drive"]
+    assert np.median(drive[100:400]) == pytest.approx(0.4, abs=0.01)
+    assert np.abs(drive[int(0.1 * rate):]).max() < 0.01  # after the burst: 0 V, not 0.4 V
 
 
 def test_vibrometer_at_the_wrong_baud_rate_gets_garbage(sim_bench):

@@ -111,9 +111,10 @@ def test_a_drive_below_the_smallest_amplitude_comes_out_as_requested(tmp_path, a
     assert source["settings"]["amplitude_vpp"] == pytest.approx(0.002)
 
 
-def test_a_source_resting_at_the_first_sample_after_the_burst_is_bounded(tmp_path):
-    # a pulse at t = 0: the source (in triggered burst mode) rests at that first sample, 1 V,
-    # once the burst is over - a second step the model of a 0 V rest would not see
+def test_a_waveform_starting_high_leaves_no_voltage_after_the_burst(tmp_path):
+    # a pulse at t = 0: a 33500 in triggered burst mode rests at the arb's first point, so the
+    # driver puts a 0 V point first; the output is back at 0 V once the burst is over, and the
+    # safety check (which assumes the worse, a rest at the first sample) still bounds it
     gain, rate = 5.0, 10000.0
     pulse = ('plugin = "ramp-derivative"\nheight = 0.01\nramp_duration = 0.01\ndelay = 0.0\n'
              'duration = 0.03')
@@ -122,11 +123,10 @@ def test_a_source_resting_at_the_first_sample_after_the_burst_is_bounded(tmp_pat
     path.write_text(path.read_text().replace(_step(1.0), pulse))
     outcome = run_profile(path, lab_registry(), tmp_path / "runs")
     drive, record_rate = _recorded_drive(outcome)
-    assert np.median(drive[int(0.5 * record_rate):]) == pytest.approx(1.0, rel=1e-3)
+    assert np.abs(drive[int(0.5 * record_rate):]).max() < 1e-3
+    assert np.abs(drive).max() == pytest.approx(1.0, rel=1e-3)  # the pulse itself was played
     measured = predicted_stroke_mm(drive, record_rate, gain, SHAKER)
     waveform = read_run(outcome.path).excitation["waveform"]
     predicted = assess(waveform, rate, gain, LIMITS, SHAKER, "off").predicted_stroke_mm
-    resting_at_zero = predicted_stroke_mm(waveform, rate, gain, SHAKER)
-    assert measured > 1.5 * resting_at_zero   # the rest at 1 V matters here
     assert predicted >= 0.995 * measured
     assert outcome.safety.predicted_stroke_mm >= predicted
