@@ -732,15 +732,17 @@ def _natural_frequency(mode: _Mode) -> tuple[float, tuple[float, float], float]:
             damped / two_pi)
 
 
+def _part(decay: dict, sel: slice) -> dict:
+    """One decay with only the extrema ``sel`` (its per-extremum arrays sliced)."""
+    return {key: (val[sel] if key in ("times", "values", "amplitude", "scale") else val)
+            for key, val in decay.items()}
+
+
 def _drop_first(decays: list[dict], count: int) -> list[dict] | None:
     """The decays without their first ``count`` extrema (None if one gets too short)."""
-    out = []
-    for d in decays:
-        if d["amplitude"].size - count < 2 * MIN_CYCLES:
-            return None
-        out.append({key: (val[count:] if key in ("times", "values", "amplitude", "scale")
-                          else val) for key, val in d.items()})
-    return out
+    if any(d["amplitude"].size - count < 2 * MIN_CYCLES for d in decays):
+        return None
+    return [_part(d, slice(count, None)) for d in decays]
 
 
 def _drift(mode: _Mode, decays: list[dict], follow: str) -> tuple[LawFit, dict[str, float]]:
@@ -808,16 +810,11 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
 
 def _halves(decays: list[dict]) -> tuple[list[dict], list[dict]] | None:
     """Each decay's larger and smaller half of extrema (None if a half is too short)."""
-    early, late = [], []
-    for d in decays:
-        n = d["amplitude"].size
-        if n < 4 * MIN_CYCLES:
-            return None
-        cut = n // 2
-        for out, sel in ((early, slice(0, cut)), (late, slice(cut, n))):
-            out.append({key: (val[sel] if key in ("times", "values", "amplitude", "scale")
-                              else val) for key, val in d.items()})
-    return early, late
+    if any(d["amplitude"].size < 4 * MIN_CYCLES for d in decays):
+        return None
+    cuts = [d["amplitude"].size // 2 for d in decays]
+    return ([_part(d, slice(0, c)) for d, c in zip(decays, cuts)],
+            [_part(d, slice(c, None)) for d, c in zip(decays, cuts)])
 
 
 def _one_law(mode: _Mode, follow: str) -> dict[str, float]:
