@@ -145,7 +145,12 @@ def each_instrument(profile: Profile, registry: Registry, order: tuple[str, ...]
                         descriptor = registry.get("instrument", config.plugin)
                         opened[role] = descriptor.open(config.address, dict(config.settings),
                                                        context)
+                        found_on = getattr(opened[role], "found_on", None)
                         report[role] = action(role, opened[role])
+                        if found_on:
+                            report[role]["output_found_on"] = True
+                            log("WARNING", f"{role}: its output was ON when opened (left on by a "
+                                           "run that died?); it was switched off")
                     except Exception as exc:  # noqa: BLE001 - reported per instrument
                         report[role] = {"error": f"{type(exc).__name__}: {exc}"}
             finally:
@@ -202,5 +207,14 @@ def probe_bench(profile: Profile, registry: Registry,
 
 def safe_bench(profile: Profile, registry: Registry,
                log: Log = lambda level, text: None) -> dict[str, dict[str, Any]]:
-    """Put every instrument in its safe state (amplifier first) and read the state back."""
-    return each_instrument(profile, registry, SAFE_ORDER, lambda role, instrument: {}, log)
+    """Put every instrument in its safe state (amplifier first) and read the state back; then,
+    if every output instrument is confirmed safe, release the bench locks of runs that died
+    (:func:`fsi_lab.bench_lock.release_dead`)."""
+    from fsi_lab.bench_lock import LOCKED_ROLES, release_dead
+
+    report = each_instrument(profile, registry, SAFE_ORDER, lambda role, instrument: {}, log)
+    if not any(role in problems(report) for role in LOCKED_ROLES):
+        for holder in release_dead(profile):
+            log("WARNING", f"released the bench lock of a run that never finished "
+                           f"({holder.describe()})")
+    return report
