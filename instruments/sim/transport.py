@@ -2,8 +2,8 @@
 
 One asyncio event loop on one background thread serves every connection of a bench. Messages
 are framed by :class:`~.scpi.Framer` (newline-terminated, binary blocks kept whole) and
-handed to an ``exchange(message, connection) -> (reply, drop)`` callable, which applies fault injection and
-returns the reply bytes (or None) and whether to close the connection instead.
+handed to an ``exchange(message, connection) -> (reply, drop)`` callable, which applies fault
+injection and returns the reply bytes (or None) and whether to close the connection instead.
 
 A pseudo-terminal stands for an RS-232 port: the client opens the slave device (its path is the
 address) with pyserial. The bench checks the line settings the client put on the port; a client
