@@ -27,6 +27,7 @@ import numpy as np
 from fsi_lab.contract import InstrumentPlugin, SignalSource
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
+from fsi_lab.instruments.kit import SAFE_TIMEOUT_S, confirmed_safe_state
 from fsi_lab.params import Param
 
 NAME = "keysight33500"
@@ -35,7 +36,6 @@ MIN_POINTS = 8
 MAX_POINTS = 1_000_000
 MIN_VPP = 0.002
 FILTERS = {"normal": "NORM", "step": "STEP", "off": "OFF"}
-SAFE_TIMEOUT_S = 1.0
 #: Slowest rate at which a 33500B takes in arb data (LAN, memory write), bytes/s: the time
 #: allowed for an upload and its error check grows by the payload's size over this.
 UPLOAD_BYTES_PER_S = 250e3
@@ -170,22 +170,15 @@ class Keysight33500(SignalSource):
         Works on a link that misbehaved: it reconnects first, with a short timeout, and tries
         twice before reporting failure.
         """
-        last: Exception | None = None
-        for _ in range(2):
-            try:
-                with self.link.timeout(SAFE_TIMEOUT_S):
-                    self.link.recover(SAFE_TIMEOUT_S)
-                    self.link.write(f"OUTP{self.channel} OFF")
-                    self.link.write("ABOR")
-                    self.link.write(f"{self._src}VOLT:OFFS 0")
-                    if not self.link.query_bool(f"OUTP{self.channel}?"):
-                        return
-                    last = InstrumentError(f"{NAME} at {self.link.address}: the output still "
-                                           "reads on after OUTP OFF")
-            except InstrumentError as exc:
-                last = exc
-                self.link.broken = self.link.broken or str(exc)
-        raise InstrumentError(f"{NAME}: safe state not confirmed: {last}")
+        link, channel = self.link, self.channel
+
+        def switch_off() -> None:
+            link.write(f"OUTP{channel} OFF")
+            link.write("ABOR")
+            link.write(f"{self._src}VOLT:OFFS 0")
+
+        confirmed_safe_state(NAME, f"{NAME} at {link.address}", link, switch_off,
+                             lambda: link.query_bool(f"OUTP{channel}?"), timeout_s=SAFE_TIMEOUT_S)
 
     def read_state(self) -> dict[str, Any]:
         with self.link.timeout(SAFE_TIMEOUT_S):

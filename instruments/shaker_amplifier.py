@@ -37,13 +37,13 @@ from typing import Any, Mapping
 from fsi_lab.contract import Amplifier, InstrumentPlugin
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
+from fsi_lab.instruments.kit import SAFE_TIMEOUT_S, confirmed_safe_state
 from fsi_lab.params import Param
 
 NAME = "shaker-amplifier"
 #: Interlock name for each bit of ``STAT:INTL?``.
 INTERLOCKS = ("over_travel", "supply_fault", "over_temperature", "over_current", "e_stop",
               "input_clip", "watchdog")
-SAFE_TIMEOUT_S = 1.0
 #: The watchdog is fed while the run has shown signs of life within this time, s.
 HEARTBEAT_S = 10.0
 
@@ -159,22 +159,15 @@ class ShakerAmplifier(Amplifier):
         """Output off, confirmed by ``OUTP?``; reconnects first if the link misbehaved, with a
         short timeout, and tries twice before reporting failure."""
         self._stop_watchdog_feeder()
-        last: Exception | None = None
-        for _ in range(2):
-            try:
-                with self.link.timeout(SAFE_TIMEOUT_S):
-                    self.link.recover(SAFE_TIMEOUT_S)
-                    self.link.write("OUTP 0")
-                    if self.watchdog == "armed":  # the output is off: no trip to latch later
-                        self.link.write("SYST:WDOG OFF")
-                    if not self.link.query_bool("OUTP?"):
-                        return
-                    last = InstrumentError(f"{self._where()}: the output still reads on "
-                                           "after OUTP 0")
-            except InstrumentError as exc:
-                last = exc
-                self.link.broken = self.link.broken or str(exc)
-        raise InstrumentError(f"{NAME}: safe state not confirmed: {last}")
+        link = self.link
+
+        def switch_off() -> None:
+            link.write("OUTP 0")
+            if self.watchdog == "armed":  # the output is off: no trip to latch later
+                link.write("SYST:WDOG OFF")
+
+        confirmed_safe_state(NAME, self._where(), link, switch_off,
+                             lambda: link.query_bool("OUTP?"), timeout_s=SAFE_TIMEOUT_S)
 
     def read_state(self) -> dict[str, Any]:
         with self.link.timeout(SAFE_TIMEOUT_S):
