@@ -16,6 +16,8 @@ from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
 from fsi_lab.signals import RunSignals
 
+#: Roles whose output can drive the shaker: their ``read_state()`` must say ``output_enabled``.
+OUTPUT_ROLES = ("amplifier", "source")
 #: Instruments are put in their safe state in this order: the amplifier first.
 SAFE_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
 #: And opened in this order: the amplifier first, so it can be made safe before anything else.
@@ -65,14 +67,15 @@ def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable
     errors = {role: _safe_state(instrument) for role, instrument in opened}
     states = {role: _read_state(instrument) for role, instrument in opened}
     for role, instrument in opened:
-        if errors[role] is None and states[role].get("output_enabled") is not True:
+        if errors[role] is None and not _output_unconfirmed(role, states[role]):
             continue
-        log("ERROR", f"{role}: {errors[role] or 'output still on after the safe state'}; "
+        log("ERROR", f"{role}: {errors[role] or _output_unconfirmed(role, states[role])}; "
                      "trying once more")
         errors[role] = _safe_state(instrument)
         states[role] = _read_state(instrument)
-        if errors[role] is None and states[role].get("output_enabled") is True:
-            errors[role] = "safe state failed: the output is still on after two attempts"
+        if errors[role] is None and _output_unconfirmed(role, states[role]):
+            errors[role] = ("safe state failed: " + _output_unconfirmed(role, states[role])
+                            + " after two attempts")
         if errors[role] is not None:
             states[role]["safe_state_error"] = errors[role]
             log("ERROR", f"{role}: NOT confirmed safe: {errors[role]}")
@@ -105,15 +108,31 @@ def _read_state(instrument: Instrument) -> dict[str, Any]:
         return {"error": f"could not read state: {type(exc).__name__}: {exc}"}
 
 
+def _output_unconfirmed(role: str, state: Mapping[str, Any]) -> str:
+    """Why ``state`` read back does not confirm the output off, or ''. An output role
+    (:data:`OUTPUT_ROLES`) must report ``output_enabled`` False; a state without it (a driver
+    that forgot the key, or a state that could not be read) confirms nothing."""
+    enabled = state.get("output_enabled")
+    if enabled is True:
+        return "the output is still on"
+    if role in OUTPUT_ROLES and enabled is not False:
+        if "error" in state:
+            return str(state["error"])
+        return ("its state read back does not say that the output is off (read_state() gives "
+                "no boolean output_enabled)")
+    return ""
+
+
 def unsafe_roles(states: Mapping[str, Mapping[str, Any]]) -> dict[str, str]:
     """Per role, why an instrument of :func:`safe_and_close` is not confirmed safe: its safe
-    state failed, or it still reports its output on."""
+    state failed, it still reports its output on, or (an output role) its state does not say
+    that the output is off."""
     found = {}
     for role, state in states.items():
         if "safe_state_error" in state:
             found[role] = str(state["safe_state_error"])
-        elif state.get("output_enabled") is True:
-            found[role] = "its output is still on"
+        elif _output_unconfirmed(role, state):
+            found[role] = _output_unconfirmed(role, state)
     return found
 
 
@@ -145,7 +164,12 @@ def each_instrument(profile: Profile, registry: Registry, order: tuple[str, ...]
                         descriptor = registry.get("instrument", config.plugin)
                         opened[role] = descriptor.open(config.address, dict(config.settings),
                                                        context)
+                        found_on = getattr(opened[role], "found_on", None)
                         report[role] = action(role, opened[role])
+                        if found_on:
+                            report[role]["output_found_on"] = True
+                            log("WARNING", f"{role}: its output was ON when opened (left on by a "
+                                           "run that died?); it was switched off")
                     except Exception as exc:  # noqa: BLE001 - reported per instrument
                         report[role] = {"error": f"{type(exc).__name__}: {exc}"}
             finally:
@@ -202,5 +226,14 @@ def probe_bench(profile: Profile, registry: Registry,
 
 def safe_bench(profile: Profile, registry: Registry,
                log: Log = lambda level, text: None) -> dict[str, dict[str, Any]]:
-    """Put every instrument in its safe state (amplifier first) and read the state back."""
-    return each_instrument(profile, registry, SAFE_ORDER, lambda role, instrument: {}, log)
+    """Put every instrument in its safe state (amplifier first) and read the state back; then,
+    if every output instrument is confirmed safe, release the bench locks of runs that died
+    (:func:`fsi_lab.bench_lock.release_dead`)."""
+    from fsi_lab.bench_lock import LOCKED_ROLES, release_dead
+
+    report = each_instrument(profile, registry, SAFE_ORDER, lambda role, instrument: {}, log)
+    if not any(role in problems(report) for role in LOCKED_ROLES):
+        for holder in release_dead(profile):
+            log("WARNING", f"released the bench lock of a run that never finished "
+                           f"({holder.describe()})")
+    return report

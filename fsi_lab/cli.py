@@ -288,6 +288,15 @@ def cmd_show(args) -> int:
             "excitation": {k: v for k, v in (run.excitation or {}).items() if k != "waveform"}
             or None,
             "analysis": summary}
+    warnings = []
+    if attrs.get("exit_status") == "running":
+        warnings.append(
+            "this run never finished: the process that ran it died (kill -9, a crash, a power "
+            "cut) before it could put the bench in its safe state and read it back; the record "
+            "ends where its last flush did. Check the bench: fsi-lab safe PROFILE")
+    info["warnings"] = warnings
+    for text in warnings:
+        print(f"[warning] {text}", file=sys.stderr)
     if args.json:
         _emit_json(info)
         return 0
@@ -398,6 +407,8 @@ def cmd_bench_access(args) -> int:
         for role, info in report.items():
             verdict = "NOT confirmed safe" if role in failed else "safe"
             print(f"{role}: {info.get('identity') or verdict}")
+            if info.get("output_found_on"):
+                print("  output found ON (left on by a run that died?): switched off")
             for key in ("error", "safe_state_error"):
                 if key in info:
                     print(f"  {key.replace('_', ' ')}: {info[key]}")

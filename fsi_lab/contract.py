@@ -37,7 +37,12 @@ class Instrument(abc.ABC):
 
     @abc.abstractmethod
     def read_state(self) -> dict[str, Any]:
-        """State read back from the instrument (e.g. ``{"output_enabled": False}``)."""
+        """State read back from the instrument (e.g. ``{"output_enabled": False}``).
+
+        A source and an amplifier must give ``output_enabled`` (bool, read from the
+        instrument): without it, or with anything but False after the safe state, the
+        instrument is not confirmed safe and the run fails saying so.
+        """
 
     def settings(self) -> dict[str, Any]:
         """Snapshot of the settings in force, stored in the run file."""

@@ -4,6 +4,13 @@ Whatever ends a run (success, an error, Ctrl+C, SIGTERM, an instrument that stop
 an abort from the GUI), the amplifier output is disabled and the source set to 0 V first; then
 the instruments' state is read back and the run file is finalized with its exit status.
 
+What the process cannot do once it is dead (``kill -9``, a crash, a power cut) the bench does:
+the amplifier's driver arms its watchdog, which switches the output off when the run falls
+silent; and a run on real instruments holds a lock on them (:mod:`fsi_lab.bench_lock`), so the
+next run refuses to start until ``fsi-lab safe`` has looked at a bench left by a run that died.
+During the record every instrument is asked a few times a second whether it still answers
+(:meth:`~fsi_lab.contract.Instrument.monitor`), so a link fault anywhere fails the run.
+
 A run can also be stopped early (:meth:`Runner.stop`): the acquisition ends after the block in
 hand, the bench goes to the same safe state, and the shortened record is a completed run that is
 analysed like any other (root attribute ``stopped_early``).
@@ -22,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close, unsafe_roles
+from fsi_lab.bench_lock import BenchLock
 from fsi_lab.chain import analyse_and_store
 from fsi_lab.contract import ROLE_INTERFACES, Instrument
 from fsi_lab.errors import (
@@ -199,12 +207,18 @@ class Runner:
         self.bus.log("INFO", f"safety check passed: peak drive {report.peak_drive_v:.3g} V, "
                              f"gain {report.gain:g}, predicted stroke "
                              f"{report.predicted_stroke_mm:.3g} mm")
-        signals = RunSignals(on_signal=self._signalled)
-        signals.install()
+        path, run_uuid, started = self._file or new_run_path(self.out_dir)
+        lock = BenchLock(self.profile)
+        lock.acquire(str(path))  # refused (nothing opened or written) while another run holds it
+        try:
+            signals = RunSignals(on_signal=self._signalled)
+            signals.install()
+        except BaseException:
+            lock.release()
+            raise
         outcome = RunOutcome(path=None, exit_status="failed", safety=report)
         writer: RunFileWriter | None = None
         try:
-            path, run_uuid, started = self._file or new_run_path(self.out_dir)
             writer = RunFileWriter(path, self._root_attrs(run_uuid, started))
             outcome.path = path
             self.bus.log("INFO", f"writing {path}")
@@ -226,7 +240,12 @@ class Runner:
                 f"{type(exc).__name__}: {exc}")
             outcome.traceback = traceback.format_exc()
         finally:
-            self._finish(signals, writer, outcome)
+            try:
+                self._finish(signals, writer, outcome)
+            finally:
+                # released only once the bench is safe and the file final: a run killed before
+                # leaves its lock, and the next one refuses until `fsi-lab safe` has looked
+                lock.release()
         # From here to the end Ctrl+C and SIGTERM end only the analysis (the record is safe);
         # the run's handlers also set the abort flag, checked at every progress event.
         try:
@@ -325,6 +344,9 @@ class Runner:
             self.instruments[role] = instrument
             if role == "amplifier":  # nothing may drive the shaker before we arm
                 instrument.safe_state()
+            if getattr(instrument, "found_on", None):
+                self.bus.log("WARNING", f"{role}: its output was ON when the run opened it (left "
+                                        "on by a run that died?); it was switched off first")
             identity = instrument.identify()
             writer.write_instrument(role, {
                 "identity": identity, "plugin": config.plugin, "address": config.address,

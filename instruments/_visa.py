@@ -2,7 +2,8 @@
 
 It turns every transport problem into an :class:`~fsi_lab.errors.InstrumentError` that names the
 instrument, its address, the command and what happened; reads the error queue after each
-configuration step; reads IEEE 488.2 definite-length blocks; and can reconnect with a short
+configuration step; keeps each exchange whole when two threads share the link (a watchdog
+feeder and the run); reads IEEE 488.2 definite-length blocks; and can reconnect with a short
 timeout so that the safe state can still be reached after a garbled or missing reply.
 
 Addresses are VISA resource names: ``TCPIP0::<host>::<port>::SOCKET`` (raw SCPI socket, e.g.
@@ -13,9 +14,11 @@ port 5025), ``TCPIP0::<host>::inst0::INSTR`` (VXI-11) or ``ASRL<device>::INSTR``
 from __future__ import annotations
 
 import contextlib
+import functools
 import re
 import select
 import socket
+import threading
 from typing import Iterator
 
 from fsi_lab.errors import InstrumentError
@@ -46,6 +49,16 @@ def _set_nodelay(resource) -> None:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
 
+def _exchange(method):
+    """Run ``method`` holding the link's lock: its writes and reads are one exchange."""
+
+    @functools.wraps(method)
+    def locked(self, *args, **kwargs):
+        with self.lock:
+            return method(self, *args, **kwargs)
+    return locked
+
+
 class VisaLink:
     """One open VISA resource.
 
@@ -70,9 +83,12 @@ class VisaLink:
         self.broken: str | None = None
         self._rm = None
         self._resource = None
+        #: Held for each whole exchange (a query's write and read, a step and its error check).
+        self.lock = threading.RLock()
         self.connect(self.timeout_s)
 
     # ------------------------------------------------------------------ connection
+    @_exchange
     def connect(self, timeout_s: float) -> None:
         """(Re)open the resource; InstrumentError if it cannot be opened."""
         import pyvisa
@@ -126,6 +142,7 @@ class VisaLink:
                 with contextlib.suppress(Exception):
                     resource.timeout = saved
 
+    @_exchange
     def recover(self, timeout_s: float) -> None:
         """Reconnect if an earlier exchange left the link out of step (safe state, read back)."""
         if self.broken is not None or self._resource is None:
@@ -176,14 +193,17 @@ class VisaLink:
         except Exception:  # noqa: BLE001 - only a hint for the message
             return False
 
+    @_exchange
     def write(self, command: str) -> None:
         """Send one command."""
         self._io(command, lambda r: r.write_raw(command.encode("ascii") + b"\n"))
 
+    @_exchange
     def write_raw(self, command: str, data: bytes) -> None:
         """Send ``data`` (a whole message with its terminator); ``command`` names it."""
         self._io(command, lambda r: r.write_raw(data))
 
+    @_exchange
     def query(self, command: str) -> str:
         """Send a query and return its reply line without the terminator."""
         self.write(command)
@@ -195,6 +215,7 @@ class VisaLink:
                                       "settings and the cable)") from None
         return text.rstrip("\r\n")
 
+    @_exchange
     def read_block(self, command: str) -> bytes:
         """Send ``command`` and read its definite-length block reply (and the terminator)."""
         self.write(command)
@@ -245,6 +266,7 @@ class VisaLink:
         raise self._fail(command, f"unexpected reply {reply!r}; expected 0 or 1")
 
     # ------------------------------------------------------------------ error queue
+    @_exchange
     def errors(self) -> list[str]:
         """Empty the instrument's error queue (``SYST:ERR?``) and return its entries."""
         found = []
@@ -258,6 +280,7 @@ class VisaLink:
             found.append(reply)
         return found
 
+    @_exchange
     def check(self, step: str, accepted: str = "") -> None:
         """Raise InstrumentError if the error queue holds anything after ``step``."""
         found = self.errors()
@@ -266,6 +289,7 @@ class VisaLink:
             raise InstrumentError(f"{self.instrument} at {self.address}: {step} was refused: "
                                   f"{'; '.join(found)}{hint}")
 
+    @_exchange
     def send_checked(self, command: str, accepted: str = "") -> None:
         """Send one configuration command and check the error queue after it."""
         self.write(command)

@@ -27,6 +27,7 @@ import numpy as np
 from fsi_lab.contract import InstrumentPlugin, SignalSource
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
+from fsi_lab.instruments.kit import SAFE_TIMEOUT_S, confirmed_safe_state
 from fsi_lab.params import Param
 
 NAME = "keysight33500"
@@ -35,7 +36,6 @@ MIN_POINTS = 8
 MAX_POINTS = 1_000_000
 MIN_VPP = 0.002
 FILTERS = {"normal": "NORM", "step": "STEP", "off": "OFF"}
-SAFE_TIMEOUT_S = 1.0
 #: Slowest rate at which a 33500B takes in arb data (LAN, memory write), bytes/s: the time
 #: allowed for an upload and its error check grows by the payload's size over this.
 UPLOAD_BYTES_PER_S = 250e3
@@ -68,8 +68,11 @@ def arb_points(wave: np.ndarray) -> tuple[np.ndarray, float]:
 class Keysight33500(SignalSource):
     """An open 33500B-class generator. Use :func:`open_source`."""
 
-    def __init__(self, link, settings: dict[str, Any], identity: str) -> None:
+    def __init__(self, link, settings: dict[str, Any], identity: str,
+                 found_on: bool | None = None) -> None:
         self.link = link
+        #: Whether the output was on when the generator was opened (None: it could not be read).
+        self.found_on = found_on
         self.channel = int(settings["channel"])
         self.filter = FILTERS[settings["arb_filter"]]
         self.identity = identity
@@ -84,7 +87,7 @@ class Keysight33500(SignalSource):
 
     def settings(self) -> dict[str, Any]:
         return {"visa_address": self.link.address, "arb_name": ARB_NAME, "channel": self.channel,
-                "arb_filter": self.filter, **self._loaded}
+                "arb_filter": self.filter, "output_found_on": self.found_on, **self._loaded}
 
     def load_waveform(self, samples: np.ndarray, sample_rate: float) -> None:
         """Upload ``samples`` (V) to play once at ``sample_rate`` (Sa/s) per trigger."""
@@ -167,22 +170,15 @@ class Keysight33500(SignalSource):
         Works on a link that misbehaved: it reconnects first, with a short timeout, and tries
         twice before reporting failure.
         """
-        last: Exception | None = None
-        for _ in range(2):
-            try:
-                with self.link.timeout(SAFE_TIMEOUT_S):
-                    self.link.recover(SAFE_TIMEOUT_S)
-                    self.link.write(f"OUTP{self.channel} OFF")
-                    self.link.write("ABOR")
-                    self.link.write(f"{self._src}VOLT:OFFS 0")
-                    if not self.link.query_bool(f"OUTP{self.channel}?"):
-                        return
-                    last = InstrumentError(f"{NAME} at {self.link.address}: the output still "
-                                           "reads on after OUTP OFF")
-            except InstrumentError as exc:
-                last = exc
-                self.link.broken = self.link.broken or str(exc)
-        raise InstrumentError(f"{NAME}: safe state not confirmed: {last}")
+        link, channel = self.link, self.channel
+
+        def switch_off() -> None:
+            link.write(f"OUTP{channel} OFF")
+            link.write("ABOR")
+            link.write(f"{self._src}VOLT:OFFS 0")
+
+        confirmed_safe_state(NAME, f"{NAME} at {link.address}", link, switch_off,
+                             lambda: link.query_bool(f"OUTP{channel}?"), timeout_s=SAFE_TIMEOUT_S)
 
     def read_state(self) -> dict[str, Any]:
         with self.link.timeout(SAFE_TIMEOUT_S):
@@ -212,10 +208,23 @@ def check_source(address: str, settings: dict[str, Any], plan: Mapping[str, Any]
                              "generator's channel 1 is wired to the amplifier")
 
 
+def _output_found_on(link, channel: int) -> bool | None:
+    """``OUTP<n>?`` before anything else is sent: whether the output was left on; None when
+    the reply could not be read (the link is reopened then, so that ``OUTP<n> OFF`` still goes
+    out)."""
+    try:
+        with link.timeout(SAFE_TIMEOUT_S):
+            return link.query_bool(f"OUTP{channel}?")
+    except InstrumentError:
+        link.recover(SAFE_TIMEOUT_S)
+        return None
+
+
 def open_source(address: str, settings: dict[str, Any], context: dict[str, Any]) -> Keysight33500:
-    """Connect, switch the output off, identify, clear the status and confirm the output off
-    (the first ``OUTP<n> OFF`` goes out before the identity is known, so that the output goes
-    off even when the reply to ``*IDN?`` is unexpected)."""
+    """Connect, read whether the output was left on, switch it off, identify, clear the status
+    and confirm the output off (``OUTP<n>?`` and the first ``OUTP<n> OFF`` go out before the
+    identity is known, so that the output goes off even when the reply to ``*IDN?`` is
+    unexpected, and an output found on is reported: :attr:`Keysight33500.found_on`)."""
     from fsi_lab.instruments._visa import VisaLink
 
     if address.strip() in ("", "embedded"):
@@ -224,6 +233,7 @@ def open_source(address: str, settings: dict[str, Any], context: dict[str, Any])
         address = resolve_address("source", NAME, address, context)
     link = VisaLink(NAME, address, settings["timeout_s"])
     try:
+        found_on = _output_found_on(link, settings["channel"])
         link.write(f"OUTP{settings['channel']} OFF")
         identity = link.query("*IDN?")
         if identity.count(",") < 3:
@@ -235,7 +245,7 @@ def open_source(address: str, settings: dict[str, Any], context: dict[str, Any])
     except BaseException:
         link.close()
         raise
-    return Keysight33500(link, settings, identity)
+    return Keysight33500(link, settings, identity, found_on)
 
 
 PLUGIN = InstrumentPlugin(

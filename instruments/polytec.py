@@ -61,6 +61,19 @@ def delay_seconds(text: str) -> float:
     return float(m.group(1)) * _UNIT[m.group(2)]
 
 
+def _serial_errors() -> tuple[type[BaseException], ...]:
+    """What a failing serial port raises: pyserial's errors, OS errors and, on POSIX, termios
+    errors (a port that vanished makes ``tcflush`` raise ``termios.error``, not an OSError)."""
+    import serial
+
+    errors: tuple[type[BaseException], ...] = (serial.SerialException, OSError)
+    try:
+        import termios
+    except ImportError:  # pragma: no cover - Windows
+        return errors
+    return errors + (termios.error,)
+
+
 class SerialLine:
     """A line-oriented serial port: one command, at most one reply line."""
 
@@ -73,7 +86,7 @@ class SerialLine:
             self.serial = serial.serial_for_url(port, baudrate=baud_rate, bytesize=8,
                                                 parity="N", stopbits=1, timeout=timeout_s,
                                                 write_timeout=timeout_s)
-        except (serial.SerialException, ValueError, OSError) as exc:
+        except _serial_errors() + (ValueError,) as exc:
             raise InstrumentError(
                 f"{NAME} at {port}: cannot open the serial port ({exc}); expected a device "
                 "such as /dev/ttyUSB0 or COM3, or a pyserial URL such as rfc2217://host:port"
@@ -85,21 +98,19 @@ class SerialLine:
 
     def send(self, line: str) -> None:
         """Send one line (a ``Set``: no reply is expected)."""
-        import serial
 
         try:
             self.serial.write(line.encode("ascii") + b"\n")
             self.serial.flush()
-        except (serial.SerialException, OSError) as exc:
+        except _serial_errors() as exc:
             raise self._error(line, f"the serial port failed ({exc})") from None
 
     def read_line(self, line: str) -> str:
         """One reply line (stripped) to the question ``line`` just sent."""
-        import serial
 
         try:
             raw = self.serial.read_until(b"\n")
-        except (serial.SerialException, OSError) as exc:
+        except _serial_errors() as exc:
             raise self._error(line, f"the serial port failed ({exc})") from None
         if not raw.endswith(b"\n"):
             raise self._error(line, f"no reply within {self.timeout_s:g} s" +
@@ -115,11 +126,10 @@ class SerialLine:
 
     def ask(self, line: str) -> str:
         """Send ``line`` and return the reply line (an echo of ``line`` is skipped)."""
-        import serial
 
         try:
             self.serial.reset_input_buffer()  # a late reply to an interrupted question
-        except (serial.SerialException, OSError) as exc:
+        except _serial_errors() as exc:
             raise self._error(line, f"the serial port failed ({exc})") from None
         self.send(line)
         text = self.read_line(line)

@@ -2,9 +2,27 @@
 
 Command set: ``*IDN?``, ``*CLS``, ``SYST:ERR?``, ``OUTP 0|1``, ``OUTP?``, ``GAIN <V/V>``,
 ``GAIN?``, ``STAT:INTL?`` (interlock bitfield: bit 0 over-travel, 1 supply fault,
-2 over-temperature, 3 over-current, 4 e-stop, 5 input clip), ``INTL:RES`` and ``MEAS:CURR?`` (A).
-Interlocks latch in the amplifier and force its output off; ``OUTP 1`` is refused while one is
-active, and this driver checks them before asking.
+2 over-temperature, 3 over-current, 4 e-stop, 5 input clip, 6 watchdog), ``INTL:RES`` and
+``MEAS:CURR?`` (A). Interlocks latch in the amplifier and force its output off; ``OUTP 1`` is
+refused while one is active, and this driver checks them before asking.
+
+A dead controller cannot leave the shaker driven: before the output goes on, the driver arms the
+amplifier's communication watchdog (``SYST:WDOG:TIM <watchdog_s>``, ``SYST:WDOG ON``) and a
+thread of this process feeds it (``SYST:WDOG:FEED``) four times per watchdog time for as long as
+the run shows signs of life (:meth:`ShakerAmplifier.monitor`, called by the runner a few times a
+second, within :data:`HEARTBEAT_S`). When the process is killed, crashes or freezes, or the
+cable is pulled, the feeding stops and the amplifier switches its output off by itself after
+``watchdog_s`` and latches its ``watchdog`` interlock. Why the amplifier and not a guardian
+process: a guardian is one more process a crash, a job scheduler's kill of the process group or
+a power cut of the PC takes down with the run, and it needs a second connection that a serial
+amplifier cannot offer; the amplifier's own timer survives all of these. Amplifiers with such a
+watchdog (a "communication timeout" or "watchdog" setting that switches the output off when the
+host falls silent) are configured the same way; one that does not know ``SYST:WDOG`` (error
+-113) is used without (the run records ``watchdog: "not offered"``), and the run then relies on
+the bench lock and on the next command that opens the bench reporting outputs it found on.
+
+On opening, the output state is read (``OUTP?``) before ``OUTP 0`` goes out, so that an output
+left on by a run that died is reported (:attr:`ShakerAmplifier.found_on`).
 
 Address: a VISA resource, e.g. ``TCPIP0::192.168.1.20::5025::SOCKET`` or
 ``ASRL/dev/ttyUSB0::INSTR`` (8N1 at ``baud_rate``), or ``embedded``.
@@ -12,33 +30,93 @@ Address: a VISA resource, e.g. ``TCPIP0::192.168.1.20::5025::SOCKET`` or
 
 from __future__ import annotations
 
+import threading
+import time
 from typing import Any, Mapping
 
 from fsi_lab.contract import Amplifier, InstrumentPlugin
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
+from fsi_lab.instruments.kit import SAFE_TIMEOUT_S, confirmed_safe_state
 from fsi_lab.params import Param
 
 NAME = "shaker-amplifier"
 #: Interlock name for each bit of ``STAT:INTL?``.
 INTERLOCKS = ("over_travel", "supply_fault", "over_temperature", "over_current", "e_stop",
-              "input_clip")
-SAFE_TIMEOUT_S = 1.0
+              "input_clip", "watchdog")
+#: The watchdog is fed while the run has shown signs of life within this time, s.
+HEARTBEAT_S = 10.0
 
 
 class ShakerAmplifier(Amplifier):
     """An open amplifier. Use :func:`open_amplifier`."""
 
-    def __init__(self, link, identity: str) -> None:
+    def __init__(self, link, identity: str, watchdog_s: float = 0.0,
+                 found_on: bool | None = None) -> None:
         self.link = link
         self.identity = identity
         self._gain: float | None = None
+        self.watchdog_s = float(watchdog_s)
+        #: Whether the output was on when the amplifier was opened (None: it could not be read).
+        self.found_on = found_on
+        #: "armed", "not offered" by the amplifier, "off" (watchdog_s = 0) or "not armed yet".
+        self.watchdog = "off" if self.watchdog_s <= 0 else "not armed yet"
+        self._alive_until = 0.0
+        self._feeder: threading.Thread | None = None
+        self._stop_feeding = threading.Event()
 
     def identify(self) -> str:
         return self.identity
 
     def settings(self) -> dict[str, Any]:
-        return {"visa_address": self.link.address, "gain_read_back": self._gain}
+        return {"visa_address": self.link.address, "gain_read_back": self._gain,
+                "watchdog_s": self.watchdog_s, "watchdog": self.watchdog,
+                "output_found_on": self.found_on}
+
+    # ------------------------------------------------------------------ watchdog
+    def monitor(self) -> None:
+        """The run is alive: the watchdog is fed for :data:`HEARTBEAT_S` more."""
+        self._alive_until = time.monotonic() + HEARTBEAT_S
+
+    def _arm_watchdog(self) -> None:
+        """Arm the amplifier's watchdog and start feeding it; without one, say so."""
+        if self.watchdog_s <= 0 or self.watchdog == "not offered":
+            return
+        link = self.link
+        link.write(f"SYST:WDOG:TIM {self.watchdog_s:.6g}")
+        link.write("SYST:WDOG ON")
+        refused = link.errors()
+        if refused and all(e.startswith("-113") for e in refused):
+            self.watchdog = "not offered"
+            return
+        if refused:
+            raise InstrumentError(f"{self._where()}: arming the watchdog "
+                                  f"(SYST:WDOG:TIM {self.watchdog_s:g}; SYST:WDOG ON) was "
+                                  f"refused: {'; '.join(refused)}")
+        self.watchdog = "armed"
+        self.monitor()
+        self._stop_feeding.clear()
+        if self._feeder is None or not self._feeder.is_alive():
+            self._feeder = threading.Thread(target=self._feed, daemon=True,
+                                            name="fsi-lab-amplifier-watchdog")
+            self._feeder.start()
+
+    def _feed(self) -> None:
+        """Feed the watchdog four times per watchdog time while the run is alive."""
+        period = self.watchdog_s / 4
+        while not self._stop_feeding.wait(period):
+            if time.monotonic() > self._alive_until:
+                return  # the run stopped showing signs of life: let the watchdog act
+            try:
+                self.link.write("SYST:WDOG:FEED")
+            except InstrumentError:
+                return
+
+    def _stop_watchdog_feeder(self) -> None:
+        self._stop_feeding.set()
+        feeder = self._feeder
+        if feeder is not None and feeder is not threading.current_thread():
+            feeder.join(timeout=self.watchdog_s + SAFE_TIMEOUT_S)
 
     def _where(self) -> str:
         return f"{NAME} at {self.link.address}"
@@ -71,6 +149,7 @@ class ShakerAmplifier(Amplifier):
                     f"{self._where()}: output on refused: interlock {', '.join(active)} is "
                     "active; remove its cause, then clear it with INTL:RES (or set "
                     "reset_interlocks = true to do so when the amplifier is opened for a run)")
+            self._arm_watchdog()
         self.link.send_checked(f"OUTP {1 if enabled else 0}")
         if self.link.query_bool("OUTP?") != enabled:
             raise InstrumentError(f"{self._where()}: the output did not switch "
@@ -79,20 +158,16 @@ class ShakerAmplifier(Amplifier):
     def safe_state(self) -> None:
         """Output off, confirmed by ``OUTP?``; reconnects first if the link misbehaved, with a
         short timeout, and tries twice before reporting failure."""
-        last: Exception | None = None
-        for _ in range(2):
-            try:
-                with self.link.timeout(SAFE_TIMEOUT_S):
-                    self.link.recover(SAFE_TIMEOUT_S)
-                    self.link.write("OUTP 0")
-                    if not self.link.query_bool("OUTP?"):
-                        return
-                    last = InstrumentError(f"{self._where()}: the output still reads on "
-                                           "after OUTP 0")
-            except InstrumentError as exc:
-                last = exc
-                self.link.broken = self.link.broken or str(exc)
-        raise InstrumentError(f"{NAME}: safe state not confirmed: {last}")
+        self._stop_watchdog_feeder()
+        link = self.link
+
+        def switch_off() -> None:
+            link.write("OUTP 0")
+            if self.watchdog == "armed":  # the output is off: no trip to latch later
+                link.write("SYST:WDOG OFF")
+
+        confirmed_safe_state(NAME, self._where(), link, switch_off,
+                             lambda: link.query_bool("OUTP?"), timeout_s=SAFE_TIMEOUT_S)
 
     def read_state(self) -> dict[str, Any]:
         with self.link.timeout(SAFE_TIMEOUT_S):
@@ -106,16 +181,29 @@ class ShakerAmplifier(Amplifier):
         return state
 
     def close(self) -> None:
+        self._stop_watchdog_feeder()
         self.link.close()
+
+
+def _output_found_on(link) -> bool | None:
+    """``OUTP?`` before anything else is sent: whether the output was left on; None when the
+    reply could not be read (the link is reopened then, so that ``OUTP 0`` still goes out)."""
+    try:
+        with link.timeout(SAFE_TIMEOUT_S):
+            return link.query_bool("OUTP?")
+    except InstrumentError:
+        link.recover(SAFE_TIMEOUT_S)
+        return None
 
 
 def open_amplifier(address: str, settings: dict[str, Any],
                    context: dict[str, Any]) -> ShakerAmplifier:
     """Connect, switch the output off, identify, clear the status and confirm the output off.
 
-    ``OUTP 0`` is the first thing sent, before the identity is known, so that the output goes
-    off even when the reply to ``*IDN?`` is unexpected; once the error queue is cleared it is
-    sent again and checked. Latched interlocks are cleared (``INTL:RES``) only when
+    ``OUTP?`` and then ``OUTP 0`` are the first things sent, before the identity is known, so
+    that the output goes off even when the reply to ``*IDN?`` is unexpected and an output found
+    on is reported (:attr:`ShakerAmplifier.found_on`); once the error queue is cleared ``OUTP 0``
+    is sent again and checked. Latched interlocks are cleared (``INTL:RES``) only when
     ``reset_interlocks`` is set and the instruments are opened for a run
     (``context["purpose"] == "run"``, the default); ``fsi-lab safe`` and ``identify`` open them
     ``"outside-run"`` and leave latched interlocks latched.
@@ -137,6 +225,7 @@ def open_amplifier(address: str, settings: dict[str, Any],
         address = resolve_address("amplifier", NAME, address, context)
     link = VisaLink(NAME, address, settings["timeout_s"], settings["baud_rate"])
     try:
+        found_on = _output_found_on(link)
         link.write("OUTP 0")
         identity = link.query("*IDN?")
         if identity.count(",") < 3:
@@ -150,7 +239,7 @@ def open_amplifier(address: str, settings: dict[str, Any],
     except BaseException:
         link.close()
         raise
-    return ShakerAmplifier(link, identity)
+    return ShakerAmplifier(link, identity, settings["watchdog_s"], found_on)
 
 
 def check_amplifier(address: str, settings: dict[str, Any], plan: Mapping[str, Any]) -> None:
@@ -174,6 +263,9 @@ PLUGIN = InstrumentPlugin(
               help="Serial addresses only: line speed (8 data bits, no parity, 1 stop bit)."),
         Param("timeout_s", "float", "s", 2.0, minimum=0.05, maximum=60.0,
               help="Time allowed for each reply."),
+        Param("watchdog_s", "float", "s", 1.0, minimum=0.0, maximum=60.0,
+              help="The amplifier switches its output off when the run has been silent this "
+                   "long (a killed or frozen controller); 0: do not arm its watchdog."),
     ),
     open=open_amplifier,
     check=check_amplifier,

@@ -16,6 +16,20 @@ from support import EXAMPLE_PLUGIN, SIM_PROFILE
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
 
+@pytest.fixture(scope="session", autouse=True)
+def bench_lock_dir(tmp_path_factory):
+    """Runs on real-instrument addresses take bench locks: in a directory of the session's
+    own (inherited by the CLI's subprocesses), never the user's."""
+    path = tmp_path_factory.mktemp("bench-locks")
+    saved = os.environ.get("FSI_LAB_LOCK_DIR")
+    os.environ["FSI_LAB_LOCK_DIR"] = str(path)
+    yield path
+    if saved is None:
+        os.environ.pop("FSI_LAB_LOCK_DIR", None)
+    else:
+        os.environ["FSI_LAB_LOCK_DIR"] = saved
+
+
 @pytest.fixture(scope="session")
 def example_plugin_dir(tmp_path_factory) -> Path:
     """The example plugin distribution pip-installed into a directory of its own."""

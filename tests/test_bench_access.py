@@ -106,6 +106,25 @@ def test_an_output_that_stays_on_is_not_confirmed_safe():
         assert why in unsafe_roles(states)["amplifier"]
 
 
+class _Forgetful(_Amplifier):
+    """A third-party driver whose state read back forgets ``output_enabled``."""
+
+    def read_state(self):
+        return {"gain": 0.0}
+
+
+def test_an_output_whose_state_does_not_say_it_is_off_is_not_confirmed_safe():
+    from fsi_lab.bench_access import safe_and_close, unsafe_roles
+
+    for role in ("amplifier", "source"):
+        forgetful = _Forgetful()
+        states = safe_and_close({role: forgetful}, [])
+        assert forgetful.attempts == 2
+        assert "does not say that the output is off" in unsafe_roles(states)[role]
+    states = safe_and_close({"vibrometer": _Forgetful()}, [])  # no output to confirm
+    assert unsafe_roles(states) == {}
+
+
 def test_ctrl_c_waits_until_every_instrument_is_safe(sim_profile):
     import json
     import signal

@@ -9,10 +9,26 @@ simulated block, A).
 Interlocks latch and force the output off; ``OUTP 1`` is refused (error -221) while one is
 latched. ``INTL:RES`` clears the latched interlocks whose cause has gone (an e-stop still pressed,
 a supply fault or an over-temperature still present stay latched).
+
+The communication watchdog (a dead controller cannot leave the shaker driven):
+
+==========================  =================================================================
+``SYST:WDOG:TIM <s>``        watchdog time, 0.1 to 60 s (``MIN``/``MAX``/``DEF`` = 1 s);
+                             ``SYST:WDOG:TIM?`` reads it
+``SYST:WDOG ON|OFF``         arm or disarm it; ``SYST:WDOG?`` reads it
+``SYST:WDOG:FEED``           does nothing but feed it
+==========================  =================================================================
+
+Armed, it is fed by every program message that arrives on the connection that armed it (other
+connections, a monitoring client's, do not feed it). When none has arrived for the watchdog time,
+the output is switched off and the ``watchdog`` interlock (bit 6) latches, whatever happened to
+the controller: a crash, a kill, a frozen process, a pulled cable. ``*RST`` disarms it, and so
+does the trip.
 """
 
 from __future__ import annotations
 
+import time
 from typing import TYPE_CHECKING
 
 from fsi_lab.instruments.sim import scpi
@@ -25,7 +41,9 @@ IDENTITY = "fsi-lab,PA25E-SIM,SIMPA25,1.0 (simulated)"
 MAX_GAIN = 50.0
 #: Bit of each interlock in the ``STAT:INTL?`` bitfield.
 INTERLOCK_BITS = {"over_travel": 0, "supply_fault": 1, "over_temperature": 2,
-                  "over_current": 3, "e_stop": 4, "input_clip": 5}
+                  "over_current": 3, "e_stop": 4, "input_clip": 5, "watchdog": 6}
+#: Watchdog time bounds and default, s.
+WATCHDOG_MIN_S, WATCHDOG_MAX_S, WATCHDOG_DEFAULT_S = 0.1, 60.0, 1.0
 #: Interlocks whose cause persists until it is removed on the bench.
 PERSISTENT = ("supply_fault", "over_temperature", "e_stop")
 
@@ -40,6 +58,10 @@ class AmplifierState:
         self.causes: set[str] = set()  # persistent causes still present
         self.current_rms_a = 0.0
         self.trips: list[tuple[float | None, str]] = []  # (record time, interlock) history
+        self.watchdog_s = WATCHDOG_DEFAULT_S
+        self.watchdog_armed = False
+        self.watchdog_owner: object = None  # the connection that armed it
+        self.watchdog_fed = 0.0  # time.monotonic() of the last feed
 
     def trip(self, names: set[str], time_s: float | None = None) -> None:
         """Latch ``names`` and switch the output off."""
@@ -70,6 +92,12 @@ class AmplifierSim(ScpiInstrument):
         c.add("STATus:INTLock?", lambda a, s: str(self.state.bits))
         c.add("INTLock:RESet", self._reset_interlocks)
         c.add("MEASure:CURRent?", lambda a, s: f"{self.state.current_rms_a:.6E}")
+        c.add("SYSTem:WDOG[:STATe]", self._watchdog)
+        c.add("SYSTem:WDOG[:STATe]?", lambda a, s: "1" if self.state.watchdog_armed else "0")
+        c.add("SYSTem:WDOG:TIMe", self._watchdog_time)
+        c.add("SYSTem:WDOG:TIMe?", lambda a, s: "{:.6g}".format(scpi.query_limit(
+            a, WATCHDOG_MIN_S, WATCHDOG_MAX_S, WATCHDOG_DEFAULT_S, self.state.watchdog_s)))
+        c.add("SYSTem:WDOG:FEED", lambda a, s: None)
 
     def set_cause(self, name: str, present: bool) -> None:
         """Press or release the e-stop, or raise or clear a supply or temperature fault."""
@@ -84,9 +112,34 @@ class AmplifierSim(ScpiInstrument):
                 self.state.causes.discard(name)
 
     def reset(self) -> None:
-        """``*RST``: output off, gain 0 (latched interlocks stay latched)."""
+        """``*RST``: output off, gain 0, watchdog disarmed (latched interlocks stay latched)."""
         self.state.output_on = False
         self.state.gain = 0.0
+        self.state.watchdog_armed = False
+
+    def received(self, connection: object) -> None:
+        """A message on the connection that armed the watchdog feeds it."""
+        if self.state.watchdog_armed and connection is self.state.watchdog_owner:
+            self.state.watchdog_fed = time.monotonic()
+
+    def tick(self) -> None:
+        """The watchdog: trip when its connection has been silent for the watchdog time."""
+        state = self.state
+        if state.watchdog_armed and time.monotonic() - state.watchdog_fed > state.watchdog_s:
+            state.watchdog_armed = False
+            state.trip({"watchdog"}, self.bench.data_time)
+
+    def _watchdog(self, args, suffixes):
+        on = scpi.boolean(args)
+        state = self.state
+        state.watchdog_armed = on
+        state.watchdog_owner = self.connection if on else None
+        state.watchdog_fed = time.monotonic()
+
+    def _watchdog_time(self, args, suffixes):
+        self.state.watchdog_s = scpi.number(
+            args, WATCHDOG_MIN_S, WATCHDOG_MAX_S,
+            words=scpi.limits(WATCHDOG_MIN_S, WATCHDOG_MAX_S, WATCHDOG_DEFAULT_S), unit="S")
 
     def _output(self, args, suffixes):
         on = scpi.boolean(args)

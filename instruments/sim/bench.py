@@ -35,6 +35,8 @@ from fsi_lab.instruments.sim.transport import LoopThread, PtyEndpoint, TcpEndpoi
 from fsi_lab.instruments.sim.world import World, oversampling
 
 ROLES = ("source", "amplifier", "vibrometer", "acquisition")
+#: Period of the instruments' timers (the amplifier's watchdog), s.
+TICK_S = 0.05
 
 
 @dataclass
@@ -164,9 +166,25 @@ class SimBench:
         except BaseException:
             self.stop()
             raise
+        self._loop.loop.call_soon_threadsafe(self._tick)
         self._log(f"simulated bench ready ({'fast' if self.options.fast else 'real time'}; "
                   f"fault: {self.faults.describe()})")
         return self
+
+    def _tick(self) -> None:
+        """On the loop, every :data:`TICK_S`: the instruments' timers (the amplifier's
+        watchdog), with the world caught up to now."""
+        if self._loop is None:
+            return
+        try:
+            with self.lock:
+                self.catch_up()
+                for instrument in (self.source, self.amplifier, self.digitiser):
+                    instrument.tick()
+                self._report_trips()
+        finally:
+            if self._loop is not None:
+                self._loop.loop.call_later(TICK_S, self._tick)
 
     def stop(self) -> None:
         """Close every connection and the servers, stop the loop thread (idempotent)."""
@@ -233,8 +251,8 @@ class SimBench:
             f'address = "{a["acquisition"]}"', ""])
 
     # ------------------------------------------------------------------ the wire
-    def _exchange(self, role: str, handle: Callable[[bytes], bytes | None]):
-        def exchange(message: bytes) -> tuple[bytes | None, bool]:
+    def _exchange(self, role: str, handle: Callable[[bytes, object], bytes | None]):
+        def exchange(message: bytes, connection: object = None) -> tuple[bytes | None, bool]:
             with self.lock:
                 self.catch_up()
                 action = self.faults.link_action(role, self.data_time)
@@ -244,7 +262,7 @@ class SimBench:
                     self._log(f"fault: the {role} drops its connection")
                     return None, True
                 try:
-                    reply = handle(message)
+                    reply = handle(message, connection)
                 except Exception as exc:  # noqa: BLE001 - a simulation failure, not the client's
                     self._log(f"the simulated {role} failed on {message[:40]!r}: "
                               f"{type(exc).__name__}: {exc}; it drops its connection")

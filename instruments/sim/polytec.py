@@ -60,7 +60,7 @@ class PolytecSim:
                                      getattr(opts, "vibrometer_echo", False),
                                      getattr(opts, "vibrometer_acknowledge", False))
 
-    def handle(self, line: bytes) -> bytes | None:
+    def handle(self, line: bytes, connection: object = None) -> bytes | None:
         """Answer one line; the reply (with LF, after the echo in echo mode) or None."""
         with self.bench.lock:
             self.bench.catch_up()

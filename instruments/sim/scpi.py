@@ -582,6 +582,7 @@ class ScpiInstrument:
 
     def __init__(self, bench) -> None:
         self.bench = bench
+        self.connection: object = None  # of the message being run
         self.status = Status()
         self.errors = ErrorQueue(self.status)
         c = self.commands = CommandSet(self.errors)
@@ -607,11 +608,20 @@ class ScpiInstrument:
     def reset(self) -> None:
         """``*RST``: the instrument's reset settings (the status registers are kept)."""
 
-    def handle(self, message: bytes) -> bytes | None:
-        """Run one program message; the reply bytes (with newline) or None."""
+    def handle(self, message: bytes, connection: object = None) -> bytes | None:
+        """Run one program message received on ``connection``; the reply bytes (with
+        newline) or None."""
         with self.bench.lock:
             self.bench.catch_up()
+            self.connection = connection
+            self.received(connection)
             return self.commands.run(message)
+
+    def received(self, connection: object) -> None:
+        """Called for every program message, before it runs, with its connection."""
+
+    def tick(self) -> None:
+        """Called a few times a second by the bench, under its lock (timers)."""
 
     def _cls(self, args, suffixes):
         self.errors.clear()

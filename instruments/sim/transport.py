@@ -2,8 +2,8 @@
 
 One asyncio event loop on one background thread serves every connection of a bench. Messages
 are framed by :class:`~.scpi.Framer` (newline-terminated, binary blocks kept whole) and
-handed to an ``exchange(message) -> (reply, drop)`` callable, which applies fault injection and
-returns the reply bytes (or None) and whether to close the connection instead.
+handed to an ``exchange(message, connection) -> (reply, drop)`` callable, which applies fault
+injection and returns the reply bytes (or None) and whether to close the connection instead.
 
 A pseudo-terminal stands for an RS-232 port: the client opens the slave device (its path is the
 address) with pyserial. The bench checks the line settings the client put on the port; a client
@@ -24,7 +24,9 @@ from typing import Awaitable, Callable
 
 from fsi_lab.instruments.sim.scpi import Framer
 
-Exchange = Callable[[bytes], "tuple[bytes | None, bool]"]
+#: ``exchange(message, connection)``: ``connection`` tells the connections apart (an instrument
+#: may bind state to the one that set it, as a watchdog does).
+Exchange = Callable[[bytes, object], "tuple[bytes | None, bool]"]
 HOST = "127.0.0.1"
 BAUD_CONSTANTS = {115200: termios.B115200, 9600: termios.B9600, 19200: termios.B19200,
                   38400: termios.B38400, 57600: termios.B57600}
@@ -86,7 +88,7 @@ class TcpEndpoint:
                 if not data:
                     break
                 for message in framer.feed(data):
-                    reply, drop = self.exchange(message)
+                    reply, drop = self.exchange(message, task)
                     if drop:
                         self._drop_all()
                         return
@@ -167,7 +169,7 @@ class PtyEndpoint:
             if not self.line_settings_ok():
                 self._send(FRAMING_GARBAGE)
                 continue
-            reply, drop = self.exchange(message)
+            reply, drop = self.exchange(message, self)
             if drop:
                 self._close()
                 return

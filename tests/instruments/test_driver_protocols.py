@@ -27,7 +27,8 @@ def checked(*commands: bytes) -> list:
 
 
 # --------------------------------------------------------------------------- Keysight 33500B
-KEYSIGHT_OPEN = [(b"OUTP1 OFF\n", None), (b"*IDN?\n", IDN), (b"*CLS\n", None)] \
+KEYSIGHT_OPEN = [(b"OUTP1?\n", b"0\n"), (b"OUTP1 OFF\n", None), (b"*IDN?\n", IDN),
+                 (b"*CLS\n", None)] \
     + checked(b"OUTP1 OFF")
 
 
@@ -36,7 +37,7 @@ def _keysight(peer: ScriptedPeer, **values):
 
 
 def test_keysight_output_goes_off_even_when_the_identity_is_unexpected(tcp_peer):
-    peer = tcp_peer([(b"OUTP1 OFF\n", None), (b"*IDN?\n", b"33521B\n")])
+    peer = tcp_peer([(b"OUTP1?\n", b"1\n"), (b"OUTP1 OFF\n", None), (b"*IDN?\n", b"33521B\n")])
     with pytest.raises(InstrumentError, match="unexpected identity '33521B'; expected "
                                               r"<maker>,<model>,<serial>,<firmware> \(OUTP OFF "
                                               r"was sent first\)"):
@@ -100,7 +101,8 @@ def test_keysight_waits_for_a_big_upload_in_proportion_to_its_size(tcp_peer):
 def test_keysight_on_channel_2_routes_the_trigger_output_and_needs_it(tcp_peer):
     wave = np.array([0.0, 0.25, 0.5, -0.5, 0.0, 0.0, 0.0, 0.0])
     payload = struct.pack("<8f", 0.0, 0.5, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0)
-    script = [(b"OUTP2 OFF\n", None), (b"*IDN?\n", IDN), (b"*CLS\n", None)]
+    script = [(b"OUTP2?\n", b"0\n"), (b"OUTP2 OFF\n", None), (b"*IDN?\n", IDN),
+              (b"*CLS\n", None)]
     script += checked(b"OUTP2 OFF", b"OUTP2 OFF", b"FORM:BORD SWAP", b"SOUR2:DATA:VOL:CLE")
     script += [(b"SOUR2:DATA:ARB FSILAB,#232" + payload + b"\n", None), NO_ERROR]
     script += checked(b"SOUR2:FUNC ARB", b"SOUR2:FUNC:ARB FSILAB", b"SOUR2:FUNC:ARB:SRAT 1000",
@@ -157,8 +159,10 @@ def test_keysight_refuses_more_points_than_its_memory_before_sending(tcp_peer):
 
 # --------------------------------------------------------------------------- amplifier
 AMP_IDN = b"fsi-lab,PA25E,0001,1.0\n"
-# the output goes off first, before the identity is known, and again once the queue is clear
-AMP_OPEN = [(b"OUTP 0\n", None), (b"*IDN?\n", AMP_IDN), (b"*CLS\n", None)] + checked(b"OUTP 0")
+# the output state is read and the output goes off first, before the identity is known, and
+# again once the queue is clear
+AMP_OPEN = [(b"OUTP?\n", b"0\n"), (b"OUTP 0\n", None), (b"*IDN?\n", AMP_IDN),
+            (b"*CLS\n", None)] + checked(b"OUTP 0")
 
 
 def _amplifier(peer, context=None, **values):
@@ -167,7 +171,8 @@ def _amplifier(peer, context=None, **values):
 
 
 def test_amplifier_output_goes_off_even_when_the_identity_is_unexpected(tcp_peer):
-    peer = tcp_peer([(b"OUTP 0\n", None), (b"*IDN?\n", b"PA25E amplifier v2\n")])
+    peer = tcp_peer([(b"OUTP?\n", b"1\n"), (b"OUTP 0\n", None),
+                     (b"*IDN?\n", b"PA25E amplifier v2\n")])
     with pytest.raises(InstrumentError, match="unexpected identity 'PA25E amplifier v2'; "
                                               "expected <maker>,<model>,<serial>,<firmware> "
                                               r"\(OUTP 0 was sent first\)"):
@@ -185,15 +190,18 @@ def test_amplifier_clears_interlocks_only_when_opened_for_a_run(tcp_peer, contex
 
 def test_amplifier_gain_output_and_safe_state(tcp_peer):
     script = AMP_OPEN + checked(b"GAIN 2.5") + [(b"GAIN?\n", b"2.5\n")]
-    script += [(b"STAT:INTL?\n", b"0\n")] + checked(b"OUTP 1") + [(b"OUTP?\n", b"1\n")]
-    script += [(b"OUTP 0\n", None), (b"OUTP?\n", b"0\n")]
+    script += [(b"STAT:INTL?\n", b"0\n"), (b"SYST:WDOG:TIM 60\n", None),
+               (b"SYST:WDOG ON\n", None), NO_ERROR]  # fed every 15 s: not within this test
+    script += checked(b"OUTP 1") + [(b"OUTP?\n", b"1\n")]
+    script += [(b"OUTP 0\n", None), (b"SYST:WDOG OFF\n", None), (b"OUTP?\n", b"0\n")]
     script += [(b"OUTP?\n", b"0\n"), (b"GAIN?\n", b"2.5\n"), (b"STAT:INTL?\n", b"0\n"),
                (b"MEAS:CURR?\n", b"0.000000E+00\n")]
     peer = tcp_peer(script)
-    amplifier = _amplifier(peer)
+    amplifier = _amplifier(peer, watchdog_s=60.0)
     try:
         amplifier.set_gain(2.5)
         amplifier.enable_output(True)
+        assert amplifier.settings()["watchdog"] == "armed"
         amplifier.safe_state()
         assert amplifier.read_state() == {"output_enabled": False, "gain": 2.5,
                                           "interlocks": {}, "current_a": 0.0}
@@ -210,7 +218,7 @@ def test_amplifier_decodes_the_interlock_bitfield_and_refuses_output(tcp_peer):
     try:
         assert amplifier.interlocks() == {
             "over_travel": True, "supply_fault": False, "over_temperature": False,
-            "over_current": False, "e_stop": True, "input_clip": False}
+            "over_current": False, "e_stop": True, "input_clip": False, "watchdog": False}
         with pytest.raises(InstrumentError, match="output on refused: interlock input_clip is "
                                                   "active; remove its cause, then clear it "
                                                   "with INTL:RES"):
@@ -218,6 +226,26 @@ def test_amplifier_decodes_the_interlock_bitfield_and_refuses_output(tcp_peer):
     finally:
         amplifier.close()
     peer.expect_all()  # no OUTP 1 was sent
+
+
+def test_amplifier_reports_an_output_found_on_and_works_without_a_watchdog(tcp_peer):
+    script = [(b"OUTP?\n", b"1\n"), (b"OUTP 0\n", None), (b"*IDN?\n", AMP_IDN),
+              (b"*CLS\n", None)] + checked(b"OUTP 0")
+    script += [(b"STAT:INTL?\n", b"0\n"), (b"SYST:WDOG:TIM 1\n", None),
+               (b"SYST:WDOG ON\n", None), (b"SYST:ERR?\n", b'-113,"Undefined header"\n'),
+               (b"SYST:ERR?\n", b'-113,"Undefined header"\n'), NO_ERROR]
+    script += checked(b"OUTP 1") + [(b"OUTP?\n", b"1\n")]
+    script += [(b"OUTP 0\n", None), (b"OUTP?\n", b"0\n")]
+    peer = tcp_peer(script)
+    amplifier = _amplifier(peer)
+    try:
+        assert amplifier.found_on is True
+        amplifier.enable_output(True)
+        assert amplifier.settings()["watchdog"] == "not offered"
+        amplifier.safe_state()
+    finally:
+        amplifier.close()
+    peer.expect_all()
 
 
 def test_amplifier_rejects_a_gain_that_reads_back_differently(tcp_peer):

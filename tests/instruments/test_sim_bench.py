@@ -330,3 +330,16 @@ def test_a_stopped_bench_closes_its_ports_and_thread():
     assert not bench_threads()
     with pytest.raises(OSError):
         socket.create_connection(("127.0.0.1", port), timeout=1).close()
+
+
+def test_a_vanished_serial_port_is_an_instrument_error_on_every_question(sim_bench):
+    bench = sim_bench()
+    vibrometer = polytec.PLUGIN.open(bench.addresses["vibrometer"],
+                                     settings(polytec, timeout_s=0.5), {})
+    try:
+        bench.inject_fault("drop", "vibrometer")  # the port vanishes at the next line
+        for _ in range(3):  # the read, then flushing a dead port (termios.error underneath)
+            with pytest.raises(InstrumentError, match=r"polytec at /dev/pts/\d+: "):
+                vibrometer.monitor()
+    finally:
+        vibrometer.close()
