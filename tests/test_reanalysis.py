@@ -16,8 +16,7 @@ import pytest
 from support import GOOD_PROFILE, ROOT, run_main
 
 from fsi_lab.errors import AnalysisError
-from fsi_lab.runfile import (RunFileWriter, read_analysis_summary, read_run,
-                             write_analysis)
+from fsi_lab.runfile import RunFileWriter, read_analysis_summary, read_run, write_analysis
 
 #: The file may differ from its size after the first analysis by this fraction at most.
 TOLERANCE = 0.05
