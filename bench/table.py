@@ -71,7 +71,7 @@ def cold_times(imports: str, call: str, prepare: str = "",
     for _ in range(repeat):
         with tempfile.TemporaryDirectory() as cache:
             proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                                  cwd=ROOT, timeout=900,
+                                  check=False, cwd=ROOT, timeout=900,
                                   env={**os.environ, "NUMBA_CACHE_DIR": cache})
         if proc.returncode != 0:
             raise RuntimeError(f"cold start of {call!r} failed: {proc.stderr[-500:]}")
@@ -91,7 +91,8 @@ def process_times(argv: list[str], repeat: int = REPEAT, env: dict | None = None
             before()
         started = time.perf_counter()
         proc = subprocess.run(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                              cwd=ROOT, timeout=900, env={**os.environ, **(env or {})})
+                              check=False, cwd=ROOT, timeout=900,
+                              env={**os.environ, **(env or {})})
         out.append(time.perf_counter() - started)
         if proc.returncode != 0:
             raise RuntimeError(f"{' '.join(argv)} exited {proc.returncode}: "

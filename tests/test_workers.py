@@ -51,6 +51,5 @@ def test_each_worker_runs_one_blas_and_one_numba_thread(monkeypatch):
 
 
 def test_a_pool_needs_a_worker():
-    with pytest.raises(ValueError, match="workers = 0: expected at least 1"):
-        with worker_pool(0):
-            pass
+    with pytest.raises(ValueError, match="workers = 0: expected at least 1"), worker_pool(0):
+        pass
