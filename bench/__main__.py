@@ -1,7 +1,11 @@
 """Run every ``bench/bench_*.py`` module and print one table.
 
 Each module exposes ``rows()`` returning a list of :class:`bench.Row`; our figure and the
-reference it is compared with are measured in the same run.
+reference it is compared with are measured in the same run, the same number of times
+(:data:`bench.table.REPEAT`), and given as median (min-max): warm (in-process, after one
+untimed call) and cold (the first call in a fresh process with an empty numba cache, imports
+apart), with the floor of the work where one applies (one FFT of the length, reading the bytes).
+Rows without a target show a figure for what it is ("-" under met).
 """
 
 from __future__ import annotations

@@ -39,8 +39,23 @@ def crash_or_hang(task: Callable[[], object], size_bytes: int = 0,
         A (re-entrant) lock held across the fork, so that no other thread of the caller is
         inside the library at that moment and the child inherits it consistent (h5py's lock).
     """
+    return in_child(task, size_bytes, hold)[0]
+
+
+def in_child(task: Callable[[], object], size_bytes: int = 0,
+             hold: ContextManager | None = None) -> tuple[str | None, bool]:
+    """Run ``task`` in a forked child, for its effects (e.g. a file it writes).
+
+    Returns
+    -------
+    problem, returned
+        ``problem`` as :func:`crash_or_hang` gives it (None, or a crash or hang in words);
+        ``returned`` is True when ``task`` returned without raising. Where processes cannot
+        be forked, ``task`` runs in the caller (its exceptions then propagate).
+    """
     if not hasattr(os, "fork"):  # pragma: no cover - fsi-lab runs on Linux
-        return None
+        task()
+        return None, True
     timeout = TIMEOUT_S + size_bytes / BYTES_PER_S
     with hold if hold is not None else contextlib.nullcontext():
         pid = os.fork()
@@ -55,15 +70,16 @@ def crash_or_hang(task: Callable[[], object], size_bytes: int = 0,
     try:
         status = _wait(pid, timeout)
         if status is None:
-            return f"reading it did not finish within {timeout:.3g} s"
+            return f"reading it did not finish within {timeout:.3g} s", False
         pid = 0
     finally:
         if pid:  # timed out, or the parent was interrupted: the child must not outlive it
             os.kill(pid, signal.SIGKILL)
             os.waitpid(pid, 0)
     if os.WIFSIGNALED(status):
-        return f"the HDF5 library crashed reading it ({signal.Signals(os.WTERMSIG(status)).name})"
-    return None
+        name = signal.Signals(os.WTERMSIG(status)).name
+        return f"the HDF5 library crashed reading it ({name})", False
+    return None, os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0
 
 
 def _wait(pid: int, timeout: float) -> int | None:

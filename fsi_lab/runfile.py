@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import datetime as _dt
+import itertools
 import json
+import os
+import stat
 import uuid as _uuid
 from dataclasses import dataclass, field
 from importlib import metadata
@@ -16,7 +19,7 @@ import numpy as np
 from fsi_lab.contract import ChannelData
 from fsi_lab.errors import AnalysisError, InputFileError
 from fsi_lab.inputfiles import require_regular_file
-from fsi_lab.isolation import crash_or_hang
+from fsi_lab.isolation import crash_or_hang, in_child
 from fsi_lab.runcheck import EXPECTED as RUN_FILE
 from fsi_lab.runcheck import (
     CHANNEL_RATES_HZ, H5_ERRORS, MAX_T0_S, RunFileReader, decode_attr,
@@ -343,56 +346,206 @@ def require_analysable(run: RunData, minimum: int = 2) -> None:
 
 def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
                    summary: Mapping[str, Any]) -> None:
-    """Replace ``/analysis`` with new results, leaving everything else untouched.
+    """Replace ``/analysis`` with new results, leaving everything else as it was.
 
     ``groups`` maps ``"<channel>/<plugin>"`` to a dict with ``datasets``, ``units``, ``attrs``
-    and ``params``. The new group is written beside the old one and swapped in at the end,
-    so a failure while writing keeps the previous results.
+    and ``params``. The file is rewritten, never modified: everything but ``/analysis`` is
+    copied (object for object, the channels' chunks as they are) into a temporary file beside
+    it, the new results are written there, and the temporary file, synced to disk, replaces
+    the run file in one rename. So the file does not grow over re-analyses (the space of the
+    previous results goes with the old file), and a failure or a crash (even ``kill -9``) at any
+    moment leaves the run file exactly as it was, previous results included; what a crash
+    leaves of the temporary file (``.<name>.<pid>-<n>.rewrite``) is removed by the next
+    analysis of the file once its process is gone. See docs/run-format.md.
 
     Raises
     ------
     AnalysisError
-        A result HDF5 cannot store (named); the previous results stay.
+        A result HDF5 cannot store (named), or the rewritten file cannot be synced or renamed
+        (a full disk); the run file is unchanged.
     InputFileError
-        The previous ``/analysis`` cannot be replaced (a damaged file).
+        The run file cannot be read whole, or is read-only, or its folder does not allow the
+        temporary file; the run file is unchanged.
     """
     path = Path(path)
-    with _open_checked(path, "r+") as handle:
-        where = "/analysis.new"
+    with _open_checked(path, "r"):  # an fsi-lab run file, or refused
+        pass
+    target = Path(os.path.realpath(path))  # a symbolic link keeps pointing at the run file
+    if not os.access(target, os.W_OK):
+        raise InputFileError(f"{path}: is read-only; fsi-lab analyze stores its results in the "
+                             "run file (make it writable, or analyse a copy)")
+    _remove_stale_rewrites(target)
+    temp = target.with_name(f".{target.name}.{os.getpid()}-{next(_REWRITES)}{_REWRITE_SUFFIX}")
+    try:
+        _copy_record(path, temp)
+        with h5py.File(temp, "r+") as handle:
+            _write_results(handle, path, groups, summary)
         try:
-            if "analysis.new" in handle:
-                del handle["analysis.new"]
-            root = handle.create_group("analysis.new")
-        except H5_ERRORS as exc:
-            raise InputFileError(f"{path}: {where}: cannot be replaced ({exc}); expected "
-                                 f"{RUN_FILE}") from None
+            _replace(target, temp)
+        except OSError as exc:  # e.g. a full disk while syncing
+            raise AnalysisError(f"{path}: the analysis cannot be stored ({exc}); the run file "
+                                "is unchanged") from None
+    except BaseException:
+        temp.unlink(missing_ok=True)
+        raise
+
+
+#: The temporary files of :func:`write_analysis` end with this; numbered within a process.
+_REWRITE_SUFFIX = ".rewrite"
+_REWRITES = itertools.count()
+
+
+def _remove_stale_rewrites(target: Path) -> None:
+    """Remove temporary files of earlier rewrites of ``target`` whose process is gone (a
+    ``kill -9`` or a power cut during an analysis)."""
+    prefix = f".{target.name}."
+    try:
+        entries = list(os.scandir(target.parent))
+    except OSError:
+        return
+    for entry in entries:
+        name = entry.name
+        if not (name.startswith(prefix) and name.endswith(_REWRITE_SUFFIX)):
+            continue
+        pid = name[len(prefix):-len(_REWRITE_SUFFIX)].partition("-")[0]
+        if not pid.isdigit() or _alive(int(pid)):
+            continue
         try:
-            write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
-            for key, content in groups.items():
-                where = f"/analysis/{key}"
-                group = root.create_group(key)
-                for name, array in content.get("datasets", {}).items():
-                    where = f"/analysis/{key}/{name}"
-                    dataset = group.create_dataset(name, data=np.asarray(array))
-                    unit = content.get("units", {}).get(name)
-                    if unit is not None:
-                        dataset.attrs["units"] = unit
-                write_attrs(group, content.get("attrs", {}))
-                write_attrs(group.create_group("params"), content.get("params", {}))
-        except BaseException as exc:  # the previous results stay; no half-written group is left
-            del handle["analysis.new"]
-            if isinstance(exc, H5_ERRORS):
-                raise AnalysisError(f"{path}: {where}: the analysis result cannot be stored "
-                                    f"({type(exc).__name__}: {exc}); the previous results are "
-                                    "kept") from None
-            raise
+            os.unlink(entry.path)
+        except OSError:
+            pass
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists (on this machine)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # it exists, owned by someone else
+        return True
+    return True
+
+
+def _copy_record(path: Path, temp: Path) -> None:
+    """Copy everything of run file ``path`` but ``/analysis`` into a new file ``temp``.
+
+    The copy runs in a forked child (:func:`~fsi_lab.isolation.in_child`): it reads every
+    node, also those fsi-lab never reads otherwise, and damage there must not crash the
+    caller. When the copy fails with an ordinary error, it is redone here for the message.
+    """
+    _new_file(path, temp)
+    problem, copied = in_child(lambda: _copy_nodes(path, temp), path.stat().st_size,
+                               hold=h5py._objects.phil)
+    if problem:
+        raise InputFileError(f"{path}: damaged: {problem}; expected {RUN_FILE}")
+    if not copied:
+        _new_file(path, temp)
+        _copy_nodes(path, temp)  # raises InputFileError naming what could not be copied
+        raise InputFileError(f"{path}: cannot be copied for the rewrite (the copy failed in a "
+                             f"child process and not in this one); expected {RUN_FILE}")
+
+
+def _new_file(path: Path, temp: Path) -> None:
+    """An empty HDF5 file ``temp`` (created here, so that the folder's refusal is ours to
+    report), in HDF5's earliest file format like every run file."""
+    try:
+        temp.unlink(missing_ok=True)
+        h5py.File(temp, "x").close()
+    except OSError as exc:
+        raise InputFileError(
+            f"{path}: cannot write the temporary file {temp.name} beside it ({exc}); fsi-lab "
+            "analyze rewrites the run file through a temporary file in its folder") from None
+
+
+def _copy_nodes(path: Path, temp: Path) -> None:
+    """Into the empty file ``temp``: ``path``'s root attributes (with their HDF5 types) and
+    every member of its root but ``/analysis`` (and an unfinished ``/analysis.new`` of an older
+    version), by HDF5's object copy: datasets keep their layout, chunks and attributes;
+    soft and external links stay links."""
+    where = "/"
+    try:
+        with h5py.File(path, "r") as source, h5py.File(temp, "r+") as copy:
+            for index in range(h5py.h5o.get_info(source.id).num_attrs):
+                attr = h5py.h5a.open(source.id, index=index)
+                where = f"/ attribute {_text(attr.get_name())!r}"
+                space = attr.get_space()
+                new = h5py.h5a.create(copy.id, attr.get_name(), attr.get_type(), space)
+                if space.get_simple_extent_type() != h5py.h5s.NULL:
+                    values = np.empty(attr.shape, dtype=attr.dtype)
+                    attr.read(values)
+                    new.write(values)
+            for name in list(source.id):
+                where = "/" + _text(name)
+                if name in (b"analysis", b"analysis.new"):
+                    continue
+                kind = source.id.links.get_info(name).type
+                if kind == h5py.h5l.TYPE_HARD:
+                    h5py.h5o.copy(source.id, name, copy.id, name)
+                elif kind == h5py.h5l.TYPE_SOFT:
+                    copy.id.links.create_soft(name, source.id.links.get_val(name))
+                elif kind == h5py.h5l.TYPE_EXTERNAL:
+                    copy.id.links.create_external(name, *source.id.links.get_val(name))
+                else:
+                    raise ValueError(f"a link of type {kind} that fsi-lab cannot copy")
+            copy.create_group("analysis")
+    except H5_ERRORS as exc:
+        raise InputFileError(f"{path}: {where}: cannot be copied for the rewrite "
+                             f"({type(exc).__name__}: {exc}); expected {RUN_FILE}") from None
+
+
+def _text(name: bytes) -> str:
+    return name.decode("utf-8", errors="replace")
+
+
+def _write_results(handle: h5py.File, path: Path, groups: Mapping[str, Mapping[str, Any]],
+                   summary: Mapping[str, Any]) -> None:
+    """The new results into the (empty) ``/analysis`` of the open rewrite ``handle``."""
+    root = handle["analysis"]
+    where = "/analysis"
+    try:
+        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
+        for key, content in groups.items():
+            where = f"/analysis/{key}"
+            group = root.create_group(key)
+            for name, array in content.get("datasets", {}).items():
+                where = f"/analysis/{key}/{name}"
+                dataset = group.create_dataset(name, data=np.asarray(array))
+                unit = content.get("units", {}).get(name)
+                if unit is not None:
+                    dataset.attrs["units"] = unit
+            write_attrs(group, content.get("attrs", {}))
+            write_attrs(group.create_group("params"), content.get("params", {}))
+    except H5_ERRORS as exc:
+        raise AnalysisError(f"{path}: {where}: the analysis result cannot be stored "
+                            f"({type(exc).__name__}: {exc}); the previous results are "
+                            "kept") from None
+
+
+def _replace(target: Path, temp: Path) -> None:
+    """``temp`` synced to disk, given ``target``'s permissions (and owner, where allowed),
+    then renamed over ``target``; the folder synced so that the rename is on disk too."""
+    info = target.stat()
+    os.chmod(temp, stat.S_IMODE(info.st_mode))
+    if (info.st_uid, info.st_gid) != (os.geteuid(), os.getegid()):
         try:
-            if "analysis" in handle:
-                del handle["analysis"]
-            handle.move("analysis.new", "analysis")
-        except H5_ERRORS as exc:
-            raise InputFileError(f"{path}: /analysis: the previous results cannot be replaced "
-                                 f"({exc}); expected {RUN_FILE}") from None
+            os.chown(temp, info.st_uid, info.st_gid)
+        except OSError:  # not allowed: the file becomes ours, as any file we write
+            pass
+    _fsync(temp, os.O_RDONLY)
+    os.replace(temp, target)
+    try:
+        _fsync(target.parent, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:  # a folder that cannot be opened or synced (some network file systems)
+        pass
+
+
+def _fsync(path: Path, flags: int) -> None:
+    fd = os.open(path, flags)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def read_analysis_summary(path: str | Path) -> dict[str, Any] | None:

@@ -10,7 +10,6 @@ RMS error (% of the truth) and the coverage of the 95 % intervals.
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -142,15 +141,14 @@ class Row:
 
 
 def evaluate(cases: list[Case], trials: int, workers: int = 2) -> list[Row]:
-    """Run ``trials`` realisations of every case (in ``workers`` processes, one BLAS and
-    numba thread each: two processes that each start a thread per core fight over the cores)."""
+    """Run ``trials`` realisations of every case (in ``workers`` processes)."""
     jobs = [(case, seed) for case in cases for seed in range(trials)]
     if workers > 1:
-        import multiprocessing
+        # One BLAS and one numba thread per worker: processes that each start a thread per
+        # core fight over the cores and end up slower than one (fsi_lab.workers says more).
+        from fsi_lab.workers import worker_pool
 
-        os.environ.update(OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
-                          NUMBA_NUM_THREADS="1")
-        with multiprocessing.get_context("fork").Pool(workers) as pool:
+        with worker_pool(workers) as pool:
             results = pool.map(run_trial, jobs, chunksize=1)
     else:
         results = [run_trial(job) for job in jobs]
