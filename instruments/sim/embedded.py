@@ -76,7 +76,7 @@ def check_embedded_record(address: str, plan: dict[str, Any]) -> None:
     profile's beam model at the record's sample rate (ValueError naming the remedy)."""
     if not check_embedded(address, plan):
         return
-    from fsi_lab.instruments.sim.world import oversampling
+    from fsi_lab.instruments.sim.rates import oversampling
     from fsi_lab.modelling import beam_model
 
     oversampling(beam_model(plan["specimen"], plan["model"]), plan["sample_rate"])
