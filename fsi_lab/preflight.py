@@ -23,7 +23,6 @@ from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
 from fsi_lab.safety import SafetyReport, assess
 
-
 #: Most samples a drive waveform may have: the largest arb memory of the generators fsi-lab
 #: drives (a 33500B with its memory option); a longer one is refused before it is generated.
 MAX_WAVEFORM_POINTS = 16_000_000

@@ -24,9 +24,7 @@ import numpy as np
 from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close, unsafe_roles
 from fsi_lab.chain import analyse_and_store
 from fsi_lab.contract import ROLE_INTERFACES, Instrument
-from fsi_lab.errors import (
-    FsiLabError, InstrumentError, RunAborted,
-)
+from fsi_lab.errors import FsiLabError, InstrumentError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
 from fsi_lab.preflight import check_safety
 from fsi_lab.profile import Profile
