@@ -172,9 +172,9 @@ def check_source(address: str, settings: dict[str, Any], plan: Mapping[str, Any]
     from fsi_lab.instruments.sim.embedded import check_embedded
 
     if check_embedded(address, plan):
-        from fsi_lab.instruments.sim.keysight import CHANNELS
+        from fsi_lab.instruments.sim.specs import SOURCE_CHANNELS
 
-        if settings["channel"] > CHANNELS:
+        if settings["channel"] > SOURCE_CHANNELS:
             raise ValueError(f"channel: {settings['channel']}; the embedded simulated generator "
                              f"has channel 1 only")
 

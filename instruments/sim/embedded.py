@@ -3,9 +3,10 @@
 When a profile says ``[bench] embedded = true``, drivers whose address is ``"embedded"`` (or
 empty) call :func:`resolve_address`. The first one starts the bench from the run's shared
 context (physics from ``specimen``, ``model`` and ``shaker``; ``fast``, ``fault`` and
-``fault_after_s`` from ``bench``), stores it there and registers its ``stop`` in the context's
-``cleanup`` list, which the runner calls once every instrument is safe and closed. The drivers
-then connect to it through their real protocol.
+``fault_after_s`` from ``bench``; its integrator loaded at start only when the ``purpose`` is a
+run), stores it there and registers its ``stop`` in the context's ``cleanup`` list, which the
+runner calls once every instrument is safe and closed. The drivers then connect to it through
+their real protocol.
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ def get_embedded_bench(context: dict[str, Any]):
     section = context.get("bench") or {}
     options = BenchOptions(fast=bool(section.get("fast", False)),
                            fault=str(section.get("fault", "none")),
-                           fault_after_s=float(section.get("fault_after_s", 1.0)))
+                           fault_after_s=float(section.get("fault_after_s", 1.0)),
+                           warm_up=context.get("purpose", "run") == "run")
     bench = SimBench(context["specimen"], context.get("model"), context.get("shaker"),
                      options).start()
     context[CONTEXT_KEY] = bench

@@ -19,18 +19,16 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import signal
 
 from fsi_lab.instruments.sim import scpi
 from fsi_lab.instruments.sim.scpi import CommandSet, ErrorQueue, ScpiError
+from fsi_lab.instruments.sim.specs import SOURCE_CHANNELS as CHANNELS
 
 if TYPE_CHECKING:  # pragma: no cover
     from fsi_lab.instruments.sim.bench import SimBench
 
 IDENTITY = "fsi-lab,33521B-SIM,SIM33500,1.0 (simulated)"
 MAX_POINTS = 1_000_000
-#: Output channels of the simulated generator (a 33521B has one).
-CHANNELS = 1
 MIN_POINTS = 8
 DAC_LEVELS = 32767.0
 MAX_SAMPLE_RATE = 160e6
@@ -118,7 +116,10 @@ def resample_arb(points: np.ndarray, arb_rate: float, world_rate: float,
                                  points.size - 1)]
     ratio = Fraction(world_rate / arb_rate).limit_denominator(2000)
     if float(ratio) and abs(float(ratio) - world_rate / arb_rate) < 1e-9 * world_rate / arb_rate:
-        out = signal.resample_poly(points, ratio.numerator, ratio.denominator)
+        # scipy.signal loads when a record plays an arb, not when the bench is only made safe
+        from scipy.signal import resample_poly
+
+        out = resample_poly(points, ratio.numerator, ratio.denominator)
         return out[:n_out]
     t = np.arange(n_out) / world_rate
     return np.interp(t, np.arange(points.size) / arb_rate, points)

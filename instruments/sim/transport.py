@@ -23,6 +23,7 @@ import tty
 from typing import Awaitable, Callable
 
 from fsi_lab.instruments.sim.scpi import take_messages
+from fsi_lab.instruments.sim.specs import SERIAL_BAUD
 
 Exchange = Callable[[bytes], "tuple[bytes | None, bool]"]
 HOST = "127.0.0.1"
@@ -124,10 +125,6 @@ class TcpEndpoint:
             task.cancel()
         if tasks:
             await asyncio.gather(*tasks, return_exceptions=True)
-
-
-#: Line speed of the simulated serial ports, baud (8N1).
-SERIAL_BAUD = 115200
 
 
 class PtyEndpoint:
