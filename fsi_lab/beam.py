@@ -35,7 +35,6 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from fsi_lab.errors import ParameterError
 from fsi_lab.specimen import FLUID_DENSITY
@@ -54,6 +53,54 @@ def _sech(x: float) -> float:
     """1 / cosh(x) without overflow for large x."""
     e = math.exp(-abs(x))
     return 2.0 * e / (1.0 + e * e)
+
+
+def _brent(f, lo: float, hi: float, xtol: float, rtol: float, maxiter: int) -> float:
+    """A root of ``f`` in ``[lo, hi]``, where ``f`` changes sign, by Brent's method.
+
+    The steps of ``scipy.optimize.brentq`` (inverse quadratic extrapolation or secant when
+    they shrink the bracket fast enough, bisection otherwise), so that the roots are the
+    same to the last bit, without importing scipy for a handful of roots: the beam model is
+    built by every ``fsi-lab profile check``. Converged when the bracket is within
+    ``(xtol + rtol |x|)``.
+    """
+    xpre, xcur = lo, hi
+    fpre, fcur = f(xpre), f(xcur)
+    if fpre == 0:
+        return xpre
+    if fcur == 0:
+        return xcur
+    if math.copysign(1.0, fpre) == math.copysign(1.0, fcur):
+        raise ValueError(f"f({lo}) and f({hi}) have the same sign: no root is bracketed")
+    xblk = fblk = spre = scur = 0.0
+    for _ in range(maxiter):
+        if fpre != 0 and fcur != 0 and math.copysign(1.0, fpre) != math.copysign(1.0, fcur):
+            xblk, fblk = xpre, fpre
+            spre = scur = xcur - xpre
+        if abs(fblk) < abs(fcur):
+            xpre, xcur, xblk = xcur, xblk, xcur
+            fpre, fcur, fblk = fcur, fblk, fcur
+        delta = (xtol + rtol * abs(xcur)) / 2
+        sbis = (xblk - xcur) / 2
+        if fcur == 0 or abs(sbis) < delta:
+            return xcur
+        if abs(spre) > delta and abs(fcur) < abs(fpre):
+            if xpre == xblk:  # interpolate
+                stry = -fcur * (xcur - xpre) / (fcur - fpre)
+            else:  # extrapolate
+                dpre = (fpre - fcur) / (xpre - xcur)
+                dblk = (fblk - fcur) / (xblk - xcur)
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
+            if 2 * abs(stry) < min(abs(spre), 3 * abs(sbis) - delta):  # a good short step
+                spre, scur = scur, stry
+            else:
+                spre = scur = sbis
+        else:
+            spre = scur = sbis
+        xpre, fpre = xcur, fcur
+        xcur += scur if abs(scur) > delta else (delta if sbis > 0 else -delta)
+        fcur = f(xcur)
+    raise ArithmeticError(f"no root found in [{lo}, {hi}] after {maxiter} iterations")
 
 
 def clamped_free_betas(modes: int) -> np.ndarray:
@@ -82,7 +129,7 @@ def clamped_free_betas(modes: int) -> np.ndarray:
 
         lo = (n - 1) * math.pi
         hi = n * math.pi
-        betas[i] = brentq(f, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+        betas[i] = _brent(f, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
     return betas
 
 

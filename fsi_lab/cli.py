@@ -423,8 +423,8 @@ def cmd_bench_access(args) -> int:
 
 
 def cmd_profile_check(args) -> int:
+    from fsi_lab.preflight import check_safety
     from fsi_lab.profile import load_profile
-    from fsi_lab.runner import check_safety
 
     registry = _registry()
     profile = load_profile(args.profile, registry, args.set)
@@ -477,10 +477,10 @@ def cmd_model(args) -> int:
 
 def cmd_simulate(args) -> int:
     from fsi_lab.errors import ProfileError, RunAborted
-    from fsi_lab.modelling import simulate_run
+    from fsi_lab.preflight import prepare_excitation
     from fsi_lab.runfile import new_run_path, software_version
-    from fsi_lab.runner import prepare_excitation
     from fsi_lab.signals import RunSignals
+    from fsi_lab.simulation import simulate_run
 
     registry, profile = _model_profile(args)
     if profile.excitation_plugin is None:

@@ -8,6 +8,7 @@ skips, with the reason, those that break the contract.
 from __future__ import annotations
 
 import abc
+import importlib
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
@@ -17,6 +18,33 @@ from fsi_lab.params import Param
 
 KINDS = ("instrument", "excitation", "analysis")
 ROLES = ("source", "amplifier", "vibrometer", "acquisition")
+
+
+@dataclass(frozen=True)
+class Deferred:
+    """A function named ``"package.module:function"``, imported when it is first called.
+
+    A descriptor may give its work this way (``run=Deferred("my_plugin._work:run")``, likewise
+    ``generate``, ``open`` or ``check``), so that listing the plugins and checking a profile,
+    which read only the descriptors, do not import what the work needs (scipy, numba): the
+    module holding the descriptor stays light. A module that fails to import then fails the
+    first call, where the chain reports it like any other failure of that plugin.
+    """
+
+    target: str
+
+    def __post_init__(self) -> None:
+        module, sep, name = self.target.partition(":")
+        if not (module and sep and name):
+            raise ValueError(f"Deferred({self.target!r}): expected 'package.module:function'")
+
+    def load(self) -> Callable[..., Any]:
+        """The named function (its module imported now, if it was not yet)."""
+        module, _, name = self.target.partition(":")
+        return getattr(importlib.import_module(module), name)
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        return self.load()(*args, **kwargs)
 
 
 # --------------------------------------------------------------------------- instruments

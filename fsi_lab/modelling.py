@@ -1,22 +1,19 @@
-"""The beam-in-fluid model as a profile describes it, and simulated runs from it.
+"""The beam-in-fluid model as a profile describes it, and the bench physics built on it.
 
 A profile's ``[specimen]`` gives the beam and fluid; its ``[model]`` section gives the number of
 modes and the damping (C_i and C_f per unit length, or damping ratios per mode). The same model
-drives ``fsi-lab model``, ``fsi-lab simulate`` and the simulated bench.
+drives ``fsi-lab model``, ``fsi-lab simulate`` (:mod:`fsi_lab.simulation`) and the simulated
+bench, and every profile check builds it.
 """
 
 from __future__ import annotations
 
-import traceback
-from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from fsi_lab.beam import PROJECTIONS, BeamModel, Damping
-from fsi_lab.errors import RunAborted
 from fsi_lab.params import Param
-from fsi_lab.runfile import INTERRUPTED, RunFileWriter, utc_now, write_attrs
 from fsi_lab.shaker import ShakerModel
 
 MODEL_PARAMS: tuple[Param, ...] = (
@@ -34,13 +31,6 @@ MODEL_PARAMS: tuple[Param, ...] = (
     Param("projection", "str", "", "per-mode", choices=PROJECTIONS,
           help="Quadratic damping per mode (the paper) or projected consistently (Galerkin)."),
 )
-
-#: Name of the simulated channels and what they hold.
-SIMULATED_CHANNELS = {
-    "drive": ("voltage", "V"),
-    "base_acceleration": ("acceleration", "m/s^2"),
-    "tip_velocity": ("velocity", "m/s"),
-}
 
 
 def beam_model(specimen: Any, model: dict[str, Any], modes: int | None = None) -> BeamModel:
@@ -104,52 +94,3 @@ class BenchPhysics:
         velocity = self.beam.advance(acceleration)["absolute_velocity"][:, 0]
         return {"base_displacement": displacement, "base_acceleration": acceleration,
                 "tip_velocity": velocity}
-
-
-def simulate_run(profile: Any, waveform: np.ndarray, waveform_rate: float, duration: float,
-                 sample_rate: float, out: Path, modes: int | None, attrs: dict[str, Any],
-                 progress: Callable[[float], None] = lambda fraction: None) -> Path:
-    """Write a run file of the model driven by the profile's excitation.
-
-    The excitation (source volts) passes through the amplifier gain and the ``[shaker]`` model
-    to give the base acceleration that drives the beam. Records longer than the excitation are
-    padded with zeros. Channels: ``drive`` (V), ``base_acceleration`` (m/s^2) and
-    ``tip_velocity`` (absolute velocity at ``specimen.measurement_point``, m/s), the layout of a
-    measured run.
-    """
-    model = beam_model(profile.specimen, profile.model, modes)
-    physics = BenchPhysics(model, profile.shaker, sample_rate, profile.specimen.measurement_point)
-    gain = float(profile.roles["amplifier"].settings.get("gain", 1.0)) if profile.roles else 1.0
-    total = int(round(duration * sample_rate))
-    t = np.arange(total) / sample_rate
-    drive = np.interp(t, np.arange(waveform.size) / waveform_rate, waveform, right=0.0)
-    writer = RunFileWriter(out, {**attrs, "kind": "simulated"})
-    ending = {"exit_status": "failed", "error": "", "traceback": ""}
-    try:
-        writer.write_excitation(waveform, waveform_rate,
-                                {"plugin": profile.excitation_plugin, "amplifier_gain": gain},
-                                profile.excitation)
-        for name, (quantity, unit) in SIMULATED_CHANNELS.items():
-            writer.create_channel(name, {"units": unit, "quantity": quantity,
-                                         "sample_rate": sample_rate, "t0": 0.0,
-                                         "sensitivity": 1.0, "source_instrument": "model"})
-        block = max(1, int(sample_rate))  # one-second blocks
-        for start in range(0, total, block):
-            chunk = drive[start:start + block]
-            motion = physics.advance(chunk * gain)
-            writer.append("drive", chunk)
-            writer.append("base_acceleration", motion["base_acceleration"])
-            writer.append("tip_velocity", motion["tip_velocity"])
-            progress(min(1.0, (start + block) / total))
-        write_attrs(writer.file.create_group("model"), model_summary(model))
-        ending["exit_status"] = "completed"
-    except (KeyboardInterrupt, RunAborted) as exc:  # recorded as the runner records an abort
-        ending.update(exit_status="aborted", error=str(exc) or INTERRUPTED)
-        raise
-    except BaseException as exc:
-        ending.update(error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
-        raise
-    finally:
-        writer.set_attrs({**ending, "stop_time": utc_now()})
-        writer.close()
-    return out

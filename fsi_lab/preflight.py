@@ -1,10 +1,14 @@
-"""What a run will ask of its instruments, checked before any of them is opened.
+"""What a run will ask of its bench, checked before any instrument is opened.
+
+:func:`check_safety` generates the excitation (:func:`prepare_excitation`), runs every
+instrument's own check on the run (:func:`check_instruments`) and assesses the waveform against
+the profile's ``[safety]`` limits. ``fsi-lab profile check``, ``fsi-lab run`` and the GUI call
+it, so a profile the bench would refuse is refused before a run file exists.
 
 Each instrument plugin may declare a ``check`` (see
 :class:`~fsi_lab.contract.InstrumentPlugin`): it is given the run's plan (the bench context,
 the channels' inputs, the record's rate and length, the waveform's size) and refuses what the
-instrument would refuse during the run. ``fsi-lab profile check`` and ``fsi-lab run`` call it
-after generating the waveform, so such a profile is refused before a run file exists.
+instrument would refuse during the run.
 """
 
 from __future__ import annotations
@@ -17,6 +21,51 @@ from fsi_lab.bench_access import bench_context
 from fsi_lab.errors import PluginError, ProfileError
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
+from fsi_lab.safety import SafetyReport, assess
+
+#: Most samples a drive waveform may have: the largest arb memory of the generators fsi-lab
+#: drives (a 33500B with its memory option); a longer one is refused before it is generated.
+MAX_WAVEFORM_POINTS = 16_000_000
+
+
+def _too_long(profile: Profile, points: float, rate: float) -> ProfileError:
+    return ProfileError(
+        f"{profile.path}: excitation: {profile.excitation_plugin!r} would make {points:,.0f} "
+        f"samples at {rate:g} Sa/s; a source holds at most {MAX_WAVEFORM_POINTS:,}: shorten "
+        "the excitation or lower bench.source.sample_rate (or run.sample_rate when it is unset)")
+
+
+def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray, float]:
+    """Generate the profile's drive waveform (V) and its sample rate (Hz).
+
+    Raises
+    ------
+    ProfileError
+        The waveform would have more than :data:`MAX_WAVEFORM_POINTS` samples, or none.
+    PluginError
+        The excitation plugin failed.
+    """
+    descriptor = registry.get("excitation", profile.excitation_plugin)
+    rate = float(profile.roles["source"].settings.get("sample_rate") or profile.run["sample_rate"])
+    if descriptor.duration is not None:
+        points = float(descriptor.duration(dict(profile.excitation))) * rate
+        if points > MAX_WAVEFORM_POINTS:
+            raise _too_long(profile, points, rate)
+    try:
+        waveform = np.asarray(descriptor.generate(dict(profile.excitation), rate), dtype=float)
+    except Exception as exc:  # noqa: BLE001 - a plugin's failure, before anything is driven
+        raise PluginError(
+            f"{profile.path}: excitation plugin {profile.excitation_plugin!r} failed to generate "
+            f"its waveform with {profile.excitation} at {rate:g} Hz: {type(exc).__name__}: {exc}"
+        ) from None
+    if waveform.size > MAX_WAVEFORM_POINTS:
+        raise _too_long(profile, waveform.size, rate)
+    if waveform.ndim != 1 or waveform.size == 0:
+        raise ProfileError(
+            f"{profile.path}: excitation {profile.excitation_plugin!r} produced no samples "
+            f"with {profile.excitation}; check its parameters"
+        )
+    return waveform, rate
 
 
 def run_plan(profile: Profile, waveform: np.ndarray, waveform_rate: float) -> dict[str, Any]:
@@ -62,3 +111,22 @@ def check_instruments(profile: Profile, registry: Registry, waveform: np.ndarray
             raise PluginError(
                 f"{profile.path}: bench.{role}: plugin {config.plugin!r} failed to check the "
                 f"run: {type(exc).__name__}: {exc}") from None
+
+
+def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, float, SafetyReport]:
+    """Generate the waveform, check what the run asks of each instrument
+    (:func:`~fsi_lab.preflight.check_instruments`, which raises) and assess the waveform
+    against ``[safety]`` (the verdict is in the report, not raised)."""
+    waveform, rate = prepare_excitation(profile, registry)
+    check_instruments(profile, registry, waveform, rate)
+    gain = profile.roles["amplifier"].settings.get("gain")
+    if gain is None:
+        raise ProfileError(
+            f"{profile.path}: bench.amplifier: plugin {profile.roles['amplifier'].plugin!r} "
+            "declares no 'gain' parameter, so the gain limit cannot be checked"
+        )
+    # A source that declares ``arb_filter`` says how it reconstructs its output; without it
+    # the check assumes the worse of a held and a band-limited output.
+    arb_filter = profile.roles["source"].settings.get("arb_filter")
+    report = assess(waveform, rate, float(gain), profile.safety, profile.shaker, arb_filter)
+    return waveform, rate, report

@@ -32,17 +32,15 @@ from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close, unsa
 from fsi_lab.bench_lock import BenchLock
 from fsi_lab.chain import analyse_and_store
 from fsi_lab.contract import ROLE_INTERFACES, Instrument
-from fsi_lab.errors import (
-    FsiLabError, InstrumentError, PluginError, ProfileError, RunAborted,
-)
+from fsi_lab.errors import FsiLabError, InstrumentError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
-from fsi_lab.preflight import check_instruments
+from fsi_lab.preflight import check_safety
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
 from fsi_lab.runfile import (
     INTERRUPTED, RunFileWriter, new_run_path, read_run, software_version, utc_now,
 )
-from fsi_lab.safety import SafetyReport, assess, require_safe
+from fsi_lab.safety import SafetyReport, require_safe
 from fsi_lab.signals import RunSignals
 
 INTERLOCK_POLL_S = 0.2
@@ -77,70 +75,6 @@ class RunOutcome:
             "final_state": self.final_states,
             "analysis": self.summary,
         }
-
-
-#: Most samples a drive waveform may have: the largest arb memory of the generators fsi-lab
-#: drives (a 33500B with its memory option); a longer one is refused before it is generated.
-MAX_WAVEFORM_POINTS = 16_000_000
-
-
-def _too_long(profile: Profile, points: float, rate: float) -> ProfileError:
-    return ProfileError(
-        f"{profile.path}: excitation: {profile.excitation_plugin!r} would make {points:,.0f} "
-        f"samples at {rate:g} Sa/s; a source holds at most {MAX_WAVEFORM_POINTS:,}: shorten "
-        "the excitation or lower bench.source.sample_rate (or run.sample_rate when it is unset)")
-
-
-def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray, float]:
-    """Generate the profile's drive waveform (V) and its sample rate (Hz).
-
-    Raises
-    ------
-    ProfileError
-        The waveform would have more than :data:`MAX_WAVEFORM_POINTS` samples, or none.
-    PluginError
-        The excitation plugin failed.
-    """
-    descriptor = registry.get("excitation", profile.excitation_plugin)
-    rate = float(profile.roles["source"].settings.get("sample_rate") or profile.run["sample_rate"])
-    if descriptor.duration is not None:
-        points = float(descriptor.duration(dict(profile.excitation))) * rate
-        if points > MAX_WAVEFORM_POINTS:
-            raise _too_long(profile, points, rate)
-    try:
-        waveform = np.asarray(descriptor.generate(dict(profile.excitation), rate), dtype=float)
-    except Exception as exc:  # noqa: BLE001 - a plugin's failure, before anything is driven
-        raise PluginError(
-            f"{profile.path}: excitation plugin {profile.excitation_plugin!r} failed to generate "
-            f"its waveform with {profile.excitation} at {rate:g} Hz: {type(exc).__name__}: {exc}"
-        ) from None
-    if waveform.size > MAX_WAVEFORM_POINTS:
-        raise _too_long(profile, waveform.size, rate)
-    if waveform.ndim != 1 or waveform.size == 0:
-        raise ProfileError(
-            f"{profile.path}: excitation {profile.excitation_plugin!r} produced no samples "
-            f"with {profile.excitation}; check its parameters"
-        )
-    return waveform, rate
-
-
-def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, float, SafetyReport]:
-    """Generate the waveform, check what the run asks of each instrument
-    (:func:`~fsi_lab.preflight.check_instruments`, which raises) and assess the waveform
-    against ``[safety]`` (the verdict is in the report, not raised)."""
-    waveform, rate = prepare_excitation(profile, registry)
-    check_instruments(profile, registry, waveform, rate)
-    gain = profile.roles["amplifier"].settings.get("gain")
-    if gain is None:
-        raise ProfileError(
-            f"{profile.path}: bench.amplifier: plugin {profile.roles['amplifier'].plugin!r} "
-            "declares no 'gain' parameter, so the gain limit cannot be checked"
-        )
-    # A source that declares ``arb_filter`` says how it reconstructs its output; without it
-    # the check assumes the worse of a held and a band-limited output.
-    arb_filter = profile.roles["source"].settings.get("arb_filter")
-    report = assess(waveform, rate, float(gain), profile.safety, profile.shaker, arb_filter)
-    return waveform, rate, report
 
 
 class Runner:

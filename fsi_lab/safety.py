@@ -15,9 +15,9 @@ from dataclasses import asdict, dataclass
 from typing import Iterator
 
 import numpy as np
-from scipy import signal
 
 from fsi_lab.errors import SafetyError
+from fsi_lab.lti import interpolate
 from fsi_lab.shaker import stroke_of_blocks_mm
 
 #: The stroke model runs at this many samples per suspension period at least (at 20 its
@@ -113,11 +113,11 @@ def source_output(waveform: np.ndarray, factor: int, reconstruction: str,
     """The source output, V, at ``factor`` points per sample of ``waveform`` (V), in blocks.
 
     :data:`HOLD` repeats each sample; :data:`BAND_LIMITED` interpolates through a windowed-sinc
-    filter cut off at half the source rate (``scipy.signal.resample_poly``, as the simulated
-    source does). The output spans the waveform, from its first sample on, to its last (what
-    the source rests at afterwards is :func:`output_stroke_mm`'s concern); with ``edges`` it
-    also includes the reconstruction's ringing before the first and after the last sample, for
-    its peak.
+    filter cut off at half the source rate (that of ``scipy.signal.resample_poly``, as the
+    simulated source does, computed by :func:`fsi_lab.lti.interpolate`). The output spans the
+    waveform, from its first sample on, to its last (what the source rests at afterwards is
+    :func:`output_stroke_mm`'s concern); with ``edges`` it also includes the reconstruction's
+    ringing before the first and after the last sample, for its peak.
     """
     n, step = waveform.size, max(1, BLOCK // factor)
     if reconstruction == HOLD:
@@ -132,7 +132,7 @@ def source_output(waveform: np.ndarray, factor: int, reconstruction: str,
         lo, hi = start - CONTEXT, stop + CONTEXT
         segment = np.concatenate([np.zeros(max(0, -lo)), waveform[max(lo, 0):min(hi, n)],
                                   np.zeros(max(0, hi - n))])
-        out = signal.resample_poly(segment, factor, 1)
+        out = interpolate(segment, factor)
         yield out[CONTEXT * factor:(CONTEXT + stop - start) * factor]
 
 

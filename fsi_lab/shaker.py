@@ -8,6 +8,11 @@ with static sensitivity ``k`` (m/V), natural frequency ``f_s`` and damping ratio
 It predicts the stroke for the safety check and produces the base motion of the simulated
 bench and of ``fsi-lab simulate``. A step makes the base overshoot and ring at ``f_s``, as the
 paper observed (about 30 Hz loaded, 47 Hz unloaded).
+
+Both use the same discrete filters (:func:`discrete_filters`, the bilinear transform). The
+bench's :class:`ShakerModel` runs them through ``scipy.signal.lfilter``, fastest on its many
+short blocks; the stroke prediction, which every ``fsi-lab profile check`` makes, runs them
+through :func:`fsi_lab.lti.lfilter` and so does not wait for scipy to load.
 """
 
 from __future__ import annotations
@@ -15,7 +20,18 @@ from __future__ import annotations
 from typing import Iterable
 
 import numpy as np
-from scipy import signal
+
+from fsi_lab import lti
+
+
+def discrete_filters(sample_rate: float, suspension_hz: float, damping_ratio: float,
+                     mm_per_volt: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(b, a)`` of the base displacement (m) and the base acceleration (m/s^2) per amplifier
+    output volt, at ``sample_rate`` Hz (see :class:`ShakerModel` for the other parameters)."""
+    w = 2 * np.pi * suspension_hz
+    gain = w * w * mm_per_volt * 1e-3
+    den = [1.0, 2 * damping_ratio * w, w * w]
+    return [lti.bilinear(num, den, sample_rate) for num in ([gain], [gain, 0.0, 0.0])]
 
 
 class ShakerModel:
@@ -35,15 +51,11 @@ class ShakerModel:
 
     def __init__(self, sample_rate: float, suspension_hz: float, damping_ratio: float,
                  mm_per_volt: float) -> None:
-        w = 2 * np.pi * suspension_hz
-        gain = w * w * mm_per_volt * 1e-3
-        den = [1.0, 2 * damping_ratio * w, w * w]
-        dt = 1.0 / sample_rate
-        self._filters = []
-        for num in ([gain], [gain, 0.0, 0.0]):  # displacement (m), acceleration (m/s^2)
-            b, a, _ = signal.cont2discrete((num, den), dt, method="bilinear")
-            b, a = np.ravel(b), np.ravel(a)
-            self._filters.append([b, a, np.zeros(max(len(a), len(b)) - 1)])
+        from scipy.signal import lfilter  # the bench's physics; the stroke prediction does without
+
+        self._lfilter = lfilter
+        self._filters = [[b, a, np.zeros(2)] for b, a in discrete_filters(
+            sample_rate, suspension_hz, damping_ratio, mm_per_volt)]
 
     @classmethod
     def from_profile(cls, sample_rate: float, shaker: dict) -> "ShakerModel":
@@ -57,7 +69,7 @@ class ShakerModel:
         u = np.asarray(amplifier_volts, dtype=float)
         out = []
         for entry in self._filters:
-            y, entry[2] = signal.lfilter(entry[0], entry[1], u, zi=entry[2])
+            y, entry[2] = self._lfilter(entry[0], entry[1], u, zi=entry[2])
             out.append(y)
         return out[0], out[1]
 
@@ -87,15 +99,17 @@ def stroke_of_blocks_mm(blocks: Iterable[np.ndarray], sample_rate: float, gain: 
     """:func:`predicted_stroke_mm` of a drive given as consecutive blocks (V at
     ``sample_rate`` Hz), so that a long drive need not be held in memory at once, followed by
     ``rest_v`` (V) held for five suspension periods (where the source rests after it)."""
-    model = ShakerModel.from_profile(sample_rate, shaker)
+    (b, a), _ = discrete_filters(sample_rate, shaker["suspension_hz"], shaker["damping_ratio"],
+                                 shaker["mm_per_volt"])
+    state = np.zeros(2)
     largest, samples = 0.0, 0
     for block in blocks:
-        displacement, _ = model.advance(np.asarray(block, dtype=float) * gain)
+        displacement, state = lti.lfilter(b, a, np.asarray(block, dtype=float) * gain, state)
         if displacement.size:
             largest = max(largest, float(np.max(np.abs(displacement))))
         samples += displacement.size
     if samples == 0:
         return 0.0
-    tail, _ = model.advance(np.full(int(np.ceil(5 * sample_rate / shaker["suspension_hz"])),
-                                    rest_v * gain))
+    rest = np.full(int(np.ceil(5 * sample_rate / shaker["suspension_hz"])), rest_v * gain)
+    tail, _ = lti.lfilter(b, a, rest, state)
     return max(largest, float(np.max(np.abs(tail)))) * 1e3

@@ -23,6 +23,7 @@ import numpy as np
 from fsi_lab.contract import Acquisition, Amplifier, InstrumentPlugin, SignalSource, Vibrometer
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
+from fsi_lab.modal_step import check_step
 from fsi_lab.modelling import BenchPhysics, beam_model
 from fsi_lab.params import Param
 
@@ -239,8 +240,6 @@ def check_acquisition(address: str, settings: dict[str, Any], plan: Mapping[str,
     problem = InProcessAcquisition.record_problem(plan["inputs"], plan["specimen"])
     if problem:
         raise ValueError(problem)
-    from fsi_lab.modal_integrator import check_step
-
     check_step(beam_model(plan["specimen"], plan["model"]), plan["sample_rate"])
 
 

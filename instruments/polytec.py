@@ -264,11 +264,9 @@ def check_vibrometer(address: str, settings: dict[str, Any], plan: Mapping[str, 
 
     if not check_embedded(address, plan):
         return
-    from fsi_lab.instruments.sim.frontends import VIBROMETER_RANGES
-    from fsi_lab.instruments.sim.polytec import DECODER
-    from fsi_lab.instruments.sim.transport import SERIAL_BAUD
+    from fsi_lab.instruments.sim.specs import SERIAL_BAUD, VIBROMETER_DECODER, VIBROMETER_RANGES
 
-    offered = {"range": tuple(VIBROMETER_RANGES), "decoder": ("auto", DECODER),
+    offered = {"range": tuple(VIBROMETER_RANGES), "decoder": ("auto", VIBROMETER_DECODER),
                "baud_rate": (SERIAL_BAUD,)}
     for key, accepted in offered.items():
         if settings[key] not in accepted:

@@ -39,6 +39,29 @@ def test_betas_match_published_roots_to_1e12():
     assert np.max(np.abs(betas - PUBLISHED_BETAS)) < 1e-12
 
 
+def test_betas_are_those_of_scipys_brentq():
+    """The model finds its roots without scipy (checking a profile builds it), by the steps of
+    scipy.optimize.brentq: the same roots (to one unit in the last place), so no model or
+    simulation changes."""
+    from scipy.optimize import brentq
+
+    from fsi_lab.beam import _sech
+
+    def f(b):
+        return math.cos(b) + _sech(b)
+
+    expected = [brentq(f, (n - 1) * math.pi, n * math.pi, xtol=1e-15,
+                       rtol=4 * np.finfo(float).eps, maxiter=200) for n in range(1, 201)]
+    np.testing.assert_array_max_ulp(clamped_free_betas(200), np.array(expected), maxulp=1)
+
+
+def test_the_root_finder_refuses_a_bracket_without_a_sign_change():
+    from fsi_lab.beam import _brent
+
+    with pytest.raises(ValueError, match="same sign"):
+        _brent(lambda x: x * x + 1.0, -1.0, 1.0, 1e-12, 1e-15, 100)
+
+
 def test_betas_for_many_modes_solve_the_characteristic_equation():
     betas = clamped_free_betas(1000)
     n = np.arange(1, 1001)

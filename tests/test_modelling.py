@@ -81,9 +81,9 @@ def test_simulate_records_its_overrides_and_analyze_uses_them(tmp_path):
 
 
 def test_a_failed_simulation_says_so_in_its_file(tmp_path, registry):
-    from fsi_lab.modelling import simulate_run
+    from fsi_lab.preflight import prepare_excitation
     from fsi_lab.profile import load_profile
-    from fsi_lab.runner import prepare_excitation
+    from fsi_lab.simulation import simulate_run
 
     profile = load_profile(WET, registry)
     waveform, rate = prepare_excitation(profile, registry)
@@ -103,9 +103,9 @@ def test_a_failed_simulation_says_so_in_its_file(tmp_path, registry):
 
 
 def test_an_interrupted_simulation_is_aborted_without_a_traceback(tmp_path, registry):
-    from fsi_lab.modelling import simulate_run
+    from fsi_lab.preflight import prepare_excitation
     from fsi_lab.profile import load_profile
-    from fsi_lab.runner import prepare_excitation
+    from fsi_lab.simulation import simulate_run
 
     profile = load_profile(WET, registry)
     waveform, rate = prepare_excitation(profile, registry)

@@ -88,3 +88,25 @@ def test_a_disabled_plugin_is_reported_as_unknown_with_the_choices(with_example_
     with pytest.raises(PluginError, match="unknown excitation plugin 'chirp'; installed "
                                           "excitation plugins: step"):
         registry.get("excitation", "chirp")
+
+
+def test_a_deferred_function_is_imported_on_its_first_call():
+    from fsi_lab.contract import Deferred
+
+    deferred = Deferred("fsi_lab.lti:interpolate")
+    assert callable(deferred) and deferred.load().__name__ == "interpolate"
+    assert list(deferred([1.0, 2.0], 1)) == [1.0, 2.0]
+    with pytest.raises(ValueError, match="package.module:function"):
+        Deferred("fsi_lab.lti.interpolate")
+    with pytest.raises(ModuleNotFoundError):
+        Deferred("fsi_lab.no_such_module:run")()
+
+
+def test_built_in_analyses_run_their_work_through_deferred_modules(registry):
+    from fsi_lab.contract import Deferred
+
+    for name in registry.names("analysis"):
+        run = registry.get("analysis", name).run
+        if registry.version_of("analysis", name).startswith("fsi-lab "):
+            assert isinstance(run, Deferred), name
+            assert callable(run.load()), name

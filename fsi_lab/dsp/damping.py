@@ -42,11 +42,10 @@ import numpy as np
 import scipy.optimize as sopt
 
 from fsi_lab.dsp._signal import fail
+from fsi_lab.dsp.choices import DAMPING_METHODS as METHODS
 from fsi_lab.dsp.decays import FreeDecays, decay_runs, smooth_per_decay
 from fsi_lab.dsp.instantaneous import instantaneous
 from fsi_lab.errors import AnalysisError
-
-METHODS = ("decrement", "envelope-fit", "eq5", "eq7")
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,7 @@ import numpy as np
 import scipy.stats as sstats
 
 from fsi_lab.dsp._signal import fail
+from fsi_lab.dsp.choices import WEIGHTINGS
 
 
 @dataclass(frozen=True)
@@ -82,9 +83,6 @@ def equivalent_coefficient(zeta: Any, frequency: Any, mass_per_length: float) ->
     """Eq. 25: ``C_q = 2 zeta (mu + M) 2 pi f``, kg/(m s), from zeta and f (Hz)."""
     return 2.0 * np.asarray(zeta, dtype=np.float64) * mass_per_length * 2.0 * math.pi \
         * np.asarray(frequency, dtype=np.float64)
-
-
-WEIGHTINGS = ("amplitude", "uniform")
 
 
 def equivalent_damping(amplitude: Any, zeta: Any, frequency: Any, mass_per_length: float, *,

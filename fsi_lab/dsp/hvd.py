@@ -68,6 +68,7 @@ from fsi_lab.dsp._signal import (
     predict_pad,
     smooth_step,
 )
+from fsi_lab.dsp.choices import PADDINGS
 from fsi_lab.dsp.mode_switch import mode_switches
 from fsi_lab.dsp.spectrum import free_decay_peaks
 
@@ -88,7 +89,6 @@ PEAK_THRESHOLD = 0.01
 PEAK_SMOOTHING = 0.05
 #: The decomposition band is flat up to BAND_FACTOR x the highest significant peak.
 BAND_FACTOR = 3.0
-PADDINGS = ("predict", "mirror")
 #: A band (``band_hz``) must hold a spectral peak of the record at least this fraction of its
 #: largest.
 BAND_PEAK_THRESHOLD = 1e-3

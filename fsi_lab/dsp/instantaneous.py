@@ -40,8 +40,7 @@ from fsi_lab.dsp._signal import (
     fail,
     moving_average,
 )
-
-OFFSETS = ("cycles", "mean", "none")  # "cycles": from successive extrema (see module doc)
+from fsi_lab.dsp.choices import OFFSETS  # "cycles": from successive extrema (see module doc)
 
 
 @dataclass(frozen=True)

@@ -28,9 +28,9 @@ import scipy.signal as ssig
 from scipy.ndimage import maximum_filter1d
 
 from fsi_lab.dsp._signal import as_record, check_rate, fail, rfft
+from fsi_lab.dsp.choices import WINDOWS
 from fsi_lab.dsp.decays import decay_segments
 
-WINDOWS = ("hann", "blackmanharris", "flattop", "boxcar", "decay")
 #: Fewest samples of a free decay for :func:`free_decay_peaks` to average the decays' spectra.
 MIN_SEGMENT = 64
 

@@ -2,9 +2,9 @@
 the safety verdict before Start is possible.
 
 The plugin list is the registry's (third-party plugins included); the form is generated from the
-chosen plugin's schema; the preview is the waveform :func:`fsi_lab.runner.check_safety` generates,
-and the verdict is its :class:`~fsi_lab.safety.SafetyReport`, both computed off the UI thread by
-:class:`~fsi_lab.gui.session.ProfileSession`.
+chosen plugin's schema; the preview is the waveform :func:`fsi_lab.preflight.check_safety`
+generates, and the verdict is its :class:`~fsi_lab.safety.SafetyReport`, both computed off the
+UI thread by :class:`~fsi_lab.gui.session.ProfileSession`.
 """
 
 from __future__ import annotations

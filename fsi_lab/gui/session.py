@@ -2,7 +2,7 @@
 
 The forms never build a profile themselves. Their edits become ``key.path=value`` overrides,
 exactly what ``fsi-lab run --set`` takes, and :func:`fsi_lab.profile.parse_profile` validates the
-result; :func:`fsi_lab.runner.check_safety` then gives the waveform (the preview) and the
+result; :func:`fsi_lab.preflight.check_safety` then gives the waveform (the preview) and the
 safety verdict. Both run off the UI thread, and a newer edit makes older answers stale. The run
 file stores the profile text and the overrides, so a run started from the GUI can be redone
 with ``fsi-lab run PROFILE --set ...``.
@@ -18,9 +18,9 @@ import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
 
 from fsi_lab.errors import FsiLabError
+from fsi_lab.preflight import check_safety
 from fsi_lab.profile import Profile, parse_profile
 from fsi_lab.registry import Registry
-from fsi_lab.runner import check_safety
 from fsi_lab.safety import SafetyReport
 from fsi_lab.gui.decimate import min_max_decimate
 from fsi_lab.gui.worker import TaskPool

@@ -14,6 +14,10 @@ Servers bind 127.0.0.1 only. The world advances with the digitiser's record: in 
 samples due by the wall clock are simulated whenever any instrument is addressed (so a command
 takes effect at the moment it arrives); a fast bench simulates samples when they are fetched.
 The source's trigger output is wired to the digitiser's external trigger input.
+
+The world's physics (its filters need scipy, the beam integrator numba) is loaded by the first
+record, and at start only when :attr:`BenchOptions.warm_up` asks for it: a bench started only
+to make its instruments safe or identify them (``fsi-lab safe``) needs neither.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ import math
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -31,8 +35,12 @@ from fsi_lab.instruments.sim.daq import DigitiserSim
 from fsi_lab.instruments.sim.faults import FaultPlan, garble
 from fsi_lab.instruments.sim.keysight import KeysightSim
 from fsi_lab.instruments.sim.polytec import PolytecSim
+from fsi_lab.instruments.sim.rates import oversampling
 from fsi_lab.instruments.sim.transport import LoopThread, PtyEndpoint, TcpEndpoint
-from fsi_lab.instruments.sim.world import World, oversampling
+from fsi_lab.modelling import BenchPhysics, beam_model
+
+if TYPE_CHECKING:  # pragma: no cover
+    from fsi_lab.instruments.sim.world import World
 
 ROLES = ("source", "amplifier", "vibrometer", "acquisition")
 #: Period of the instruments' timers (the amplifier's watchdog), s.
@@ -73,6 +81,10 @@ class BenchOptions:
         The generator's channel (1 or 2) wired to the amplifier and the digitiser's input 1.
     log
         Called with a line of text for each notable event (record start, trips, faults).
+    warm_up
+        Load the compiled beam integrator at start, so that the first record does not wait
+        for it; a bench that will record nothing (its instruments only made safe or
+        identified) starts faster without.
     """
 
     fast: bool = False
@@ -92,6 +104,7 @@ class BenchOptions:
     accelerometer_mv_per_g: float = 100.0
     source_channel: int = 1
     log: Callable[[str], None] | None = None
+    warm_up: bool = True
 
 
 def physics_sections(specimen=None, model: dict | None = None,
@@ -124,8 +137,6 @@ class SimBench:
 
     def __init__(self, specimen=None, model: dict | None = None, shaker: dict | None = None,
                  options: BenchOptions | None = None) -> None:
-        from fsi_lab.modelling import beam_model
-
         self.specimen, self.model, self.shaker = physics_sections(specimen, model, shaker)
         self.options = options or BenchOptions()
         self.beam = beam_model(self.specimen, self.model)
@@ -147,7 +158,8 @@ class SimBench:
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> "SimBench":
         """Start the servers and the pseudo-terminals; returns self."""
-        self._warm_up()
+        if self.options.warm_up:
+            self._warm_up()
         self._loop = LoopThread("fsi-lab-sim-bench")
         self._loop.start()
         ports = self.options.ports
@@ -212,8 +224,6 @@ class SimBench:
 
     def _warm_up(self) -> None:
         """Load the compiled integrator now rather than in the middle of a record."""
-        from fsi_lab.modelling import BenchPhysics
-
         rate = 10000.0 * oversampling(self.beam, 10000.0)
         BenchPhysics(self.beam, self.shaker, rate,
                      self.specimen.measurement_point).advance(np.zeros(8))
@@ -289,6 +299,8 @@ class SimBench:
     def start_record(self, rate: float, points: int, inputs: list[int], ranges: list[float],
                      iepe: list[bool]) -> None:
         """A digitiser record starts now: the world is at rest at t = 0."""
+        from fsi_lab.instruments.sim.world import World  # the physics: see the module's notes
+
         self.record = World(self, self.beam, rate, inputs, ranges, iepe)
         self._points = int(points)
         self._t0 = time.monotonic()

@@ -35,8 +35,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fsi_lab.instruments.sim import scpi
-from fsi_lab.instruments.sim.frontends import DIGITISER_RANGES, Digitiser
 from fsi_lab.instruments.sim.scpi import ScpiError, ScpiInstrument
+from fsi_lab.instruments.sim.specs import DIGITISER_RANGES, volts_per_code
 
 if TYPE_CHECKING:  # pragma: no cover
     from fsi_lab.instruments.sim.bench import SimBench
@@ -100,7 +100,7 @@ class DigitiserSim(ScpiInstrument):
             n, scpi.boolean(a))))
         c.add("INPut#:IEPE?", self._query(lambda n: "1" if self.state.iepe[n] else "0"))
         c.add("INPut#:SCALe?", self._query(
-            lambda n: f"{Digitiser.scale(self.state.ranges[n]):.9E}"))
+            lambda n: f"{volts_per_code(self.state.ranges[n]):.9E}"))
         c.add("TRIGger:SOURce", self._trigger)
         c.add("TRIGger:SOURce?", lambda a, s: self.state.trigger)
         c.add("INITiate[:IMMediate]", self._init)

@@ -3,9 +3,10 @@
 When a profile says ``[bench] embedded = true``, drivers whose address is ``"embedded"`` (or
 empty) call :func:`resolve_address`. The first one starts the bench from the run's shared
 context (physics from ``specimen``, ``model`` and ``shaker``; ``fast``, ``fault``,
-``fault_after_s`` and ``fault_target`` from ``bench``), stores it there and registers its
-``stop`` in the context's ``cleanup`` list, which the runner calls once every instrument is safe
-and closed. The drivers then connect to it through their real protocol.
+``fault_after_s`` and ``fault_target`` from ``bench``; its integrator loaded at start only when
+the ``purpose`` is a run), stores it there and registers its ``stop`` in the context's ``cleanup`` list, which the
+runner calls once every instrument is safe and closed. The drivers then connect to it through
+their real protocol.
 """
 
 from __future__ import annotations
@@ -31,7 +32,8 @@ def get_embedded_bench(context: dict[str, Any]):
     options = BenchOptions(fast=bool(section.get("fast", False)),
                            fault=str(section.get("fault", "none")),
                            fault_after_s=float(section.get("fault_after_s", 1.0)),
-                           fault_target=section.get("fault_target") or None)
+                           fault_target=section.get("fault_target") or None,
+                           warm_up=context.get("purpose", "run") == "run")
     bench = SimBench(context["specimen"], context.get("model"), context.get("shaker"),
                      options).start()
     context[CONTEXT_KEY] = bench
@@ -77,7 +79,7 @@ def check_embedded_record(address: str, plan: dict[str, Any]) -> None:
     profile's beam model at the record's sample rate (ValueError naming the remedy)."""
     if not check_embedded(address, plan):
         return
-    from fsi_lab.instruments.sim.world import oversampling
+    from fsi_lab.instruments.sim.rates import oversampling
     from fsi_lab.modelling import beam_model
 
     oversampling(beam_model(plan["specimen"], plan["model"]), plan["sample_rate"])

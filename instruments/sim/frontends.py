@@ -11,20 +11,14 @@ import math
 import numpy as np
 from scipy import signal
 
+from fsi_lab.instruments.sim.specs import (
+    ADC_BITS,
+    VIBROMETER_OUTPUT_V,
+    VIBROMETER_RANGES,
+    volts_per_code,
+)
 from fsi_lab.units import STANDARD_GRAVITY
 
-#: Velocity ranges of the simulated PDV-100-class vibrometer: name -> ((m/s)/V, noise density
-#: (m/s)/sqrt(Hz)). The analogue output spans +-VIBROMETER_OUTPUT_V.
-VIBROMETER_RANGES = {
-    "5mm/s/V": (0.005, 0.02e-6),
-    "25mm/s/V": (0.025, 0.1e-6),
-    "125mm/s/V": (0.125, 0.5e-6),
-}
-VIBROMETER_OUTPUT_V = 4.0
-
-#: Input ranges of the simulated digitiser, V (peak); the ADC has 24 bits over +-range.
-DIGITISER_RANGES = (0.316, 1.0, 3.16, 10.0)
-ADC_BITS = 24
 #: RMS input noise of the digitiser as a fraction of the range (-114 dB of full scale).
 ADC_NOISE_FRACTION = 2.0 ** -19
 #: -3 dB corner of the AC coupling of an IEPE input (first order), Hz.
@@ -117,7 +111,7 @@ class Digitiser:
     @classmethod
     def scale(cls, range_v: float) -> float:
         """Volts per code on an input of ``range_v``."""
-        return range_v / cls.FULL_SCALE
+        return volts_per_code(range_v)
 
     def codes(self, volts: np.ndarray, ranges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Quantise ``volts`` (n_samples, n_inputs) on inputs of ``ranges`` (n_inputs,).

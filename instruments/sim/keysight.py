@@ -42,10 +42,10 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import signal
 
 from fsi_lab.instruments.sim import scpi
 from fsi_lab.instruments.sim.scpi import ScpiError, ScpiInstrument
+from fsi_lab.instruments.sim.specs import SOURCE_CHANNELS as CHANNELS
 
 if TYPE_CHECKING:  # pragma: no cover
     from fsi_lab.instruments.sim.bench import SimBench
@@ -54,8 +54,6 @@ MODEL = "33522B"
 SERIAL = "SIMULATED01"
 IDENTITY = f"Keysight Technologies,{MODEL},{SERIAL},4.03-1.19 (fsi-lab simulation)"
 MAX_POINTS = 1_000_000
-#: Output channels of the simulated generator (a 33522B has two).
-CHANNELS = 2
 MIN_POINTS = 8
 DAC_LEVELS = 32767.0
 MAX_SAMPLE_RATE = 250e6
@@ -227,7 +225,10 @@ def resample_arb(points: np.ndarray, arb_rate: float, world_rate: float,
                                  points.size - 1)]
     ratio = Fraction(world_rate / arb_rate).limit_denominator(2000)
     if float(ratio) and abs(float(ratio) - world_rate / arb_rate) < 1e-9 * world_rate / arb_rate:
-        out = signal.resample_poly(points, ratio.numerator, ratio.denominator)
+        # scipy.signal loads when a record plays an arb, not when the bench is only made safe
+        from scipy.signal import resample_poly
+
+        out = resample_poly(points, ratio.numerator, ratio.denominator)
         return out[:n_out]
     t = np.arange(n_out) / world_rate
     return np.interp(t, np.arange(points.size) / arb_rate, points)

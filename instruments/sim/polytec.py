@@ -14,21 +14,21 @@ text is this simulation's: the references at hand do not give it). Both power up
 options say (off by default).
 
 The velocity decoder sits at ``decoder_index`` (0 by default) among indices 0 to 3; its ranges
-are those of :data:`~.frontends.VIBROMETER_RANGES`; it powers up in ``25mm/s/V``.
+are those of :data:`~.specs.VIBROMETER_RANGES`; it powers up in ``25mm/s/V``.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from fsi_lab.instruments.sim.frontends import VIBROMETER_RANGES
+from fsi_lab.instruments.sim.specs import VIBROMETER_DECODER as DECODER
+from fsi_lab.instruments.sim.specs import VIBROMETER_RANGES
 
 if TYPE_CHECKING:  # pragma: no cover
     from fsi_lab.instruments.sim.bench import SimBench
 
 CONTROLLER = "PDV-100"
 VERSION = "1.0 (simulated)"
-DECODER = "VD-PDV"
 DECODER_SLOTS = 4
 POWER_UP_RANGE = "25mm/s/V"
 MAX_FREQUENCY = "22kHz"

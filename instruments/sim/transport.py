@@ -23,6 +23,7 @@ import tty
 from typing import Awaitable, Callable
 
 from fsi_lab.instruments.sim.scpi import Framer
+from fsi_lab.instruments.sim.specs import SERIAL_BAUD
 
 #: ``exchange(message, connection)``: ``connection`` tells the connections apart (an instrument
 #: may bind state to the one that set it, as a watchdog does).
@@ -125,10 +126,6 @@ class TcpEndpoint:
             task.cancel()
         if tasks:
             await asyncio.gather(*tasks, return_exceptions=True)
-
-
-#: Line speed of the simulated serial ports, baud (8N1).
-SERIAL_BAUD = 115200
 
 
 class PtyEndpoint:

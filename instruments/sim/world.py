@@ -29,9 +29,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fsi_lab.errors import ParameterError
 from fsi_lab.instruments.sim.frontends import Accelerometer, Decimator, Digitiser, Vibrometer
-from fsi_lab.modal_integrator import check_step
+from fsi_lab.instruments.sim.rates import oversampling
 from fsi_lab.modelling import BenchPhysics
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -40,20 +39,6 @@ if TYPE_CHECKING:  # pragma: no cover
 #: The digitiser's inputs and what is wired to them.
 WIRING = {1: "drive", 2: "base_acceleration", 3: "tip_velocity", 4: "spare"}
 OVERLOAD_TRANSIENT_S = 1e-3
-MAX_OVERSAMPLING = 64
-
-
-def oversampling(model, sample_rate: float) -> int:
-    """Smallest integer factor that lets the integrator resolve every mode of ``model``."""
-    for factor in range(1, MAX_OVERSAMPLING + 1):
-        try:
-            check_step(model, sample_rate * factor)
-            return factor
-        except ParameterError:
-            continue
-    raise ParameterError(
-        f"the simulated bench cannot resolve the highest mode at {sample_rate:g} Hz even "
-        f"oversampled {MAX_OVERSAMPLING} times; lower model.modes or raise run.sample_rate")
 
 
 class World:

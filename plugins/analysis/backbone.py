@@ -1,113 +1,15 @@
-"""The ``backbone`` analysis plugin: an adapter around :mod:`fsi_lab.dsp.backbone`."""
+"""The ``backbone`` analysis plugin: frequency against amplitude, per component.
+
+Declared here; the work, around :mod:`fsi_lab.dsp.backbone`, is in :mod:`._backbone`, imported
+when the chain first runs it, so that listing the plugins and checking a profile do not load it.
+"""
 
 from __future__ import annotations
 
-from typing import Any
-
-import numpy as np
-
-from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
-from fsi_lab.dsp._signal import fail
-from fsi_lab.dsp.backbone import Backbone
-from fsi_lab.dsp.decays import smooth_per_decay
-from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
+from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
-from fsi_lab.plugins.analysis._chain import (
-    Component,
-    decay_attrs,
-    decay_labels,
-    decay_summary,
-    displacement_components,
-    error_entries,
-    guarded,
-    jsonable,
-    per_component,
-    stack_rows,
-    velocity_components,
-)
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS
-
-
-def decay_backbone(inst: Instantaneous, c: Component, smooth: int = 0,
-                   decay_only: bool = True) -> Backbone:
-    """Backbone of one component's :class:`.instantaneous.Instantaneous` analysis (made with
-    ``smooth = 0``) without the points in untrusted record ends (the HVD edge mask and one
-    period at each end) and, with ``decay_only``, outside its free decays; ``smooth`` is the
-    moving average (points each side) applied within each decay. Times are from the channel's
-    first sample."""
-    freq, amp = inst.frequency, inst.amplitude
-    times = inst.frequency_times
-    if smooth:
-        period = 1.0 / float(np.median(freq))
-        _, split = decay_labels(times, c, period, amp, decay_only)
-        regions = split.regions(times) if split is not None else np.zeros(times.size)
-        freq = smooth_per_decay(freq, regions, smooth)
-        amp = np.exp(smooth_per_decay(np.log(np.maximum(amp, 1e-300)), regions, smooth))
-    period = 1.0 / float(np.median(freq))
-    labels, decays = decay_labels(times, c, period, amp, decay_only)
-    keep = labels >= 0
-    if keep.sum() < 2:
-        raise fail("backbone", f"only {int(keep.sum())} period(s) away from the untrusted "
-                               "record ends and inside a free decay; need at least 2 - a "
-                               "longer record")
-    return Backbone(times[keep] + c.t0, amp[keep], freq[keep], labels[keep], decays)
-
-
-def trusted_backbone(c: Component, params: dict[str, Any], plugin: str,
-                     context: AnalysisContext) -> Backbone:
-    """Backbone of one component as the ``backbone`` plugin gives it (:func:`decay_backbone`)."""
-    with guarded(plugin, context):
-        inst = instantaneous(c.signal, c.sample_rate, offset=params["offset"], smooth=0,
-                             min_amplitude=params["min_amplitude"], noise_floor=c.noise_floor,
-                             frequency_hint=c.frequency)
-        return decay_backbone(inst, c, params["smooth_points"], params.get("decay_only", True))
-
-
-def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
-    with guarded("backbone", context):
-        disp = displacement_components(context, "backbone")
-    done, errors = per_component("backbone", context, disp,
-                                 lambda c: trusted_backbone(c, params, "backbone", context))
-    vel = velocity_components(context)
-    vdone: dict[int, Backbone] = {}
-    if vel is not None:
-        for c in vel:
-            try:
-                vdone[c.index] = trusted_backbone(c, params, "backbone", context)
-            except Exception:  # noqa: BLE001 - the velocity backbone is optional
-                pass
-    count = len(disp)
-    t0 = {c.index: c.t0 for c in disp}
-    entries = []
-    for k, bb in done.items():
-        e = {"index": k, "backbone": {"amplitude": jsonable(bb.amplitude),
-                                      "frequency_hz": jsonable(bb.frequency),
-                                      **decay_summary(bb.decays, t0[k])}}
-        if k in vdone:
-            e["backbone_velocity"] = {"amplitude": jsonable(vdone[k].amplitude),
-                                      "frequency_hz": jsonable(vdone[k].frequency)}
-        entries.append(e)
-    err_entries, err_attrs = error_entries(errors, "backbone")
-    datasets = {"time": stack_rows({k: b.time for k, b in done.items()}, count),
-                "amplitude": stack_rows({k: b.amplitude for k, b in done.items()}, count),
-                "frequency": stack_rows({k: b.frequency for k, b in done.items()}, count),
-                "decay": stack_rows({k: b.decay.astype(np.float64) for k, b in done.items()},
-                                    count)}
-    units = {"time": "s", "amplitude": "m", "frequency": "Hz", "decay": ""}
-    if vdone:
-        datasets["velocity_amplitude"] = stack_rows({k: b.amplitude for k, b in vdone.items()},
-                                                    count)
-        datasets["velocity_frequency"] = stack_rows({k: b.frequency for k, b in vdone.items()},
-                                                    count)
-        units.update(velocity_amplitude="m/s", velocity_frequency="Hz")
-    return AnalysisResult(datasets=datasets, units=units,
-                          attrs={"rows": "one row per component, padded with NaN",
-                                 **decay_attrs({k: b.decays for k, b in done.items()}, t0),
-                                 **err_attrs},
-                          summary={"components": entries + err_entries},
-                          values={"displacement": done, "velocity": vdone})
-
 
 PLUGIN = AnalysisPlugin(
     name="backbone",
@@ -117,7 +19,7 @@ PLUGIN = AnalysisPlugin(
         *INSTANT_PARAMS,
         DECAY_ONLY,
     ),
-    run=_run,
+    run=Deferred("fsi_lab.plugins.analysis._backbone:run"),
     help="Backbone curves: zero-crossing frequency against displacement amplitude (m) and "
          "against velocity amplitude (m/s), per component; the untrusted record ends are left "
          "out.",

@@ -1,57 +1,14 @@
-"""The ``frf`` analysis plugin: an adapter around :mod:`fsi_lab.dsp.frf`."""
+"""The ``frf`` analysis plugin: H1 and H2 transfer functions over the reference channel.
+
+Declared here; the work, around :mod:`fsi_lab.dsp.frf`, is in :mod:`._frf`, imported when the
+chain first runs it, so that listing the plugins and checking a profile do not load it.
+"""
 
 from __future__ import annotations
 
-from typing import Any
-
-import numpy as np
-
-from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
-from fsi_lab.dsp.frf import frf
-from fsi_lab.errors import AnalysisError
+from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
-from fsi_lab.plugins.analysis._chain import guarded, jsonable, where
-
-
-def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
-    ch = context.channel
-    ref_name = context.reference
-    if not ref_name:
-        raise AnalysisError(f"{where('frf', context)}: needs a reference channel (the base "
-                            "acceleration): set reference = NAME in the profile's [analysis]")
-    if ref_name not in context.channels:
-        raise AnalysisError(f"{where('frf', context)}: reference channel {ref_name!r} is not in "
-                            f"the run; channels are {', '.join(context.channels) or 'none'}")
-    if ref_name == ch.name:
-        raise AnalysisError(f"{where('frf', context)}: the channel is the reference itself; "
-                            "analyse the response channel")
-    ref = context.channels[ref_name]
-    if abs(float(ref.sample_rate) - float(ch.sample_rate)) > 1e-9 * float(ch.sample_rate):
-        raise AnalysisError(f"{where('frf', context)}: reference sampled at {ref.sample_rate:g} "
-                            f"Hz, response at {ch.sample_rate:g} Hz; expected the same rate")
-    with guarded("frf", context):
-        res = frf(ref.data, ch.data, ch.sample_rate, segment=params["segment"],
-                  overlap=params["overlap"], window=params["window"],
-                  min_relative=params["min_relative"], max_peaks=params["max_peaks"],
-                  min_coherence=params["min_coherence"])
-    unit = f"{ch.unit}/({ref.unit})"
-    return AnalysisResult(
-        datasets={"frequency": res.frequency, "h1_magnitude": np.abs(res.h1),
-                  "h1_phase": np.angle(res.h1), "h2_magnitude": np.abs(res.h2),
-                  "h2_phase": np.angle(res.h2), "coherence": res.coherence,
-                  "natural_frequencies": res.natural_frequencies,
-                  "damping_ratios": res.damping_ratios},
-        units={"frequency": "Hz", "h1_magnitude": unit, "h1_phase": "rad",
-               "h2_magnitude": unit, "h2_phase": "rad", "coherence": "",
-               "natural_frequencies": "Hz", "damping_ratios": ""},
-        attrs={"reference": ref_name, "resolution_hz": float(res.frequency[1]),
-               "window": params["window"]},
-        summary={"frf": {"reference": ref_name,
-                         "natural_frequencies_hz": jsonable(res.natural_frequencies),
-                         "damping_ratios": jsonable(res.damping_ratios)}},
-        values=res)
-
 
 PLUGIN = AnalysisPlugin(
     name="frf",
@@ -70,7 +27,7 @@ PLUGIN = AnalysisPlugin(
         Param("min_coherence", "float", "", 0.0, minimum=0.0, maximum=1.0,
               help="Ignore peaks where the coherence is lower."),
     ),
-    run=_run,
+    run=Deferred("fsi_lab.plugins.analysis._frf:run"),
     help="H1 and H2 frequency response of the channel over the reference channel (base "
          "acceleration) by Welch averaging, coherence, natural frequencies by interpolated "
          "peak picking and half-power damping ratios.",

@@ -1,37 +1,15 @@
-"""The ``spectrum`` analysis plugin: an adapter around :mod:`fsi_lab.dsp.spectrum`."""
+"""The ``spectrum`` analysis plugin: the amplitude spectrum of a channel and its peaks.
+
+Declared here; the work, around :mod:`fsi_lab.dsp.spectrum`, is in :mod:`._spectrum`, imported
+when the chain first runs it, so that listing the plugins and checking a profile do not load it.
+"""
 
 from __future__ import annotations
 
-from typing import Any
-
-import numpy as np
-
-from fsi_lab.contract import AnalysisContext, AnalysisPlugin, AnalysisResult
-from fsi_lab.dsp.spectrum import WINDOWS, amplitude_spectrum, find_peaks_interpolated
+from fsi_lab.contract import AnalysisPlugin, Deferred
+from fsi_lab.dsp.choices import WINDOWS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
-from fsi_lab.plugins.analysis._chain import guarded, jsonable
-
-
-def _run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
-    ch = context.channel
-    with guarded("spectrum", context):
-        f, a = amplitude_spectrum(ch.data, ch.sample_rate, window=params["window"])
-        peaks = find_peaks_interpolated(f, a, min_relative=params["min_relative"],
-                                        max_peaks=params["max_peaks"],
-                                        smoothing=params["smoothing"], fmin=f[1])
-    order = np.argsort(peaks.frequencies)
-    pf = peaks.frequencies[order]
-    pa = peaks.amplitudes[order]
-    return AnalysisResult(
-        datasets={"frequency": f, "amplitude": a, "peak_frequencies": pf,
-                  "peak_amplitudes": pa},
-        units={"frequency": "Hz", "amplitude": ch.unit, "peak_frequencies": "Hz",
-               "peak_amplitudes": ch.unit},
-        attrs={"window": params["window"], "resolution_hz": float(f[1] - f[0])},
-        summary={"spectrum_peaks_hz": jsonable(pf), "spectrum_peak_amplitudes": jsonable(pa)},
-        values=peaks)
-
 
 PLUGIN = AnalysisPlugin(
     name="spectrum",
@@ -48,7 +26,7 @@ PLUGIN = AnalysisPlugin(
               help="Relative half-width of a spectral RMS average before the peak search "
                    "(0.02 = +-2 %), for noisy or chirped spectra."),
     ),
-    run=_run,
+    run=Deferred("fsi_lab.plugins.analysis._spectrum:run"),
     help="Single-sided amplitude spectrum of the channel with interpolated peak frequencies "
          "(the paper's Figs. 5, 9, 11).",
 )

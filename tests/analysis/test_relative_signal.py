@@ -3,7 +3,7 @@
 import numpy as np
 
 from fsi_lab.contract import AnalysisContext, ChannelData
-from fsi_lab.plugins.analysis.hvd import relative_signal
+from fsi_lab.plugins.analysis._hvd import relative_signal
 
 
 def test_base_motion_is_aligned_on_t0():

@@ -1,0 +1,91 @@
+"""The work of the ``damping`` analysis plugin (declared in :mod:`.damping`): an adapter around
+:mod:`fsi_lab.dsp.damping`."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+
+from fsi_lab.contract import AnalysisContext, AnalysisResult
+from fsi_lab.dsp.damping import DampingCurve, damping_from_peaks
+from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
+from fsi_lab.plugins.analysis._chain import (
+    Component,
+    decay_attrs,
+    decay_labels,
+    decay_summary,
+    displacement_components,
+    error_entries,
+    guarded,
+    jsonable,
+    per_component,
+    stack_rows,
+)
+
+
+def decay_peaks(inst: Instantaneous, c: Component, decay_only: bool = True):
+    """Extrema of a component's :class:`.instantaneous.Instantaneous` analysis without the
+    untrusted record ends (the HVD edge mask and one period at each end) and, with
+    ``decay_only``, outside its free decays: times (s from the channel's first sample),
+    amplitudes, frequencies (Hz), the decay of each extremum and the free decays found (None
+    without ``decay_only``; times from the component's start)."""
+    period = 1.0 / float(np.median(inst.frequency))
+    labels, decays = decay_labels(inst.peak_times, c, period, inst.peak_amplitudes, decay_only)
+    keep = labels >= 0
+    return (inst.peak_times[keep] + c.t0, inst.peak_amplitudes[keep],
+            inst.peak_frequency[keep], labels[keep], decays)
+
+
+def trusted_peaks(c: Component, params: dict[str, Any]):
+    """:func:`decay_peaks` of a component (its extrema measured with ``params``)."""
+    inst = instantaneous(c.signal, c.sample_rate, offset=params.get("offset", "cycles"),
+                         min_amplitude=params.get("min_amplitude"), noise_floor=c.noise_floor,
+                         frequency_hint=c.frequency)
+    return decay_peaks(inst, c, params.get("decay_only", True))
+
+
+def curve_for(c: Component, params: dict[str, Any]) -> DampingCurve:
+    """Damping curve of a component, decay by decay (``decays`` holds the split)."""
+    t, a, f, decay, decays = trusted_peaks(c, params)
+    curve = damping_from_peaks(t, a, f, method=params["method"], span=params["span"],
+                               window=params["window"], smooth=params["smooth_points"],
+                               decay=decay)
+    return dataclasses.replace(curve, decays=decays)
+
+
+def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+    with guarded("damping", context):
+        disp = displacement_components(context, "damping")
+
+    def work(c):
+        with guarded("damping", context):
+            return curve_for(c, params)
+
+    done, errors = per_component("damping", context, disp, work)
+    count = len(disp)
+    t0 = {c.index: c.t0 for c in disp}
+    entries = [{"index": k, "damping": {"amplitude": jsonable(d.amplitude),
+                                        "zeta": jsonable(d.zeta), "method": d.method,
+                                        **({"params": d.params} if d.params else {}),
+                                        **decay_summary(d.decays, t0[k])}}
+               for k, d in done.items()]
+    err_entries, err_attrs = error_entries(errors, "damping")
+    names = ("time", "amplitude", "zeta", "frequency", "decay_rate")
+    datasets = {n: stack_rows({k: getattr(d, n) for k, d in done.items()}, count)
+                for n in names}
+    datasets["velocity_amplitude"] = stack_rows(
+        {k: 2.0 * math.pi * d.frequency * d.amplitude for k, d in done.items()}, count)
+    datasets["decay"] = stack_rows({k: d.decay.astype(np.float64) for k, d in done.items()},
+                                   count)
+    return AnalysisResult(
+        datasets=datasets,
+        units={"time": "s", "amplitude": "m", "zeta": "", "frequency": "Hz",
+               "decay_rate": "1/s", "velocity_amplitude": "m/s", "decay": ""},
+        attrs={"method": params["method"],
+               "velocity_amplitude": "2 pi f times the displacement amplitude",
+               "rows": "one row per component, padded with NaN",
+               **decay_attrs({k: d.decays for k, d in done.items()}, t0), **err_attrs},
+        summary={"components": entries + err_entries}, values=done)

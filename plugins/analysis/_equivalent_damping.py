@@ -1,0 +1,262 @@
+"""The work of the ``equivalent-damping`` analysis plugin (declared in
+:mod:`.equivalent_damping`): an adapter around :mod:`fsi_lab.dsp.equivalent_damping`."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from fsi_lab.contract import AnalysisContext, AnalysisResult
+from fsi_lab.dsp.components import BandComponents
+from fsi_lab.dsp.damping import damping_decrement
+from fsi_lab.dsp.equivalent_damping import (
+    equivalent_coefficient,
+    equivalent_damping,
+    equivalent_damping_from_envelope,
+)
+from fsi_lab.errors import AnalysisError
+from fsi_lab.plugins.analysis._chain import (
+    components,
+    decay_summary,
+    displacement_components,
+    error_entries,
+    guarded,
+    jsonable,
+    per_component,
+    stack_rows,
+    where,
+)
+
+
+def specimen_mass_per_length(specimen: Any) -> float:
+    """mu + M = rho width thickness + rho_f pi (width / 2)^2 (Eq. 10), kg/m."""
+    fluid = getattr(specimen, "fluid_density", None)
+    if fluid is None:
+        from fsi_lab.specimen import FLUID_DENSITY
+        fluid = FLUID_DENSITY[specimen.fluid]
+    return float(specimen.density * specimen.width * specimen.thickness
+                 + fluid * math.pi * (specimen.width / 2.0) ** 2)
+
+
+def modal_scale_from_beam(specimen: Any, frequency_hz: float, mode: int | None = None
+                          ) -> tuple[float, int] | None:
+    """Hook point for the modal conversion: ``W_n(x_meas)`` of the beam model, or None.
+
+    Uses :mod:`fsi_lab.beam` when it is importable and offers ``BeamModel.from_specimen``,
+    ``natural_frequencies_hz`` and ``mode_shape(x, n)`` (Eq. 15, normalised so that
+    ``int W_n^2 = L``). The mode is ``mode`` (1-based) if given, else the one whose calculated
+    natural frequency is nearest (in ratio) to ``frequency_hz`` - the shaker's suspension shifts
+    the measured modes by up to about 15 %, far less than the spacing of the beam's modes.
+    Returns ``(|W_n(x_meas)|, n)``, or None when no beam model is available or the mode shape
+    vanishes at the measuring point (a node: the mode cannot be measured there).
+    """
+    try:
+        from fsi_lab import beam
+        model_cls = beam.BeamModel
+        n_modes = max(8, int(mode or 0))
+        model = model_cls.from_specimen(specimen, modes=n_modes)
+        if mode is None:
+            fn = np.asarray(model.natural_frequencies_hz, dtype=np.float64)
+            mode = 1 + int(np.argmin(np.abs(np.log(fn / float(frequency_hz)))))
+        value = abs(float(np.asarray(model.mode_shape(specimen.measurement_point, mode))))
+    except Exception:  # noqa: BLE001 - no usable beam model: amplitudes stay as measured
+        return None
+    if not math.isfinite(value) or value < 1e-6:
+        return None
+    return value, int(mode)
+
+
+def amplitude_convention(context: AnalysisContext, params: dict[str, Any], f_hz: float
+                         ) -> tuple[float, str]:
+    """``modal_scale`` for a component at ``f_hz`` (Hz) and the words that say which amplitude
+    the coefficients belong to (see :mod:`fsi_lab.dsp.equivalent_damping`)."""
+    given = params["modal_scale"]
+    if given is not None:
+        return float(given), f"modal (modal_scale = {given:g} given)"
+    if context.specimen is not None:
+        found = modal_scale_from_beam(context.specimen, f_hz, params["mode"])
+        if found is not None:
+            return found[0], (f"modal: q_{found[1]} = w(x_meas) / W_{found[1]}(x_meas), "
+                              f"W_{found[1]}(x_meas) = {found[0]:.6g} (Eq. 15, int W^2 = L)")
+        return 1.0, "measured (no beam model available for the modal conversion)"
+    return 1.0, "measured (displacement amplitude at the measuring point)"
+
+
+def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, Any]:
+    """C_i, C_f and the law comparison of one identified mode (method ``law``)."""
+    quad = mode.quadratic
+    a, beta = quad.value("a"), quad.value("beta")
+    (a_lo, a_hi), (b_lo, b_hi) = quad.interval("a", level), quad.interval("beta", level)
+    amp = np.concatenate([d.amplitude for d in mode.decays])
+    model = np.concatenate(quad.model)
+    r2 = 1.0 - float(np.sum((amp - model) ** 2)) / max(float(np.sum((amp - amp.mean()) ** 2)),
+                                                       1e-300)
+    laws = {}
+    for name, fit in mode.laws.fits.items():
+        laws[name] = {"delta_aicc": float(mode.laws.delta[name]),
+                      **{p: float(v) for p, v in zip(fit.names, fit.params)},
+                      **{f"{p}_se": float(s) for p, s in zip(fit.names, fit.se)}}
+    entry = {"c_i": 2.0 * mass * a, "c_f": mass * beta * scale,
+             "c_i_ci95": [2.0 * mass * a_lo, 2.0 * mass * a_hi],
+             "c_f_ci95": [mass * scale * b_lo, mass * scale * b_hi],
+             "c_i_se": 2.0 * mass * float(quad.se[0]), "c_f_se": mass * scale * float(quad.se[1]),
+             "r2": r2, "points": mode.extrema_count, "decays": len(mode.decays),
+             "decay_starts_s": [float(d.times[0]) for d in mode.decays],
+             "decay_ends_s": [float(d.times[-1]) for d in mode.decays],
+             "preferred_law": mode.laws.preferred, "laws": laws}
+    coulomb = mode.laws.fits.get("coulomb")
+    if coulomb is not None and mode.laws.preferred == "coulomb":
+        # gamma is a friction force per unit mass in the measured coordinate.
+        entry["friction_force_per_length"] = mass * coulomb.value("gamma") * scale
+    return entry
+
+
+def _law_points(mode: Any, mass: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Displacement amplitude (m, in the amplitude convention) and C_q (kg/(m s)) from each
+    pair of successive extrema of the same sign (the measured points of the C_q plot)."""
+    amps, cqs = [], []
+    w = 2.0 * math.pi * mode.frequency_hz
+    for d in mode.decays:
+        if d.amplitude.size < 3:
+            continue
+        curve = damping_decrement(d.times, d.amplitude, mode.frequency_hz, span=2)
+        disp = curve.amplitude / (w if mode.quantity == "velocity" else 1.0)
+        amps.append(disp / scale)
+        cqs.append(equivalent_coefficient(curve.zeta, curve.frequency, mass))
+    if not amps:
+        return np.empty(0), np.empty(0)
+    return np.concatenate(amps), np.concatenate(cqs)
+
+
+def _run_law(context: AnalysisContext, params: dict[str, Any], mass: float, mass_source: str
+             ) -> AnalysisResult:
+    """Method ``law``: C_i and C_f from the linear + quadratic law fitted by the ``bands``
+    decomposition (:mod:`fsi_lab.dsp.identify`), with the law the record prefers."""
+    plugin = "equivalent-damping"
+    with guarded(plugin, context):
+        comps = components(context)            # (refuses when hvd failed earlier)
+    hvd = context.results.get("hvd")
+    res = hvd.values if hvd is not None else None
+    if not isinstance(res, BandComponents) or res.identification is None:
+        raise AnalysisError(
+            f"{where(plugin, context)}: method 'law' uses the damping laws fitted by hvd "
+            "(method 'bands') earlier in the chain on this channel; put hvd before it, or use "
+            "method = 'regression'")
+    if context.channel.quantity not in ("displacement", "velocity", "acceleration"):
+        raise AnalysisError(
+            f"{where(plugin, context)}: the channel measures {context.channel.quantity!r} "
+            f"({context.channel.unit}); C_i and C_f need a calibrated displacement, velocity "
+            "or acceleration channel")
+    conventions: dict[int, str] = {}
+
+    def work(c):
+        mode = res.identification.modes[c.index]
+        scale, conventions[c.index] = amplitude_convention(context, params, mode.frequency_hz)
+        entry = _law_entry(mode, mass, scale, params["confidence"])
+        amplitude, c_q = _law_points(mode, mass, scale)
+        return {**entry, "amplitude": amplitude, "c_q": c_q}
+
+    done, errors = per_component(plugin, context, comps, work)
+    return _result(done, errors, conventions, len(comps), mass, mass_source, params)
+
+
+def _result(done: dict[int, dict], errors: dict[int, str], conventions: dict[int, str],
+            count: int, mass: float, mass_source: str, params: dict[str, Any]
+            ) -> AnalysisResult:
+    """The plugin's result from per-component entries (each with ``amplitude`` and ``c_q``
+    arrays for the datasets)."""
+    entries = []
+    for k, r in done.items():
+        summary = {key: jsonable(v) for key, v in r.items() if key not in ("amplitude", "c_q")}
+        summary.update(mass_per_length=mass, method=params["method"],
+                       amplitude_convention=conventions.get(k, "measured"))
+        entries.append({"index": k, "equivalent_damping": summary})
+    err_entries, err_attrs = error_entries(errors, "equivalent_damping")
+    attrs = {"mass_per_length": mass, "mass_per_length_source": mass_source,
+             "method": params["method"], "weighting": params["weighting"],
+             "confidence": params["confidence"],
+             "amplitude_convention": "; ".join(f"component {k}: {v}"
+                                               for k, v in sorted(conventions.items())),
+             **err_attrs}
+    for k, r in done.items():
+        for key in ("c_i", "c_f", "r2"):
+            attrs[f"component_{k}_{key}"] = float(r[key])
+        if "preferred_law" in r:
+            attrs[f"component_{k}_preferred_law"] = r["preferred_law"]
+    return AnalysisResult(
+        datasets={"amplitude": stack_rows({k: r["amplitude"] for k, r in done.items()}, count),
+                  "c_q": stack_rows({k: r["c_q"] for k, r in done.items()}, count)},
+        units={"amplitude": "m", "c_q": "kg/(m s)"},
+        attrs=attrs, summary={"components": entries + err_entries}, values=done)
+
+
+def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+    plugin = "equivalent-damping"
+    if context.mass_per_length is not None:
+        mass = float(context.mass_per_length)
+        mass_source = "given (--mass-per-length)"
+    elif context.specimen is not None:
+        mass = specimen_mass_per_length(context.specimen)
+        mass_source = "specimen: rho width thickness + rho_f pi (width/2)^2"
+    else:
+        raise AnalysisError(
+            f"{where(plugin, context)}: needs mu + M, the mass per length of beam plus added "
+            "fluid mass: pass --mass-per-length KG_PER_M or give the profile a [specimen]")
+    fallback = None
+    if params["method"] == "law":
+        hvd = context.results.get("hvd")
+        if hvd is None or isinstance(hvd.values, BandComponents):
+            return _run_law(context, params, mass, mass_source)
+        # Feldman's HVD components carry no law fit: the paper's regression, said so.
+        params = {**params, "method": "regression"}
+        fallback = ("C_i and C_f from the paper's regression of C_q against amplitude: the "
+                    "damping-law fit needs hvd's method 'bands'")
+    with guarded(plugin, context):
+        disp = displacement_components(context, plugin)
+    from fsi_lab.dsp.damping import damping_from_peaks
+    from fsi_lab.plugins.analysis._damping import curve_for, trusted_peaks
+
+    prior = context.results.get("damping")
+    prior_curves = prior.values if prior is not None and isinstance(prior.values, dict) else {}
+    defaults = {"method": "decrement", "span": 2, "window": 6, "smooth_points": 0,
+                "offset": "cycles", "min_amplitude": None, "decay_only": True}
+    conventions: dict[int, str] = {}
+
+    def scale_for(k: int, f_hz: float) -> float:
+        scale, conventions[k] = amplitude_convention(context, params, f_hz)
+        return scale
+
+    def work(c):
+        with guarded(plugin, context):
+            if params["method"] == "envelope":
+                t, a, f, decay, decays = trusted_peaks(c, defaults)
+                curve = damping_from_peaks(t, a, f, method="envelope-fit", decay=decay)
+                p = curve.params
+                scale = scale_for(c.index, float(np.mean(curve.frequency)))
+                c_i, c_f, ci_i, ci_f = equivalent_damping_from_envelope(
+                    p["a"], p["b"], p["a_se"], p["b_se"], int(p["dof"]), curve.frequency,
+                    mass, modal_scale=scale, confidence=params["confidence"])
+                resid = a - curve.amplitude
+                r2 = 1.0 - float(resid @ resid) / float(np.sum((a - a.mean()) ** 2))
+                cq = equivalent_coefficient(curve.zeta, curve.frequency, mass)
+                return {"c_i": c_i, "c_f": c_f, "r2": r2, "c_i_ci95": list(ci_i),
+                        "c_f_ci95": list(ci_f), "points": int(t.size),
+                        **decay_summary(decays, c.t0),
+                        "amplitude": curve.amplitude / scale, "c_q": cq}
+            curve = prior_curves.get(c.index) or curve_for(c, defaults)
+            scale = scale_for(c.index, float(np.mean(curve.frequency)))
+            res = equivalent_damping(curve.amplitude, curve.zeta, curve.frequency, mass,
+                                     modal_scale=scale, confidence=params["confidence"],
+                                     weighting=params["weighting"])
+            return {**res.as_summary(), **decay_summary(curve.decays, c.t0),
+                    "amplitude": res.amplitude, "c_q": res.c_q,
+                    "damping_method": curve.method}
+
+    done, errors = per_component(plugin, context, disp, work)
+    result = _result(done, errors, conventions, len(disp), mass, mass_source, params)
+    if fallback:
+        for entry in result.summary["components"]:
+            entry.setdefault("warnings", []).append(fallback)
+    return result
