@@ -34,6 +34,11 @@ number. The steps:
    frequency is the backbone's small-amplitude limit: the damping's share of each period is
    taken off (with the fitted law), and ``w^2 = w0^2 + 3 alpha X^2 / 4`` (harmonic balance of
    a cubic stiffness, kept only when the record resolves it) is fitted.
+8. **Start and range.** The first extrema of each decay are left out while the quadratic law's
+   coefficients still move when more are (:func:`_stable_start`); how far they still move with
+   later starts, beyond what the extrema left out explain, widens their intervals
+   (:func:`_start_sensitivity`); the law fitted to the larger and the smaller half of the
+   cycles must agree (:func:`_one_law`). Each check that fails is a warning.
 """
 
 from __future__ import annotations
@@ -94,6 +99,16 @@ LATE_SHARE = 0.2
 MAX_DROP_SHARE = 0.3
 #: Moves of the coefficients beyond this many standard errors widen their intervals.
 DRIFT_Z = 2.5
+#: Starts of a decay tried by :func:`_stable_start` (extrema left out of every decay).
+START_COUNTS = (0, 1, 2, 3, 5, 8, 13, 21, 34)
+#: Later starts whose fits measure how far the coefficients depend on the start kept.
+START_ALTERNATIVES = 2
+#: Moves of a coefficient between starts within this many standard errors of the extrema
+#: left out count as noise; beyond, the excess is a systematic error of the start.
+START_Z = 2.0
+#: The start's error is warned when it widens an interval more than START_WARNING-fold to
+#: beyond +-START_WARNING_WIDTH of the value (a narrower interval says enough by itself).
+START_WARNING, START_WARNING_WIDTH = 1.5, 0.05
 #: A filter correction larger than this share of an extremum gets a warning.
 CORRECTION_WARNING = 0.5
 #: Passes of the filter correction (step 6).
@@ -783,7 +798,7 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
     the start kept (``dropped``: extrema left out per decay)."""
     shortest = min(d["amplitude"].size for d in mode.decays)
     tried = 0
-    for count in (0, 1, 2, 3, 5, 8, 13, 21, 34):
+    for count in START_COUNTS:
         if count > MAX_DROP_SHARE * shortest:
             break
         decays = _drop_first(mode.decays, count) if count else mode.decays
@@ -805,7 +820,43 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
     if worst > DRIFT_Z:
         mode.fits["quadratic"] = dataclasses.replace(
             mode.fits["quadratic"], cov=mode.fits["quadratic"].cov * (worst / DRIFT_Z) ** 2)
-    return {**z, "dropped": float(tried)}
+    return {**z, "dropped": float(tried), **_start_sensitivity(mode, follow, tried, shortest)}
+
+
+def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
+                       ) -> dict[str, float]:
+    """Step 8a: how much the quadratic law's coefficients depend on the start kept. The law
+    is refitted with the decays starting at the next :data:`START_ALTERNATIVES` starts of
+    :data:`START_COUNTS`; a coefficient may move between two starts as much as the extrema
+    left out allow (the later fit's variance minus the kept one's, within :data:`START_Z`
+    standard errors). What it moves beyond that is an error of the start, which no fit of the
+    kept extrema sees: its square is added to the coefficient's variance. The drift test of
+    :func:`_stable_start` asks whether a start is stable; this measures what remains when it
+    passes with little power (a short decay in noise whose first cycles are still smeared).
+    Returns ``start_a`` and ``start_beta``: the factors the standard errors were widened by."""
+    base = mode.fits["quadratic"]
+    variance = np.diag(base.cov).copy()
+    extra = np.zeros(variance.size)
+    for count in [c for c in START_COUNTS if c > tried][:START_ALTERNATIVES]:
+        if count > MAX_DROP_SHARE * shortest:
+            break
+        decays = _drop_first(mode.decays, count - tried)
+        if decays is None:
+            break
+        trial = dataclasses.replace(mode, decays=decays, fits={})
+        try:
+            _fit_all(trial, follow, ("quadratic",))
+        except AnalysisError:
+            break
+        later = trial.fits["quadratic"]
+        allowed = np.maximum(np.diag(later.cov) - variance, 0.0)
+        moved = (later.params - base.params) ** 2
+        extra = np.maximum(extra, moved - START_Z ** 2 * allowed)
+    if not (np.all(np.isfinite(extra)) and np.all(variance > 0.0)):
+        return {}
+    factor = np.sqrt((variance + extra) / variance)
+    mode.fits["quadratic"] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
+    return {f"start_{name}": float(f) for name, f in zip(base.names, factor)}
 
 
 def _halves(decays: list[dict]) -> tuple[list[dict], list[dict]] | None:
@@ -852,6 +903,13 @@ def _one_law(mode: _Mode, follow: str) -> dict[str, float]:
     return out
 
 
+def _relative_width(fit: LawFit, name: str) -> float:
+    """Half-width of a coefficient's 95 % interval over its value (inf at zero)."""
+    low, high = fit.interval(name, LEVEL)
+    value = abs(fit.value(name))
+    return 0.5 * (high - low) / value if value > 0.0 else math.inf
+
+
 def _warnings(m: ModeIdentification) -> list[str]:
     """Sentences on how far to trust the mode's numbers."""
     out = []
@@ -892,6 +950,14 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    "cycles of each decay are left out: the decay's start is not a free decay "
                    "with this law (a base still moving, a law that misfits the large cycles); "
                    f"their intervals are widened {drift / DRIFT_Z:.1f}-fold")
+    start = max((m.start_drift.get(f"start_{name}", 1.0) for name in ("a", "beta")
+                 if quad is not None and _relative_width(quad, name) > START_WARNING_WIDTH),
+                default=1.0)
+    if start > START_WARNING:
+        out.append("C_i and C_f depend on where the decay is taken to start by more than their "
+                   "noise explains (its first cycles are not yet a free decay of this law: a "
+                   "forced response or an unresolved close mode still dying out); their "
+                   f"intervals are widened up to {start:.1f}-fold for it")
     split = max(abs(m.start_drift.get("split_a", 0.0)), abs(m.start_drift.get("split_beta", 0.0)))
     if split > DRIFT_Z:
         widened = split / max(drift, DRIFT_Z)

@@ -412,11 +412,21 @@ class Whitener:
             bands = bands[:max(keep, default=0) + 1]
         self.band = len(bands) - 1
         ab = np.array(bands)
-        try:
-            self.lower = scipy.linalg.cholesky_banded(ab, lower=True)
-        except np.linalg.LinAlgError:
-            ab[0] *= 1.0 + 1e-6
-            self.lower = scipy.linalg.cholesky_banded(ab, lower=True)
+        diagonal = ab[0].copy()
+        # Cut to a band, the correlation at the extrema's irregular lags may fall short of
+        # positive definite (extrema close together, a large scale beside a small one): an
+        # uncorrelated error of a growing share of each extremum's variance is added until it
+        # is (at most the variance itself, where the fit is all but unweighted by correlation).
+        for loading in (0.0, 1e-6, 1e-4, 1e-2, 1e-1, 1.0):
+            ab[0] = diagonal * (1.0 + loading)
+            try:
+                self.lower = scipy.linalg.cholesky_banded(ab, lower=True)
+                break
+            except np.linalg.LinAlgError:
+                continue
+        else:
+            self.band = 0
+            self.lower = np.sqrt(diagonal)[None, :]
 
     def apply(self, r: np.ndarray) -> np.ndarray:
         """``L^-1 r``."""
