@@ -9,15 +9,17 @@ failure of one instrument is recorded and the others are still made safe.
 
 from __future__ import annotations
 
-from typing import Any, Callable, Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
-from fsi_lab.contract import Instrument
+from fsi_lab.contract import PURPOSES, ROLE_INTERFACES, BenchContext, Instrument  # noqa: F401
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
 from fsi_lab.signals import RunSignals
 
-#: Roles whose output can drive the shaker: their ``read_state()`` must say ``output_enabled``.
-OUTPUT_ROLES = ("amplifier", "source")
+#: Roles whose output can drive the shaker (``has_output``): their ``read_state()`` must say
+#: ``output_enabled``.
+OUTPUT_ROLES = tuple(role for role, cls in ROLE_INTERFACES.items() if cls.has_output)
 #: Instruments are put in their safe state in this order: the amplifier first.
 SAFE_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
 #: And opened in this order: the amplifier first, so it can be made safe before anything else.
@@ -26,23 +28,23 @@ OPEN_ORDER = ("amplifier", "source", "vibrometer", "acquisition")
 Log = Callable[[str, str], None]
 
 
-#: ``purpose`` of a bench context: opened for a run, or to be made safe or identified outside
-#: one (a driver then changes nothing it need not, e.g. it leaves latched interlocks latched).
-PURPOSES = ("run", "outside-run")
+def bench_context(profile: Profile, purpose: str = "run") -> BenchContext:
+    """The :class:`~fsi_lab.contract.BenchContext` shared by the instruments of one profile:
+    its ``specimen``, ``model``, ``shaker`` and ``bench`` sections, an empty ``cleanup`` list
+    and the ``purpose`` the instruments are opened for (:data:`PURPOSES`; ValueError for
+    another)."""
+    return BenchContext(specimen=profile.specimen, model=profile.model, shaker=profile.shaker,
+                        bench=dict(profile.bench), purpose=purpose)
 
 
-def bench_context(profile: Profile, purpose: str = "run") -> dict[str, Any]:
-    """The dictionary shared by the instruments of one profile (see ``InstrumentPlugin``):
-    its ``specimen``, ``model``, ``shaker`` and ``bench`` sections, a ``cleanup`` list and the
-    ``purpose`` the instruments are opened for (:data:`PURPOSES`)."""
-    if purpose not in PURPOSES:
-        raise ValueError(f"purpose {purpose!r}; expected one of {', '.join(PURPOSES)}")
-    return {"specimen": profile.specimen, "model": profile.model, "shaker": profile.shaker,
-            "bench": dict(profile.bench), "cleanup": [], "purpose": purpose}
+def _plugins(profile: Profile) -> dict[str, str]:
+    """The plugin name of each role of ``profile`` (for messages)."""
+    return {role: config.plugin for role, config in profile.roles.items()}
 
 
 def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable[[], None]],
-                   log: Log = lambda level, text: None) -> dict[str, dict[str, Any]]:
+                   log: Log = lambda level, text: None,
+                   plugins: Mapping[str, str] | None = None) -> dict[str, dict[str, Any]]:
     """Safe state for every instrument (amplifier first), then read its state back and close it.
 
     An instrument whose safe state failed, or whose state read back still has its output on
@@ -56,6 +58,9 @@ def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable
         Callables run last, in reverse order (simulated benches stop their servers there).
     log
         ``log(level, text)`` for what went wrong.
+    plugins
+        The plugin (driver) name of each role, which messages name (default: the class name of
+        the instrument).
 
     Returns
     -------
@@ -64,18 +69,22 @@ def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable
         ``safe_state_error`` when the safe state failed (see :func:`unsafe_roles`).
     """
     opened = [(role, instruments[role]) for role in SAFE_ORDER if role in instruments]
+    names = {role: (plugins or {}).get(role) or type(instrument).__name__
+             for role, instrument in opened}
     errors = {role: _safe_state(instrument) for role, instrument in opened}
     states = {role: _read_state(instrument) for role, instrument in opened}
+
+    def unconfirmed(role: str) -> str:
+        return _output_unconfirmed(role, states[role], names[role])
+
     for role, instrument in opened:
-        if errors[role] is None and not _output_unconfirmed(role, states[role]):
+        if errors[role] is None and not unconfirmed(role):
             continue
-        log("ERROR", f"{role}: {errors[role] or _output_unconfirmed(role, states[role])}; "
-                     "trying once more")
+        log("ERROR", f"{role}: {errors[role] or unconfirmed(role)}; trying once more")
         errors[role] = _safe_state(instrument)
         states[role] = _read_state(instrument)
-        if errors[role] is None and _output_unconfirmed(role, states[role]):
-            errors[role] = ("safe state failed: " + _output_unconfirmed(role, states[role])
-                            + " after two attempts")
+        if errors[role] is None and unconfirmed(role):
+            errors[role] = "safe state failed: " + unconfirmed(role) + " after two attempts"
         if errors[role] is not None:
             states[role]["safe_state_error"] = errors[role]
             log("ERROR", f"{role}: NOT confirmed safe: {errors[role]}")
@@ -108,31 +117,38 @@ def _read_state(instrument: Instrument) -> dict[str, Any]:
         return {"error": f"could not read state: {type(exc).__name__}: {exc}"}
 
 
-def _output_unconfirmed(role: str, state: Mapping[str, Any]) -> str:
+def _output_unconfirmed(role: str, state: Mapping[str, Any], plugin: str = "") -> str:
     """Why ``state`` read back does not confirm the output off, or ''. An output role
     (:data:`OUTPUT_ROLES`) must report ``output_enabled`` False; a state without it (a driver
-    that forgot the key, or a state that could not be read) confirms nothing."""
+    that forgot the key, or a state that could not be read) confirms nothing, and the message
+    names the driver (``plugin``)."""
     enabled = state.get("output_enabled")
     if enabled is True:
         return "the output is still on"
     if role in OUTPUT_ROLES and enabled is not False:
         if "error" in state:
             return str(state["error"])
-        return ("its state read back does not say that the output is off (read_state() gives "
-                "no boolean output_enabled)")
+        driver = f"driver {plugin!r}: " if plugin else ""
+        got = "no output_enabled" if "output_enabled" not in state \
+            else f"output_enabled = {enabled!r}, not a bool"
+        return (f"{driver}its state read back does not say that the output is off "
+                f"(read_state() gives {got}; a {role} driver returns "
+                "fsi_lab.contract.OutputState(output_enabled=<bool read from the instrument>))")
     return ""
 
 
-def unsafe_roles(states: Mapping[str, Mapping[str, Any]]) -> dict[str, str]:
+def unsafe_roles(states: Mapping[str, Mapping[str, Any]],
+                 plugins: Mapping[str, str] | None = None) -> dict[str, str]:
     """Per role, why an instrument of :func:`safe_and_close` is not confirmed safe: its safe
     state failed, it still reports its output on, or (an output role) its state does not say
-    that the output is off."""
+    that the output is off (naming the driver from ``plugins``, role -> plugin name)."""
     found = {}
     for role, state in states.items():
+        why = _output_unconfirmed(role, state, (plugins or {}).get(role, ""))
         if "safe_state_error" in state:
             found[role] = str(state["safe_state_error"])
-        elif _output_unconfirmed(role, state):
-            found[role] = _output_unconfirmed(role, state)
+        elif why:
+            found[role] = why
     return found
 
 
@@ -173,7 +189,7 @@ def each_instrument(profile: Profile, registry: Registry, order: tuple[str, ...]
                     except Exception as exc:  # noqa: BLE001 - reported per instrument
                         report[role] = {"error": f"{type(exc).__name__}: {exc}"}
             finally:
-                states = safe_and_close(opened, context["cleanup"], log)
+                states = safe_and_close(opened, context.cleanup, log, _plugins(profile))
                 for role, state in states.items():
                     safe_error = state.pop("safe_state_error", None)
                     report.setdefault(role, {}).setdefault("state", state)

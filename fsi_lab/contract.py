@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import abc
 import importlib
-from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping, MutableMapping
+from dataclasses import dataclass, field, fields
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -48,12 +49,136 @@ class Deferred:
 
 
 # --------------------------------------------------------------------------- instruments
+@dataclass(frozen=True)
+class RoleSetting:
+    """A setting the runner reads, by this name, from the profile table of an instrument role.
+
+    A role class lists them in :attr:`Instrument.run_settings`; a plugin of that role declares
+    each as one of its parameters (with this type and unit, and choices among these), and must
+    declare the ``required`` ones. :func:`check_descriptor` enforces it when the plugin is
+    loaded, so that the runner never reads a name a driver could leave out or mean otherwise.
+
+    Parameters
+    ----------
+    name
+        Parameter name in ``[bench.<role>]``.
+    type
+        :class:`~fsi_lab.params.Param` type the runner expects (``"float"``, ``"str"``...).
+    unit
+        Unit the runner expects the value in (``"Hz"``, ``"V/V"``).
+    required
+        Every plugin of the role must declare it; otherwise it may leave it out (the runner then
+        says what it assumes).
+    help
+        What the runner does with it.
+    choices
+        The values the runner understands, for strings.
+    """
+
+    name: str
+    type: str
+    unit: str
+    required: bool
+    help: str
+    choices: tuple[str, ...] | None = None
+
+    def problem(self, params: tuple[Param, ...]) -> str:
+        """What is wrong with a plugin's ``params`` for this setting, in words; '' if nothing."""
+        declared = next((p for p in params if p.name == self.name), None)
+        wanted = f"{self.type} in {self.unit}" if self.unit else self.type
+        if declared is None:
+            return (f"declares no {self.name!r} parameter ({wanted}), which every plugin of "
+                    f"this role must: {self.help}") if self.required else ""
+        if declared.type != self.type or declared.unit != self.unit:
+            got = f"{declared.type} in {declared.unit}" if declared.unit else declared.type
+            return (f"parameter {self.name!r} is declared as {got}; the runner reads it as "
+                    f"{wanted} ({self.help})")
+        if self.choices is not None:
+            extra = sorted(set(declared.choices or ()) - set(self.choices))
+            if declared.choices is None or extra:
+                return (f"parameter {self.name!r} must take its values among "
+                        f"{', '.join(map(repr, self.choices))}"
+                        + (f" (got {', '.join(map(repr, extra))})" if extra else ""))
+        return ""
+
+
+class InstrumentState(Mapping[str, Any]):
+    """State read back from an instrument: named values, read like a dictionary (and equal to
+    the dictionary of the same items). Every value is stored in the run file as read.
+
+    Parameters
+    ----------
+    **values
+        Named values (``level_v=0.0``, ``interlocks={...}``), in SI units named by the key.
+    """
+
+    def __init__(self, **values: Any) -> None:
+        self._values = dict(values)
+
+    def __getitem__(self, key: str) -> Any:
+        return self._values[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({', '.join(f'{k}={v!r}' for k, v in self.items())})"
+
+
+class OutputState(InstrumentState):
+    """State read back from an instrument whose output can drive the shaker (a source, an
+    amplifier): ``output_enabled`` is required and must be a bool read from the instrument.
+
+    Parameters
+    ----------
+    output_enabled
+        Whether the output reads on.
+    **values
+        Any further values read back (``level_v``, ``gain``).
+
+    Raises
+    ------
+    TypeError
+        ``output_enabled`` is not a bool (``"ON"``, ``1``, ``None`` are refused: a state that
+        cannot say off does not confirm the output off).
+    """
+
+    def __init__(self, output_enabled: bool, **values: Any) -> None:
+        if not isinstance(output_enabled, bool):
+            raise TypeError(f"OutputState: output_enabled must be a bool read from the "
+                            f"instrument; got {output_enabled!r} ({type(output_enabled).__name__})")
+        super().__init__(output_enabled=output_enabled, **values)
+
+    @property
+    def output_enabled(self) -> bool:
+        """Whether the output reads on."""
+        return self._values["output_enabled"]
+
+
 class Instrument(abc.ABC):
     """Common interface of every instrument role.
 
     Instruments are context managers: leaving the ``with`` block puts them in their safe state
     and closes the connection, whatever happened inside.
     """
+
+    #: Whether the role's output can drive the shaker: its :meth:`read_state` must then give
+    #: ``output_enabled`` (an :class:`OutputState`), or it is not confirmed safe.
+    has_output: ClassVar[bool] = False
+    #: Settings of the role's profile table that the runner reads (:class:`RoleSetting`).
+    run_settings: ClassVar[tuple[RoleSetting, ...]] = ()
+
+    @classmethod
+    def run_setting(cls, name: str) -> RoleSetting:
+        """The declared :class:`RoleSetting` ``name``; ValueError if the role declares none."""
+        for setting in cls.run_settings:
+            if setting.name == name:
+                return setting
+        raise ValueError(f"{cls.__name__} declares no run setting {name!r}; it declares "
+                         f"{', '.join(s.name for s in cls.run_settings) or 'none'}")
 
     @abc.abstractmethod
     def identify(self) -> str:
@@ -64,12 +189,13 @@ class Instrument(abc.ABC):
         """Put the instrument where it cannot move the shaker: output off, source at 0 V."""
 
     @abc.abstractmethod
-    def read_state(self) -> dict[str, Any]:
-        """State read back from the instrument (e.g. ``{"output_enabled": False}``).
+    def read_state(self) -> Mapping[str, Any]:
+        """State read back from the instrument: an :class:`InstrumentState` (or a dict).
 
-        A source and an amplifier must give ``output_enabled`` (bool, read from the
-        instrument): without it, or with anything but False after the safe state, the
-        instrument is not confirmed safe and the run fails saying so.
+        A role with an output (:attr:`has_output`: a source, an amplifier) returns an
+        :class:`OutputState`, whose ``output_enabled`` is a bool read from the instrument: a
+        state without it, or with anything but False after the safe state, does not confirm the
+        instrument safe and the run fails saying so, naming the driver.
         """
 
     def settings(self) -> dict[str, Any]:
@@ -104,6 +230,16 @@ class Instrument(abc.ABC):
 class SignalSource(Instrument):
     """Arbitrary waveform generator that produces the drive voltage."""
 
+    has_output = True
+    run_settings = (
+        RoleSetting("sample_rate", "float", "Hz", False,
+                    "the excitation is generated at this rate (unset: the run's sample_rate)"),
+        RoleSetting("arb_filter", "str", "", False,
+                    "how the source reconstructs its output between samples, which the safety "
+                    "check predicts (undeclared: the worse of held and band-limited)",
+                    choices=("normal", "step", "off")),
+    )
+
     @abc.abstractmethod
     def load_waveform(self, samples: np.ndarray, sample_rate: float) -> None:
         """Upload ``samples`` (V) played at ``sample_rate`` (Hz), once per trigger."""
@@ -115,6 +251,12 @@ class SignalSource(Instrument):
 
 class Amplifier(Instrument):
     """Shaker power amplifier with interlocks."""
+
+    has_output = True
+    run_settings = (
+        RoleSetting("gain", "float", "V/V", True,
+                    "the runner sets the amplifier to it and the safety check limits it"),
+    )
 
     @abc.abstractmethod
     def set_gain(self, gain: float) -> None:
@@ -142,7 +284,8 @@ class Vibrometer(Instrument):
 
 
 class Acquisition(Instrument):
-    """Digitiser that streams calibrated-by-the-core voltage blocks."""
+    """Digitiser that streams calibrated-by-the-core voltage blocks (the record's rate and
+    length come from the profile's ``[run]``, not from a setting of the digitiser)."""
 
     @abc.abstractmethod
     def configure(self, inputs: Mapping[str, int], sample_rate: float, duration: float) -> float:
@@ -171,32 +314,135 @@ ROLE_INTERFACES: dict[str, type[Instrument]] = {
 }
 
 
+#: ``purpose`` of a :class:`BenchContext`: opened for a run, or to be made safe or identified
+#: outside one (a driver then changes nothing it need not, e.g. it leaves latched interlocks
+#: latched).
+PURPOSES = ("run", "outside-run")
+
+
+@dataclass(eq=False)
+class BenchContext(MutableMapping[str, Any]):
+    """What the instruments of one profile share while they are open.
+
+    Drivers read its attributes (``context.purpose``); mapping access (``context["purpose"]``,
+    ``context.get("bench")``, ``context.setdefault(...)``) still works, as it did when the
+    context was a dict: keys that are not attributes (what a driver stores for the others, such
+    as the embedded simulated bench) live in :attr:`extras`.
+
+    Attributes
+    ----------
+    specimen
+        The profile's beam and fluid (:class:`fsi_lab.specimen.Specimen`), or None.
+    model
+        The profile's ``[model]`` table (simulated instruments take their physics from it).
+    shaker
+        The profile's ``[shaker]`` table.
+    bench
+        The profile's ``[bench]`` table (``embedded``, ``fast``, ``fault``...).
+    cleanup
+        Callables the runner calls, last first, once every instrument is safe and closed (a
+        simulated instrument stops its server there).
+    purpose
+        ``"run"``, or ``"outside-run"`` (:data:`PURPOSES`).
+    extras
+        Anything else drivers store, by key.
+    """
+
+    specimen: Any = None
+    model: Mapping[str, Any] | None = None
+    shaker: Mapping[str, Any] | None = None
+    bench: dict[str, Any] = field(default_factory=dict)
+    cleanup: list[Callable[[], None]] = field(default_factory=list)
+    purpose: str = "run"
+    extras: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.purpose not in PURPOSES:
+            raise ValueError(f"purpose {self.purpose!r}; expected one of {', '.join(PURPOSES)}")
+
+    @classmethod
+    def _attributes(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls) if f.name != "extras")
+
+    def __getitem__(self, key: str) -> Any:
+        if key in self._attributes():
+            return getattr(self, key)
+        return self.extras[key]
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        if key in self._attributes():
+            setattr(self, key, value)
+        else:
+            self.extras[key] = value
+
+    def __delitem__(self, key: str) -> None:
+        if key in self._attributes():
+            raise KeyError(f"{key!r} is an attribute of the bench context and cannot be removed")
+        del self.extras[key]
+
+    def __iter__(self) -> Iterator[str]:
+        yield from self._attributes()
+        yield from self.extras
+
+    def __len__(self) -> int:
+        return len(self._attributes()) + len(self.extras)
+
+
+@dataclass(eq=False)
+class RunPlan(BenchContext):
+    """What an :class:`InstrumentPlugin`'s ``check`` is given: the :class:`BenchContext` of the
+    run and the record it will ask for (:data:`RUN_PLAN_KEYS`), by attribute or by key.
+
+    Attributes
+    ----------
+    inputs
+        Digitiser input number per channel name.
+    sample_rate
+        Record sample rate asked of the digitiser, Hz.
+    duration
+        Record length, s.
+    waveform_points
+        Samples of the excitation waveform sent to the source.
+    waveform_rate
+        Rate the source plays the waveform at, Sa/s.
+    """
+
+    inputs: dict[str, int] = field(default_factory=dict)
+    sample_rate: float = 0.0
+    duration: float = 0.0
+    waveform_points: int = 0
+    waveform_rate: float = 0.0
+
+
 @dataclass(frozen=True)
 class InstrumentPlugin:
     """An instrument driver.
 
     ``open(address, settings, bench)`` returns an object implementing the role interface;
-    ``settings`` has been validated against ``params``. ``bench`` is a dict shared by all
-    instruments of one run: it holds the profile's ``specimen``, ``model``, ``shaker`` and
-    ``bench`` sections (simulated instruments take their physics from them, and an embedded
-    simulated bench is started by the first driver that needs it), a ``cleanup`` list of
-    callables the runner calls after every instrument is safe and closed, and the ``purpose``:
-    ``"run"``, or ``"outside-run"`` when the instrument is opened only to be made safe or
-    identified (``fsi-lab safe``, ``fsi-lab identify``, the GUI's bench panel), when a driver
-    must change nothing it need not (it leaves latched interlocks latched).
+    ``settings`` has been validated against ``params``, which must declare the settings the
+    role's class lists in ``run_settings`` (:class:`RoleSetting`). ``bench`` is the
+    :class:`BenchContext` shared by all instruments of one run: the profile's ``specimen``,
+    ``model``, ``shaker`` and ``bench`` sections (simulated instruments take their physics from
+    them, and an embedded simulated bench is started by the first driver that needs it), a
+    ``cleanup`` list of callables the runner calls after every instrument is safe and closed,
+    and the ``purpose``: ``"run"``, or ``"outside-run"`` when the instrument is opened only to
+    be made safe or identified (``fsi-lab safe``, ``fsi-lab identify``, the GUI's bench panel),
+    when a driver must change nothing it need not (it leaves latched interlocks latched). It is
+    also a mapping (``bench["purpose"]``), as the dict it replaced; a driver must accept a plain
+    dict with the same keys too (tests open drivers with ``{}``).
 
     ``check(address, settings, plan)``, optional, raises ValueError with a message naming the
     setting and what the instrument accepts when the run ``plan`` describes would be refused by
     the instrument (an input it does not have, a range it does not offer, more points than its
     memory holds). It runs in ``fsi-lab profile check`` and before a run, before any instrument
-    is opened, and must not talk to the instrument. ``plan`` is the ``bench`` dict above plus
-    the record (:data:`RUN_PLAN_KEYS`).
+    is opened, and must not talk to the instrument. ``plan`` is a :class:`RunPlan`: the bench
+    context above plus the record (:data:`RUN_PLAN_KEYS`).
     """
 
     name: str
     role: str
     params: tuple[Param, ...]
-    open: Callable[[str, dict[str, Any], dict[str, Any]], Instrument]
+    open: Callable[[str, dict[str, Any], BenchContext], Instrument]
     help: str = ""
     check: Callable[[str, dict[str, Any], Mapping[str, Any]], None] | None = None
 
@@ -364,3 +610,8 @@ def check_descriptor(kind: str, descriptor: Any) -> None:
         raise ValueError(
             f"{descriptor.name}: role {descriptor.role!r} is not one of {', '.join(ROLES)}"
         )
+    if kind == "instrument":
+        for setting in ROLE_INTERFACES[descriptor.role].run_settings:
+            problem = setting.problem(descriptor.params)
+            if problem:
+                raise ValueError(f"{descriptor.name} ({descriptor.role}): {problem}")

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from fsi_lab.bench_access import bench_context
+from fsi_lab.contract import ROLE_INTERFACES, RunPlan
 from fsi_lab.errors import PluginError, ProfileError
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
@@ -26,6 +27,20 @@ from fsi_lab.safety import SafetyReport, assess
 #: Most samples a drive waveform may have: the largest arb memory of the generators fsi-lab
 #: drives (a 33500B with its memory option); a longer one is refused before it is generated.
 MAX_WAVEFORM_POINTS = 16_000_000
+
+
+def run_setting(profile: Profile, role: str, name: str) -> Any:
+    """The profile's ``bench.<role>.<name>``: a setting the role's class declares in its
+    ``run_settings`` (:class:`~fsi_lab.contract.RoleSetting`), so that the runner reads no name
+    a driver could leave out unawares. None when the plugin does not declare an optional one.
+
+    Raises
+    ------
+    ValueError
+        The role declares no run setting ``name`` (a mistake in fsi-lab, not in the profile).
+    """
+    ROLE_INTERFACES[role].run_setting(name)
+    return profile.roles[role].settings.get(name)
 
 
 def _too_long(profile: Profile, points: float, rate: float) -> ProfileError:
@@ -46,7 +61,7 @@ def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray
         The excitation plugin failed.
     """
     descriptor = registry.get("excitation", profile.excitation_plugin)
-    rate = float(profile.roles["source"].settings.get("sample_rate") or profile.run["sample_rate"])
+    rate = float(run_setting(profile, "source", "sample_rate") or profile.run["sample_rate"])
     if descriptor.duration is not None:
         points = float(descriptor.duration(dict(profile.excitation))) * rate
         if points > MAX_WAVEFORM_POINTS:
@@ -68,8 +83,8 @@ def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray
     return waveform, rate
 
 
-def run_plan(profile: Profile, waveform: np.ndarray, waveform_rate: float) -> dict[str, Any]:
-    """The ``plan`` an instrument's check receives (:data:`fsi_lab.contract.RUN_PLAN_KEYS`).
+def run_plan(profile: Profile, waveform: np.ndarray, waveform_rate: float) -> RunPlan:
+    """The :class:`~fsi_lab.contract.RunPlan` an instrument's check receives.
 
     Parameters
     ----------
@@ -80,11 +95,13 @@ def run_plan(profile: Profile, waveform: np.ndarray, waveform_rate: float) -> di
     waveform_rate
         Its sample rate, Sa/s.
     """
-    return {**bench_context(profile),
-            "inputs": {name: channel.input for name, channel in profile.channels.items()},
-            "sample_rate": float(profile.run["sample_rate"]),
-            "duration": float(profile.run["duration"]),
-            "waveform_points": int(np.size(waveform)), "waveform_rate": float(waveform_rate)}
+    context = bench_context(profile)
+    return RunPlan(specimen=context.specimen, model=context.model, shaker=context.shaker,
+                   bench=context.bench, purpose=context.purpose,
+                   inputs={name: channel.input for name, channel in profile.channels.items()},
+                   sample_rate=float(profile.run["sample_rate"]),
+                   duration=float(profile.run["duration"]),
+                   waveform_points=int(np.size(waveform)), waveform_rate=float(waveform_rate))
 
 
 def check_instruments(profile: Profile, registry: Registry, waveform: np.ndarray,
@@ -119,14 +136,14 @@ def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, floa
     against ``[safety]`` (the verdict is in the report, not raised)."""
     waveform, rate = prepare_excitation(profile, registry)
     check_instruments(profile, registry, waveform, rate)
-    gain = profile.roles["amplifier"].settings.get("gain")
-    if gain is None:
+    gain = run_setting(profile, "amplifier", "gain")
+    if gain is None:  # a descriptor that bypassed the registry's contract check
         raise ProfileError(
             f"{profile.path}: bench.amplifier: plugin {profile.roles['amplifier'].plugin!r} "
             "declares no 'gain' parameter, so the gain limit cannot be checked"
         )
     # A source that declares ``arb_filter`` says how it reconstructs its output; without it
     # the check assumes the worse of a held and a band-limited output.
-    arb_filter = profile.roles["source"].settings.get("arb_filter")
+    arb_filter = run_setting(profile, "source", "arb_filter")
     report = assess(waveform, rate, float(gain), profile.safety, profile.shaker, arb_filter)
     return waveform, rate, report

@@ -31,10 +31,10 @@ import numpy as np
 from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close, unsafe_roles
 from fsi_lab.bench_lock import BenchLock
 from fsi_lab.chain import analyse_and_store
-from fsi_lab.contract import ROLE_INTERFACES, Instrument
+from fsi_lab.contract import ROLE_INTERFACES, BenchContext, Instrument
 from fsi_lab.errors import FsiLabError, InstrumentError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
-from fsi_lab.preflight import check_safety
+from fsi_lab.preflight import check_safety, run_setting
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
 from fsi_lab.runfile import (
@@ -109,7 +109,7 @@ class Runner:
         self.instruments: dict[str, Instrument] = {}
         # Shared by the instruments of this run; simulated ones find the physics here, and
         # register in "cleanup" what must be stopped once every instrument is closed.
-        self.bench_context: dict[str, Any] = bench_context(profile)
+        self.bench_context: BenchContext = bench_context(profile)
 
     def reserve_file(self) -> Path:
         """The run file this run will write, chosen now (a sequence records it before the
@@ -304,7 +304,7 @@ class Runner:
         acquisition = self.instruments["acquisition"]
         vibrometer = self.instruments.get("vibrometer")
         source.load_waveform(waveform, rate)
-        amplifier.set_gain(float(profile.roles["amplifier"].settings["gain"]))
+        amplifier.set_gain(float(run_setting(profile, "amplifier", "gain")))
         inputs = {name: c.input for name, c in profile.channels.items()}
         sample_rate = acquisition.configure(inputs, profile.run["sample_rate"],
                                             profile.run["duration"])
@@ -425,11 +425,13 @@ class Runner:
     def _safe_state_all(self) -> dict[str, dict[str, Any]]:
         """Safe state for every opened instrument, amplifier first; then read their state back."""
         self.bus.emit(StateChanged("finalizing"))
-        return safe_and_close(self.instruments, self.bench_context["cleanup"], self.bus.log)
+        plugins = {role: config.plugin for role, config in self.profile.roles.items()}
+        return safe_and_close(self.instruments, self.bench_context.cleanup, self.bus.log, plugins)
 
     def _require_bench_safe(self, outcome: RunOutcome) -> None:
         """A run that leaves an instrument not confirmed safe has failed, however it ended."""
-        unsafe = unsafe_roles(outcome.final_states)
+        unsafe = unsafe_roles(outcome.final_states,
+                              {role: config.plugin for role, config in self.profile.roles.items()})
         if not unsafe:
             return
         note = "NOT confirmed safe after the run: " + "; ".join(

@@ -182,6 +182,11 @@ class VisaLink:
             self.broken = f"the exchange of {command!r} was interrupted"
             raise
 
+    def fail(self, command: str, what: str) -> InstrumentError:
+        """The error to raise when the reply to ``command`` is not what was expected (``what``
+        says how); the link is marked out of step, so that the safe state reconnects."""
+        return self._fail(command, what)
+
     def _peer_closed(self) -> bool:
         """Whether the TCP peer has closed a socket resource (best effort)."""
         try:

@@ -20,7 +20,14 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from fsi_lab.contract import Acquisition, Amplifier, InstrumentPlugin, SignalSource, Vibrometer
+from fsi_lab.contract import (
+    Acquisition,
+    Amplifier,
+    InstrumentPlugin,
+    OutputState,
+    SignalSource,
+    Vibrometer,
+)
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.modal_step import check_step
@@ -90,9 +97,8 @@ class InProcessSource(_Base, SignalSource):
         self._bench["source_on"] = False
         self._bench["source_level_v"] = 0.0
 
-    def read_state(self) -> dict[str, Any]:
-        return {"output_enabled": self._bench["source_on"],
-                "level_v": self._bench["source_level_v"]}
+    def read_state(self) -> OutputState:
+        return OutputState(bool(self._bench["source_on"]), level_v=self._bench["source_level_v"])
 
 
 class InProcessAmplifier(_Base, Amplifier):
@@ -117,9 +123,9 @@ class InProcessAmplifier(_Base, Amplifier):
         # Deliberately does not check liveness of the link: the bench must always be safed.
         self._bench["output_enabled"] = False
 
-    def read_state(self) -> dict[str, Any]:
-        return {"output_enabled": self._bench["output_enabled"], "gain": self._bench["gain"],
-                "interlocks": {k: v for k, v in self._bench["interlocks"].items() if v}}
+    def read_state(self) -> OutputState:
+        return OutputState(bool(self._bench["output_enabled"]), gain=self._bench["gain"],
+                           interlocks={k: v for k, v in self._bench["interlocks"].items() if v})
 
 
 class InProcessVibrometer(_Base, Vibrometer):

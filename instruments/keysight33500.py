@@ -12,7 +12,15 @@ output follows the channel in use (``OUTP:TRIG:SOUR CH<n>``; a one-channel model
 know the command is accepted on channel 1). ``start`` switches the output on and sends a bus trigger
 (``*TRG``); the generator's trigger output marks t = 0 for a digitiser waiting for it.
 ``SYST:ERR?`` is read after every configuration step and any error stops the run with the
-instrument's own message.
+instrument's own message. The settings are declared once with the instrument kit
+(:mod:`fsi_lab.instruments.kit`), which also gives the profile's ``sample_rate`` and
+``arb_filter``, the take-over, the confirmed safe state and the state read back.
+
+The generator has no watchdog of its own: the 33500B offers no communication timeout that
+switches its output off, so a run that dies leaves it to the amplifier's watchdog (see
+:mod:`~fsi_lab.instruments.shaker_amplifier`), which removes the shaker's drive whatever the
+source plays, and to the burst resting at 0 V between triggers; the next command that opens
+the bench reports an output it finds on.
 
 Address: a VISA resource, e.g. ``TCPIP0::192.168.1.10::5025::SOCKET`` (or ``embedded`` for the
 simulated bench).
@@ -20,14 +28,15 @@ simulated bench).
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
 from fsi_lab.contract import InstrumentPlugin, SignalSource
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
-from fsi_lab.instruments.kit import SAFE_TIMEOUT_S, confirmed_safe_state
+from fsi_lab.instruments.kit import ScpiOutput, Setting, connect
 from fsi_lab.params import Param
 
 NAME = "keysight33500"
@@ -65,25 +74,59 @@ def arb_points(wave: np.ndarray) -> tuple[np.ndarray, float]:
     return points, amplitude
 
 
-class Keysight33500(SignalSource):
+class Keysight33500(ScpiOutput, SignalSource):
     """An open 33500B-class generator. Use :func:`open_source`."""
+
+    NAME = NAME
+    output = Setting("OUTP{channel}", "bool", help="Output relay of the channel closed.")
+    byte_order = Setting("FORM:BORD", "str", choices=("NORM", "SWAP"),
+                         help="Byte order of binary blocks (SWAP: little-endian).")
+    function = Setting("SOUR{channel}:FUNC", "str",
+                       choices=("SIN", "SQU", "TRI", "RAMP", "PULS", "PRBS", "NOIS", "ARB", "DC"),
+                       help="Waveform function.")
+    arb = Setting("SOUR{channel}:FUNC:ARB", "str", help="Name of the arb played.")
+    sample_rate = Setting("SOUR{channel}:FUNC:ARB:SRAT", "float", "Hz", minimum=1e-6,
+                          maximum=160e6, accepted="the arb sample rate must lie between "
+                                                  "1 uSa/s and 160 MSa/s",
+                          help="Arb sample rate the excitation is generated at (unset: the "
+                               "run's rate).")
+    arb_filter = Setting("SOUR{channel}:FUNC:ARB:FILT", "str", choices=FILTERS,
+                         help="Arb output filter: 'normal' (band-limited), 'step' (smoothed "
+                              "steps) or 'off' (sample and hold).")
+    load = Setting("OUTP{channel}:LOAD", "str", choices=("INF",),
+                   help="Load the amplitude refers to (INF: high impedance).")
+    voltage_unit = Setting("SOUR{channel}:VOLT:UNIT", "str", choices=("VPP", "VRMS", "DBM"),
+                           help="Unit of the amplitude.")
+    offset = Setting("SOUR{channel}:VOLT:OFFS", "float", "V", minimum=-10.0, maximum=10.0,
+                     help="DC offset.")
+    amplitude = Setting("SOUR{channel}:VOLT", "float", "V", minimum=MIN_VPP, maximum=20.0,
+                        accepted="the peak drive must stay within +-10 V into a "
+                                 "high-impedance load",
+                        help="Amplitude, peak to peak (VOLT:UNIT VPP).")
+    burst_mode = Setting("SOUR{channel}:BURS:MODE", "str", choices=("TRIG", "GAT"),
+                         help="Burst mode (TRIG: a burst per trigger).")
+    burst_cycles = Setting("SOUR{channel}:BURS:NCYC", "int", minimum=1,
+                           help="Cycles (arb plays) per burst.")
+    trigger_source = Setting("TRIG{channel}:SOUR", "str", choices=("BUS", "IMM", "EXT", "TIM"),
+                             help="What triggers a burst (BUS: *TRG).")
+    burst = Setting("SOUR{channel}:BURS:STAT", "bool", help="Burst mode on.")
+    trigger_output = Setting("OUTP:TRIG", "bool", help="Trigger output (sync) on.")
+    trigger_output_source = Setting("OUTP:TRIG:SOUR", "str", choices=("CH1", "CH2"),
+                                    help="Channel whose bursts the trigger output marks.")
 
     def __init__(self, link, settings: dict[str, Any], identity: str,
                  found_on: bool | None = None) -> None:
-        self.link = link
+        super().__init__(link, identity)
         #: Whether the output was on when the generator was opened (None: it could not be read).
         self.found_on = found_on
         self.channel = int(settings["channel"])
-        self.filter = FILTERS[settings["arb_filter"]]
-        self.identity = identity
+        self._filter = settings["arb_filter"]
+        self.filter = FILTERS[self._filter]
         self._loaded: dict[str, Any] = {}
 
     @property
     def _src(self) -> str:
         return f"SOUR{self.channel}:"
-
-    def identify(self) -> str:
-        return self.identity
 
     def settings(self) -> dict[str, Any]:
         return {"visa_address": self.link.address, "arb_name": ARB_NAME, "channel": self.channel,
@@ -92,7 +135,7 @@ class Keysight33500(SignalSource):
     def load_waveform(self, samples: np.ndarray, sample_rate: float) -> None:
         """Upload ``samples`` (V) to play once at ``sample_rate`` (Sa/s) per trigger."""
         wave = np.asarray(samples, dtype=float).ravel()
-        where = f"{NAME} at {self.link.address}"
+        where = self.where
         if not np.all(np.isfinite(wave)):
             raise InstrumentError(f"{where}: the waveform holds NaN or infinite samples")
         if wave.size > MAX_POINTS:
@@ -111,8 +154,8 @@ class Keysight33500(SignalSource):
             wave = np.concatenate([wave, np.zeros(MIN_POINTS - wave.size)])
         points, amplitude = arb_points(wave)
         src, ch, link = self._src, self.channel, self.link
-        link.send_checked(f"OUTP{ch} OFF")
-        link.send_checked("FORM:BORD SWAP")
+        self.output = False
+        self.byte_order = "SWAP"
         link.send_checked(f"{src}DATA:VOL:CLE")
         payload = points.tobytes()
         length = str(len(payload))
@@ -121,24 +164,13 @@ class Keysight33500(SignalSource):
             link.write_raw(header, header.encode("ascii") + payload + b"\n")
             link.check(f"the upload of {points.size} points ({header[:40]}...)",
                        f"the arb memory takes {MIN_POINTS} to {MAX_POINTS:,} points in -1..1")
-        for command, accepted in (
-                (f"{src}FUNC ARB", ""),
-                (f"{src}FUNC:ARB {ARB_NAME}", ""),
-                (f"{src}FUNC:ARB:SRAT {sample_rate:.10g}", "the arb sample rate must lie "
-                                                           "between 1 uSa/s and 160 MSa/s"),
-                (f"{src}FUNC:ARB:FILT {self.filter}", ""),
-                (f"OUTP{ch}:LOAD INF", ""),
-                (f"{src}VOLT:UNIT VPP", ""),
-                (f"{src}VOLT:OFFS 0", ""),
-                (f"{src}VOLT {amplitude:.10g}", "the peak drive must stay within +-10 V into a "
-                                                "high-impedance load"),
-                (f"{src}BURS:MODE TRIG", ""),
-                (f"{src}BURS:NCYC 1", ""),
-                (f"TRIG{ch}:SOUR BUS", ""),
-                (f"{src}BURS:STAT ON", ""),
-                ("OUTP:TRIG ON", "")):
-            link.send_checked(command, accepted)
-        link.write(f"OUTP:TRIG:SOUR CH{ch}")
+        for name, value in (("function", "ARB"), ("arb", ARB_NAME), ("sample_rate", sample_rate),
+                            ("arb_filter", self._filter), ("load", "INF"),
+                            ("voltage_unit", "VPP"), ("offset", 0.0), ("amplitude", amplitude),
+                            ("burst_mode", "TRIG"), ("burst_cycles", 1),
+                            ("trigger_source", "BUS"), ("burst", True), ("trigger_output", True)):
+            self.set(name, value)
+        self.set("trigger_output_source", f"CH{ch}", check=False)
         refused = link.errors()
         if refused and not (ch == 1 and all(e.startswith("-113") for e in refused)):
             raise InstrumentError(f"{where}: routing the trigger output to channel {ch} "
@@ -146,49 +178,35 @@ class Keysight33500(SignalSource):
         self._loaded = {
             "arb_points": int(points.size),
             "leading_zero_points": lead,
-            "arb_sample_rate": link.query_float(f"{src}FUNC:ARB:SRAT?"),
-            "amplitude_vpp": link.query_float(f"{src}VOLT?"),
-            "offset_v": link.query_float(f"{src}VOLT:OFFS?"),
+            "arb_sample_rate": self.sample_rate,
+            "amplitude_vpp": self.amplitude,
+            "offset_v": self.offset,
         }
 
     def start(self) -> None:
         """Output on, then a bus trigger: the burst plays once."""
         if not self._loaded:
-            raise InstrumentError(f"{NAME} at {self.link.address}: start before load_waveform")
-        self.link.send_checked(f"OUTP{self.channel} ON")
+            raise InstrumentError(f"{self.where}: start before load_waveform")
+        self.output = True
         self.link.send_checked("*TRG", "a bus trigger needs BURS:STAT ON and TRIG:SOUR BUS")
 
     def monitor(self) -> None:
         """During the record: the output must still answer ``OUTP<n>?`` with on."""
-        if not self.link.query_bool(f"OUTP{self.channel}?"):
-            raise InstrumentError(f"{NAME} at {self.link.address}: the output went off during "
-                                  "the record (front panel, or a reset?)")
+        if not self.output:
+            raise InstrumentError(f"{self.where}: the output went off during the record (front "
+                                  "panel, or a reset?)")
 
-    def safe_state(self) -> None:
-        """Output relay open, burst aborted, offset 0 V; confirmed by reading ``OUTP?`` back.
+    def switch_off(self) -> None:
+        """Output relay open, burst aborted, offset 0 V (the kit's safe state confirms it by
+        reading ``OUTP<n>?`` back)."""
+        super().switch_off()
+        self.link.write("ABOR")
+        self.set("offset", 0.0, check=False)
 
-        Works on a link that misbehaved: it reconnects first, with a short timeout, and tries
-        twice before reporting failure.
-        """
-        link, channel = self.link, self.channel
-
-        def switch_off() -> None:
-            link.write(f"OUTP{channel} OFF")
-            link.write("ABOR")
-            link.write(f"{self._src}VOLT:OFFS 0")
-
-        confirmed_safe_state(NAME, f"{NAME} at {link.address}", link, switch_off,
-                             lambda: link.query_bool(f"OUTP{channel}?"), timeout_s=SAFE_TIMEOUT_S)
-
-    def read_state(self) -> dict[str, Any]:
-        with self.link.timeout(SAFE_TIMEOUT_S):
-            self.link.recover(SAFE_TIMEOUT_S)
-            on = self.link.query_bool(f"OUTP{self.channel}?")
-            offset = self.link.query_float(f"{self._src}VOLT:OFFS?")
-        return {"output_enabled": on, "level_v": offset if on else 0.0, "offset_v": offset}
-
-    def close(self) -> None:
-        self.link.close()
+    def state_details(self, output_enabled: bool) -> dict[str, Any]:
+        """The offset (V) and the level at the output (V: the offset while the output is on)."""
+        offset = self.offset
+        return {"level_v": offset if output_enabled else 0.0, "offset_v": offset}
 
 
 def check_source(address: str, settings: dict[str, Any], plan: Mapping[str, Any]) -> None:
@@ -202,46 +220,21 @@ def check_source(address: str, settings: dict[str, Any], plan: Mapping[str, Any]
             "or the excitation duration")
     from fsi_lab.instruments.sim.embedded import check_embedded
 
-    if check_embedded(address, plan):
-        if settings["channel"] != 1:
-            raise ValueError(f"channel: {settings['channel']}; the embedded simulated "
-                             "generator's channel 1 is wired to the amplifier")
+    if check_embedded(address, plan) and settings["channel"] != 1:
+        raise ValueError(f"channel: {settings['channel']}; the embedded simulated "
+                         "generator's channel 1 is wired to the amplifier")
 
 
-def _output_found_on(link, channel: int) -> bool | None:
-    """``OUTP<n>?`` before anything else is sent: whether the output was left on; None when
-    the reply could not be read (the link is reopened then, so that ``OUTP<n> OFF`` still goes
-    out)."""
-    try:
-        with link.timeout(SAFE_TIMEOUT_S):
-            return link.query_bool(f"OUTP{channel}?")
-    except InstrumentError:
-        link.recover(SAFE_TIMEOUT_S)
-        return None
-
-
-def open_source(address: str, settings: dict[str, Any], context: dict[str, Any]) -> Keysight33500:
+def open_source(address: str, settings: dict[str, Any],
+                context: Mapping[str, Any]) -> Keysight33500:
     """Connect, read whether the output was left on, switch it off, identify, clear the status
     and confirm the output off (``OUTP<n>?`` and the first ``OUTP<n> OFF`` go out before the
     identity is known, so that the output goes off even when the reply to ``*IDN?`` is
-    unexpected, and an output found on is reported: :attr:`Keysight33500.found_on`)."""
-    from fsi_lab.instruments._visa import VisaLink
-
-    if address.strip() in ("", "embedded"):
-        from fsi_lab.instruments.sim.embedded import resolve_address
-
-        address = resolve_address("source", NAME, address, context)
-    link = VisaLink(NAME, address, settings["timeout_s"])
+    unexpected, and an output found on is reported: :attr:`Keysight33500.found_on`; the kit's
+    :meth:`~fsi_lab.instruments.kit.ScpiOutput.take_over`)."""
+    link = connect(NAME, "source", address, settings, context)
     try:
-        found_on = _output_found_on(link, settings["channel"])
-        link.write(f"OUTP{settings['channel']} OFF")
-        identity = link.query("*IDN?")
-        if identity.count(",") < 3:
-            raise InstrumentError(f"{NAME} at {address}: unexpected identity {identity!r}; "
-                                  "expected <maker>,<model>,<serial>,<firmware> (OUTP OFF was "
-                                  "sent first)")
-        link.write("*CLS")
-        link.send_checked(f"OUTP{settings['channel']} OFF")
+        identity, found_on = Keysight33500.take_over(link, channel=settings["channel"])
     except BaseException:
         link.close()
         raise
@@ -252,13 +245,10 @@ PLUGIN = InstrumentPlugin(
     name=NAME,
     role="source",
     params=(
-        Param("sample_rate", "float", "Hz", None, minimum=1e-6, maximum=160e6,
-              help="Arb sample rate the excitation is generated at (unset: the run's rate)."),
+        Keysight33500.sample_rate.param(None),
         Param("channel", "int", "", 1, minimum=1, maximum=2,
               help="Output channel wired to the amplifier."),
-        Param("arb_filter", "str", "", "step", choices=tuple(FILTERS),
-              help="Arb output filter: 'normal' (band-limited), 'step' (smoothed steps) or "
-                   "'off' (sample and hold)."),
+        Keysight33500.arb_filter.param("step"),
         Param("timeout_s", "float", "s", 2.0, minimum=0.05, maximum=60.0,
               help="Time allowed for each reply."),
     ),

@@ -15,13 +15,15 @@ from __future__ import annotations
 
 import re
 import time
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
 from fsi_lab.contract import Acquisition, InstrumentPlugin
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
+from fsi_lab.instruments.kit import ScpiInstrument, Setting, checked_identity, connect
 from fsi_lab.params import Param
 
 NAME = "scpi-daq"
@@ -33,12 +35,29 @@ SAFE_TIMEOUT_S = 1.0
 _STATUS = re.compile(r"^(IDLE|WTRG|RUN|DONE|OVER),(\d+),(\d+)$")
 
 
-class ScpiDaq(Acquisition):
+class ScpiDaq(ScpiInstrument, Acquisition):
     """An open digitiser. Use :func:`open_daq`."""
 
+    NAME = NAME
+    byte_order = Setting("FORM:BORD", "str", choices=("NORM", "SWAP"),
+                         help="Byte order of the int32 blocks (SWAP: little-endian).")
+    input_enabled = Setting("INP{input}:STAT", "bool", help="Input digitised.")
+    input_range = Setting("INP{input}:RANG", "float", "V", minimum=0.001, maximum=10.0, fmt="g",
+                          accepted="input ranges go up to 10 V",
+                          help="Input range (peak volts).")
+    iepe_supply = Setting("INP{input}:IEPE", "bool",
+                          help="IEPE current supplied to the sensor (AC coupled).")
+    input_scale = Setting("INP{input}:SCAL", "float", "V", readonly=True,
+                          help="Volts per code of the input at its range.")
+    sample_rate = Setting("ACQ:SRAT", "float", "Hz", minimum=0.0, maximum=MAX_RATE,
+                          accepted=f"up to {MAX_RATE:g} Hz", help="Sample rate.")
+    points = Setting("ACQ:POIN", "int", minimum=1, maximum=MAX_POINTS,
+                     help="Samples per input of the record.")
+    trigger = Setting("TRIG:SOUR", "str", choices={"external": "EXT", "immediate": "IMM"},
+                      help="Start the record on the source's trigger output, or when armed.")
+
     def __init__(self, link, settings: dict[str, Any], identity: str) -> None:
-        self.link = link
-        self.identity = identity
+        super().__init__(link, identity)
         self.block_duration = float(settings["block_duration"])
         self.ranges = [float(r) for r in settings["ranges_v"]]
         self.iepe = {int(n) for n in settings["iepe_inputs"]}
@@ -53,10 +72,7 @@ class ScpiDaq(Acquisition):
         self._configured: dict[str, Any] = {}
 
     def _where(self) -> str:
-        return f"{NAME} at {self.link.address}"
-
-    def identify(self) -> str:
-        return self.identity
+        return self.where
 
     def settings(self) -> dict[str, Any]:
         return {"visa_address": self.link.address, **self._configured}
@@ -70,25 +86,23 @@ class ScpiDaq(Acquisition):
         for name, number in inputs.items():
             names.setdefault(int(number), []).append(name)
         order = sorted(names)
-        link = self.link
         for number in INPUTS:
-            link.send_checked(f"INP{number}:STAT {'ON' if number in names else 'OFF'}")
+            self.set("input_enabled", number in names, input=number)
         scales, ranges = [], {}
         for number in order:
-            link.send_checked(f"INP{number}:RANG {self.ranges[number - 1]:g}",
-                              "input ranges go up to 10 V")
-            link.send_checked(f"INP{number}:IEPE {'ON' if number in self.iepe else 'OFF'}")
-            ranges[number] = link.query_float(f"INP{number}:RANG?")
-            scales.append(link.query_float(f"INP{number}:SCAL?"))
-        link.send_checked(f"ACQ:SRAT {sample_rate:.10g}", f"up to {MAX_RATE:g} Hz")
-        rate = link.query_float("ACQ:SRAT?")
-        total = int(round(duration * rate))
-        link.send_checked(f"ACQ:POIN {total}")
-        link.send_checked(f"TRIG:SOUR {'EXT' if self.external else 'IMM'}")
+            self.set("input_range", self.ranges[number - 1], input=number)
+            self.set("iepe_supply", number in self.iepe, input=number)
+            ranges[number] = self.get("input_range", input=number)
+            scales.append(self.get("input_scale", input=number))
+        self.sample_rate = sample_rate
+        rate = self.sample_rate
+        total = round(duration * rate)
+        self.points = total
+        self.trigger = "external" if self.external else "immediate"
         self._names, self._order = names, order
         self._scales = np.asarray(scales)
         self._rate, self._total, self._fetched = rate, total, 0
-        self._block = max(1, int(round(self.block_duration * rate)))
+        self._block = max(1, round(self.block_duration * rate))
         self._configured = {
             "sample_rate": rate, "points": total, "inputs": order,
             "ranges_v": {str(n): ranges[n] for n in order},
@@ -181,12 +195,10 @@ class ScpiDaq(Acquisition):
     def read_state(self) -> dict[str, Any]:
         with self.link.timeout(SAFE_TIMEOUT_S):
             self.link.recover(SAFE_TIMEOUT_S)
-            state, available, overloads = self._status()
+            state, _available, overloads = self._status()
         return {"state": state, "samples_fetched": self._fetched,
                 "overloaded_inputs": [n for n in INPUTS if overloads >> (n - 1) & 1]}
 
-    def close(self) -> None:
-        self.link.close()
 
 
 def record_problem(inputs: Mapping[str, int], sample_rate: float, duration: float) -> str:
@@ -198,7 +210,7 @@ def record_problem(inputs: Mapping[str, int], sample_rate: float, duration: floa
         return f"channel {name!r} uses input {number}; this digitiser has inputs 1 to {len(INPUTS)}"
     if not 0 < sample_rate <= MAX_RATE:
         return f"sample rate {sample_rate:g} Hz; this digitiser samples at up to {MAX_RATE:g} Hz"
-    points = int(round(duration * sample_rate))
+    points = round(duration * sample_rate)
     if points > MAX_POINTS:
         return (f"{points:,} samples per input ({duration:g} s at {sample_rate:g} Hz); a record "
                 f"holds at most {MAX_POINTS:,}: shorten run.duration or lower run.sample_rate")
@@ -227,26 +239,18 @@ def check_daq(address: str, settings: dict[str, Any], plan: Mapping[str, Any]) -
     check_embedded_record(address, plan)
 
 
-def open_daq(address: str, settings: dict[str, Any], context: dict[str, Any]) -> ScpiDaq:
+def open_daq(address: str, settings: dict[str, Any], context: Mapping[str, Any]) -> ScpiDaq:
     """Connect, identify, reset, clear the status and choose little-endian blocks."""
-    from fsi_lab.instruments._visa import VisaLink
 
     problem = settings_problem(settings)
     if problem:
         raise InstrumentError(f"{NAME}: {problem}")
-    if address.strip() in ("", "embedded"):
-        from fsi_lab.instruments.sim.embedded import resolve_address
-
-        address = resolve_address("acquisition", NAME, address, context)
-    link = VisaLink(NAME, address, settings["timeout_s"])
+    link = connect(NAME, "acquisition", address, settings, context)
     try:
-        identity = link.query("*IDN?")
-        if identity.count(",") < 3:
-            raise InstrumentError(f"{NAME} at {address}: unexpected identity {identity!r}; "
-                                  "expected <maker>,<model>,<serial>,<firmware>")
+        identity = checked_identity(NAME, link)
         link.write("*RST")
         link.write("*CLS")
-        link.send_checked("FORM:BORD SWAP")
+        link.send_checked(ScpiDaq.byte_order.command_for("SWAP"))
     except BaseException:
         link.close()
         raise
@@ -259,12 +263,12 @@ PLUGIN = InstrumentPlugin(
     params=(
         Param("block_duration", "float", "s", 0.1, minimum=0.001, maximum=0.5,
               help="Length of each block fetched and streamed into the run file."),
-        Param("ranges_v", "floats", "V", [10.0, 10.0, 10.0, 10.0], minimum=0.001,
-              maximum=10.0, help="Input range of inputs 1 to 4 (peak volts)."),
+        Param("ranges_v", "floats", "V", [10.0, 10.0, 10.0, 10.0],
+              minimum=ScpiDaq.input_range.minimum, maximum=ScpiDaq.input_range.maximum,
+              help="Input range of inputs 1 to 4 (peak volts)."),
         Param("iepe_inputs", "floats", "", [2.0], minimum=1, maximum=4,
               help="Inputs that supply IEPE current to their sensor (the accelerometer)."),
-        Param("trigger", "str", "", "external", choices=("external", "immediate"),
-              help="Start the record on the source's trigger output, or when armed."),
+        ScpiDaq.trigger.param("external"),
         Param("timeout_s", "float", "s", 2.0, minimum=0.05, maximum=60.0,
               help="Time allowed for each reply."),
     ),

@@ -22,7 +22,10 @@ host falls silent) are configured the same way; one that does not know ``SYST:WD
 the bench lock and on the next command that opens the bench reporting outputs it found on.
 
 On opening, the output state is read (``OUTP?``) before ``OUTP 0`` goes out, so that an output
-left on by a run that died is reported (:attr:`ShakerAmplifier.found_on`).
+left on by a run that died is reported (:attr:`ShakerAmplifier.found_on`). The driver is written
+with the instrument kit (:mod:`fsi_lab.instruments.kit`): its settings are declared once, with
+their commands, units and bounds, and the profile's ``gain`` and ``watchdog_s`` are made from
+them; the take-over, the confirmed safe state and the state read back are the kit's.
 
 Address: a VISA resource, e.g. ``TCPIP0::192.168.1.20::5025::SOCKET`` or
 ``ASRL/dev/ttyUSB0::INSTR`` (8N1 at ``baud_rate``), or ``embedded``.
@@ -32,12 +35,13 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 from fsi_lab.contract import Amplifier, InstrumentPlugin
 from fsi_lab.errors import InstrumentError
 from fsi_lab.hookspecs import hookimpl
-from fsi_lab.instruments.kit import SAFE_TIMEOUT_S, confirmed_safe_state
+from fsi_lab.instruments.kit import SAFE_TIMEOUT_S, ScpiOutput, Setting, connect
 from fsi_lab.params import Param
 
 NAME = "shaker-amplifier"
@@ -48,13 +52,27 @@ INTERLOCKS = ("over_travel", "supply_fault", "over_temperature", "over_current",
 HEARTBEAT_S = 10.0
 
 
-class ShakerAmplifier(Amplifier):
+class ShakerAmplifier(ScpiOutput, Amplifier):
     """An open amplifier. Use :func:`open_amplifier`."""
+
+    NAME = NAME
+    output = Setting("OUTP", "bool", choices=("1", "0"), help="Output stage on.")
+    gain = Setting("GAIN", "float", "V/V", minimum=0.0, maximum=100.0, fmt=".6g",
+                   accepted="the gain must lie within the amplifier's range",
+                   help="Voltage gain of the amplifier.")
+    interlock_bits = Setting("STAT:INTL", "int", readonly=True,
+                             help="Latched interlocks, one bit each (INTERLOCKS).")
+    current = Setting("MEAS:CURR", "float", "A", readonly=True, help="Output current.")
+    watchdog_time = Setting("SYST:WDOG:TIM", "float", "s", minimum=0.0, maximum=60.0,
+                            fmt=".6g",
+                            help="The amplifier switches its output off when the run has been "
+                                 "silent this long (a killed or frozen controller); 0: do not "
+                                 "arm its watchdog.")
+    watchdog_enabled = Setting("SYST:WDOG", "bool", help="Communication watchdog armed.")
 
     def __init__(self, link, identity: str, watchdog_s: float = 0.0,
                  found_on: bool | None = None) -> None:
-        self.link = link
-        self.identity = identity
+        super().__init__(link, identity)
         self._gain: float | None = None
         self.watchdog_s = float(watchdog_s)
         #: Whether the output was on when the amplifier was opened (None: it could not be read).
@@ -64,9 +82,6 @@ class ShakerAmplifier(Amplifier):
         self._alive_until = 0.0
         self._feeder: threading.Thread | None = None
         self._stop_feeding = threading.Event()
-
-    def identify(self) -> str:
-        return self.identity
 
     def settings(self) -> dict[str, Any]:
         return {"visa_address": self.link.address, "gain_read_back": self._gain,
@@ -82,15 +97,14 @@ class ShakerAmplifier(Amplifier):
         """Arm the amplifier's watchdog and start feeding it; without one, say so."""
         if self.watchdog_s <= 0 or self.watchdog == "not offered":
             return
-        link = self.link
-        link.write(f"SYST:WDOG:TIM {self.watchdog_s:.6g}")
-        link.write("SYST:WDOG ON")
-        refused = link.errors()
+        self.set("watchdog_time", self.watchdog_s, check=False)
+        self.set("watchdog_enabled", True, check=False)
+        refused = self.link.errors()
         if refused and all(e.startswith("-113") for e in refused):
             self.watchdog = "not offered"
             return
         if refused:
-            raise InstrumentError(f"{self._where()}: arming the watchdog "
+            raise InstrumentError(f"{self.where}: arming the watchdog "
                                   f"(SYST:WDOG:TIM {self.watchdog_s:g}; SYST:WDOG ON) was "
                                   f"refused: {'; '.join(refused)}")
         self.watchdog = "armed"
@@ -118,24 +132,16 @@ class ShakerAmplifier(Amplifier):
         if feeder is not None and feeder is not threading.current_thread():
             feeder.join(timeout=self.watchdog_s + SAFE_TIMEOUT_S)
 
-    def _where(self) -> str:
-        return f"{NAME} at {self.link.address}"
-
+    # ------------------------------------------------------------------ the role
     def set_gain(self, gain: float) -> None:
         """Set the gain (V/V) and read it back."""
-        self.link.send_checked(f"GAIN {gain:.6g}", "the gain must lie within the amplifier's "
-                                                   "range")
-        value = self.link.query_float("GAIN?")
-        if abs(value - gain) > 1e-4 * max(1.0, abs(gain)):
-            raise InstrumentError(f"{self._where()}: gain reads back {value:g} after "
-                                  f"GAIN {gain:g}")
-        self._gain = value
+        self._gain = self.set("gain", gain, verify=True)
 
     def interlocks(self) -> dict[str, bool]:
         """Latched interlocks by name (``STAT:INTL?``)."""
-        bits = self.link.query_int("STAT:INTL?")
+        bits = self.interlock_bits
         if not 0 <= bits < 1 << len(INTERLOCKS):
-            raise InstrumentError(f"{self._where()}: STAT:INTL? answered {bits}; expected a "
+            raise InstrumentError(f"{self.where}: STAT:INTL? answered {bits}; expected a "
                                   f"bitfield 0 to {(1 << len(INTERLOCKS)) - 1}")
         return {name: bool(bits >> bit & 1) for bit, name in enumerate(INTERLOCKS)}
 
@@ -146,67 +152,52 @@ class ShakerAmplifier(Amplifier):
             active = [name for name, on in self.interlocks().items() if on]
             if active:
                 raise InstrumentError(
-                    f"{self._where()}: output on refused: interlock {', '.join(active)} is "
+                    f"{self.where}: output on refused: interlock {', '.join(active)} is "
                     "active; remove its cause, then clear it with INTL:RES (or set "
                     "reset_interlocks = true to do so when the amplifier is opened for a run)")
             self._arm_watchdog()
-        self.link.send_checked(f"OUTP {1 if enabled else 0}")
-        if self.link.query_bool("OUTP?") != enabled:
-            raise InstrumentError(f"{self._where()}: the output did not switch "
+        self.output = enabled
+        if self.output != enabled:
+            raise InstrumentError(f"{self.where}: the output did not switch "
                                   f"{'on' if enabled else 'off'}")
 
+    # ------------------------------------------------------------------ the kit's template
+    def switch_off(self) -> None:
+        """Output off; the watchdog disarmed when it was armed (the output is off: no trip to
+        latch later)."""
+        super().switch_off()
+        if self.watchdog == "armed":
+            self.set("watchdog_enabled", False, check=False)
+
     def safe_state(self) -> None:
-        """Output off, confirmed by ``OUTP?``; reconnects first if the link misbehaved, with a
-        short timeout, and tries twice before reporting failure."""
+        """Stop feeding the watchdog, then the kit's confirmed safe state: ``OUTP 0`` (and
+        ``SYST:WDOG OFF``), confirmed by ``OUTP?``."""
         self._stop_watchdog_feeder()
-        link = self.link
+        super().safe_state()
 
-        def switch_off() -> None:
-            link.write("OUTP 0")
-            if self.watchdog == "armed":  # the output is off: no trip to latch later
-                link.write("SYST:WDOG OFF")
-
-        confirmed_safe_state(NAME, self._where(), link, switch_off,
-                             lambda: link.query_bool("OUTP?"), timeout_s=SAFE_TIMEOUT_S)
-
-    def read_state(self) -> dict[str, Any]:
-        with self.link.timeout(SAFE_TIMEOUT_S):
-            self.link.recover(SAFE_TIMEOUT_S)
-            state = {
-                "output_enabled": self.link.query_bool("OUTP?"),
-                "gain": self.link.query_float("GAIN?"),
+    def state_details(self, output_enabled: bool) -> dict[str, Any]:
+        """Gain (V/V), latched interlocks and output current (A)."""
+        return {"gain": self.gain,
                 "interlocks": {k: v for k, v in self.interlocks().items() if v},
-                "current_a": self.link.query_float("MEAS:CURR?"),
-            }
-        return state
+                "current_a": self.current}
 
     def close(self) -> None:
         self._stop_watchdog_feeder()
-        self.link.close()
-
-
-def _output_found_on(link) -> bool | None:
-    """``OUTP?`` before anything else is sent: whether the output was left on; None when the
-    reply could not be read (the link is reopened then, so that ``OUTP 0`` still goes out)."""
-    try:
-        with link.timeout(SAFE_TIMEOUT_S):
-            return link.query_bool("OUTP?")
-    except InstrumentError:
-        link.recover(SAFE_TIMEOUT_S)
-        return None
+        super().close()
 
 
 def open_amplifier(address: str, settings: dict[str, Any],
-                   context: dict[str, Any]) -> ShakerAmplifier:
+                   context: Mapping[str, Any]) -> ShakerAmplifier:
     """Connect, switch the output off, identify, clear the status and confirm the output off.
 
     ``OUTP?`` and then ``OUTP 0`` are the first things sent, before the identity is known, so
     that the output goes off even when the reply to ``*IDN?`` is unexpected and an output found
     on is reported (:attr:`ShakerAmplifier.found_on`); once the error queue is cleared ``OUTP 0``
-    is sent again and checked. Latched interlocks are cleared (``INTL:RES``) only when
-    ``reset_interlocks`` is set and the instruments are opened for a run
-    (``context["purpose"] == "run"``, the default); ``fsi-lab safe`` and ``identify`` open them
-    ``"outside-run"`` and leave latched interlocks latched.
+    is sent again and checked (:meth:`~fsi_lab.instruments.kit.ScpiOutput.take_over`). Latched
+    interlocks are cleared (``INTL:RES``) only when ``reset_interlocks`` is set and the
+    instruments are opened for a run (``context["purpose"] == "run"``, the default);
+    ``fsi-lab safe`` and ``identify`` open them ``"outside-run"`` and leave latched interlocks
+    latched.
 
     Parameters
     ----------
@@ -215,25 +206,11 @@ def open_amplifier(address: str, settings: dict[str, Any],
     settings
         Validated settings (:data:`PLUGIN` parameters).
     context
-        The bench context shared by the profile's instruments.
+        The bench context shared by the profile's instruments (or a dict with its keys).
     """
-    from fsi_lab.instruments._visa import VisaLink
-
-    if address.strip() in ("", "embedded"):
-        from fsi_lab.instruments.sim.embedded import resolve_address
-
-        address = resolve_address("amplifier", NAME, address, context)
-    link = VisaLink(NAME, address, settings["timeout_s"], settings["baud_rate"])
+    link = connect(NAME, "amplifier", address, settings, context, settings["baud_rate"])
     try:
-        found_on = _output_found_on(link)
-        link.write("OUTP 0")
-        identity = link.query("*IDN?")
-        if identity.count(",") < 3:
-            raise InstrumentError(f"{NAME} at {address}: unexpected identity {identity!r}; "
-                                  "expected <maker>,<model>,<serial>,<firmware> (OUTP 0 was "
-                                  "sent first)")
-        link.write("*CLS")
-        link.send_checked("OUTP 0")
+        identity, found_on = ShakerAmplifier.take_over(link)
         if settings["reset_interlocks"] and context.get("purpose", "run") == "run":
             link.send_checked("INTL:RES")
     except BaseException:
@@ -254,8 +231,7 @@ PLUGIN = InstrumentPlugin(
     name=NAME,
     role="amplifier",
     params=(
-        Param("gain", "float", "V/V", 1.0, minimum=0.0, maximum=100.0,
-              help="Voltage gain of the amplifier."),
+        ShakerAmplifier.gain.param(1.0),
         Param("reset_interlocks", "bool", "", False,
               help="Clear latched interlocks (INTL:RES) when the amplifier is opened for a run "
                    "(not by fsi-lab safe or identify)."),
@@ -263,9 +239,7 @@ PLUGIN = InstrumentPlugin(
               help="Serial addresses only: line speed (8 data bits, no parity, 1 stop bit)."),
         Param("timeout_s", "float", "s", 2.0, minimum=0.05, maximum=60.0,
               help="Time allowed for each reply."),
-        Param("watchdog_s", "float", "s", 1.0, minimum=0.0, maximum=60.0,
-              help="The amplifier switches its output off when the run has been silent this "
-                   "long (a killed or frozen controller); 0: do not arm its watchdog."),
+        ShakerAmplifier.watchdog_time.param(1.0, name="watchdog_s"),
     ),
     open=open_amplifier,
     check=check_amplifier,

@@ -129,20 +129,39 @@ def test_keysight_reports_a_refused_step_with_the_instruments_error(tcp_peer):
     script = KEYSIGHT_OPEN + checked(b"OUTP1 OFF", b"FORM:BORD SWAP", b"SOUR1:DATA:VOL:CLE")
     script += [(b"SOUR1:DATA:ARB FSILAB,#236" + payload + b"\n", None), NO_ERROR]
     script += checked(b"SOUR1:FUNC ARB", b"SOUR1:FUNC:ARB FSILAB")
-    script += [(b"SOUR1:FUNC:ARB:SRAT 500000000\n", None),
+    # within the declared 160 MSa/s, refused by this (slower) model
+    script += [(b"SOUR1:FUNC:ARB:SRAT 100000000\n", None),
                (b"SYST:ERR?\n", b'-222,"Data out of range"\n'), NO_ERROR]
     peer = tcp_peer(script)
     source = _keysight(peer)
     try:
         with pytest.raises(InstrumentError) as info:
-            source.load_waveform(wave, 5e8)
+            source.load_waveform(wave, 1e8)
     finally:
         source.close()
     peer.expect_all()
     message = str(info.value)
     assert "keysight33500 at TCPIP0::127.0.0.1::" in message
-    assert "'SOUR1:FUNC:ARB:SRAT 500000000' was refused: -222,\"Data out of range\"" in message
+    assert "'SOUR1:FUNC:ARB:SRAT 100000000' was refused: -222,\"Data out of range\"" in message
     assert "between 1 uSa/s and 160 MSa/s" in message
+
+
+def test_keysight_refuses_a_value_beyond_its_declared_bounds_before_sending_it(tcp_peer):
+    wave = np.full(8, 0.5)
+    payload = struct.pack("<9f", 0.0, *[1.0] * 8)
+    script = KEYSIGHT_OPEN + checked(b"OUTP1 OFF", b"FORM:BORD SWAP", b"SOUR1:DATA:VOL:CLE")
+    script += [(b"SOUR1:DATA:ARB FSILAB,#236" + payload + b"\n", None), NO_ERROR]
+    script += checked(b"SOUR1:FUNC ARB", b"SOUR1:FUNC:ARB FSILAB")
+    peer = tcp_peer(script)
+    source = _keysight(peer)
+    try:
+        with pytest.raises(InstrumentError, match=r"keysight33500 at TCPIP0::127\.0\.0\.1::\d+::"
+                                                  r"SOCKET: sample_rate = 500000000\.0: accepted "
+                                                  r"a number >= 1e-06 Hz and <= 1\.6e\+08 Hz"):
+            source.load_waveform(wave, 5e8)
+    finally:
+        source.close()
+    peer.expect_all()  # SOUR1:FUNC:ARB:SRAT 500000000 was never sent
 
 
 def test_keysight_refuses_more_points_than_its_memory_before_sending(tcp_peer):

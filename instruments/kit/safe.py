@@ -1,14 +1,15 @@
-"""What fsi-lab's SCPI output drivers share, for drivers of other instruments too.
+"""The confirmed safe state: the one safe-state procedure of every output driver.
 
-:func:`confirmed_safe_state` is the one safe-state procedure of every output driver (the
-generator's and the amplifier's): switch the output off over a link that may have misbehaved,
-then read the output state back, twice if need be, and report failure only when neither attempt
-confirmed the output off.
+:func:`confirmed_safe_state` switches the output off over a link that may have misbehaved, then
+reads the output state back, twice if need be, and reports failure only when neither attempt
+confirmed the output off. :func:`output_found_on` reads, before anything else is sent, whether
+an output was left on (by a run that died). :class:`~fsi_lab.instruments.kit.scpi.ScpiOutput`
+uses both; a driver of another protocol calls them itself.
 """
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from fsi_lab.errors import InstrumentError
 
@@ -62,3 +63,26 @@ def confirmed_safe_state(name: str, where: str, link, switch_off: Callable[[], N
             last = exc
             link.broken = link.broken or str(exc)
     raise InstrumentError(f"{name}: safe state not confirmed: {last}")
+
+
+def output_found_on(link, query: str, timeout_s: float = SAFE_TIMEOUT_S) -> bool | None:
+    """Whether an output was left on: ``query`` (``"OUTP?"``) before anything else is sent.
+
+    Returns None when the reply could not be read; the link is then reopened, so that the
+    command switching the output off still goes out.
+
+    Parameters
+    ----------
+    link
+        The :class:`~fsi_lab.instruments._visa.VisaLink`.
+    query
+        The query of the output state, answered 0/1 or OFF/ON.
+    timeout_s
+        Time allowed for the reply, s.
+    """
+    try:
+        with link.timeout(timeout_s):
+            return link.query_bool(query)
+    except InstrumentError:
+        link.recover(timeout_s)
+        return None
