@@ -19,7 +19,7 @@ import re
 import select
 import socket
 import threading
-from typing import Iterator
+from collections.abc import Iterator
 
 from fsi_lab.errors import InstrumentError
 

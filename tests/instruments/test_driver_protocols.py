@@ -367,8 +367,8 @@ def test_daq_stops_at_an_overloaded_input_and_names_it(tcp_peer):
 @pytest.mark.parametrize("reply, message", [
     (b"\xa32" + _block([[1, 2]])[2:],
      r"garbled reply: reply starts with b'\\xa32', not an IEEE 488.2 block"),
-    (_block([[1, 2], [3, 4]])[:-1] + b";", r"garbled reply: block not followed by a newline "
-                                           r"but by b';'"),
+    (_block([[1, 2], [3, 4]])[:-1] + b";",
+     r"garbled reply: block not followed by a newline but by b';'"),
 ], ids=["header", "terminator"])
 def test_daq_rejects_a_garbled_block(tcp_peer, reply, message):
     script = DAQ_OPEN + DAQ_CONFIGURE + checked(b"INIT")
