@@ -19,7 +19,7 @@ import re
 import select
 import socket
 import threading
-from typing import Iterator
+from collections.abc import Iterator
 
 from fsi_lab.errors import InstrumentError
 
@@ -28,6 +28,9 @@ ADDRESS_EXAMPLES = ("TCPIP0::192.168.1.10::5025::SOCKET, TCPIP0::192.168.1.10::i
 MAX_ERRORS = 32
 _NO_ERROR = re.compile(r'^[+]?0\s*,')
 _ERROR = re.compile(r'^[+-]?\d+\s*,\s*".*"$')
+#: Most bytes of a definite-length block asked of the VISA library in one read (4 MiB: 0.34 s
+#: at 100 Mbit/s, well within a reply timeout of a second or more).
+BLOCK_PIECE = 1 << 22
 
 
 def _socket_of(resource) -> socket.socket | None:
@@ -47,6 +50,19 @@ def _set_nodelay(resource) -> None:
     sock = _socket_of(resource)
     if sock is not None:
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+
+@contextlib.contextmanager
+def _binary_reads(resource) -> Iterator[None]:
+    """Reads inside the block end at their byte count only, not at a newline byte (the
+    termination character is disabled, and restored afterwards)."""
+    saved = resource.read_termination
+    resource.read_termination = None
+    try:
+        yield
+    finally:
+        with contextlib.suppress(Exception):  # a closed session: connect() sets it again
+            resource.read_termination = saved
 
 
 def _exchange(method):
@@ -222,22 +238,31 @@ class VisaLink:
 
     @_exchange
     def read_block(self, command: str) -> bytes:
-        """Send ``command`` and read its definite-length block reply (and the terminator)."""
+        """Send ``command`` and read its definite-length block reply (and the terminator).
+
+        The header (``#<n><length>``) is read first, then the data and its newline in one read
+        of the declared length (in pieces of at most :data:`BLOCK_PIECE` bytes, each of which
+        must arrive within the reply timeout), with the termination character disabled: with it,
+        pyvisa-py's socket session ends a read at every newline byte of the binary data, about
+        every 256 bytes of int32 codes, and a 4-input block of 0.1 s at 204.8 kS/s took some
+        1 500 reads instead of one.
+        """
         self.write(command)
 
         def read(resource) -> bytes:
-            head = resource.read_bytes(2)
-            if head[:1] != b"#" or not b"1" <= head[1:2] <= b"9":
-                raise ValueError(f"reply starts with {head!r}, not an IEEE 488.2 block (#<n>)")
-            digits = head[1] - 0x30
-            length_text = resource.read_bytes(digits)
-            if not length_text.isdigit():
-                raise ValueError(f"block length {length_text!r} is not a number")
-            payload = resource.read_bytes(int(length_text)) if int(length_text) else b""
-            end = resource.read_bytes(1)
-            if end != b"\n":
-                raise ValueError(f"block not followed by a newline but by {end!r}")
-            return payload
+            with _binary_reads(resource):
+                head = resource.read_bytes(2)
+                if head[:1] != b"#" or not b"1" <= head[1:2] <= b"9":
+                    raise ValueError(f"reply starts with {head!r}, not an IEEE 488.2 block (#<n>)")
+                digits = head[1] - 0x30
+                length_text = resource.read_bytes(digits)
+                if not length_text.isdigit():
+                    raise ValueError(f"block length {length_text!r} is not a number")
+                length = int(length_text)
+                data = resource.read_bytes(length + 1, chunk_size=min(length + 1, BLOCK_PIECE))
+            if data[-1:] != b"\n":
+                raise ValueError(f"block not followed by a newline but by {data[-1:]!r}")
+            return data[:-1]
 
         try:
             return self._io(command, read)

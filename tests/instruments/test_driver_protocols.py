@@ -292,13 +292,20 @@ def test_amplifier_flags_a_garbled_bitfield(tcp_peer):
 # --------------------------------------------------------------------------- digitiser
 DAQ_OPEN = [(b"*IDN?\n", b"fsi-lab,DSA4,0002,1.0\n"), (b"*RST\n", None), (b"*CLS\n", None)]
 DAQ_OPEN += checked(b"FORM:BORD SWAP")
-DAQ_CONFIGURE = checked(b"INP1:STAT ON", b"INP2:STAT OFF", b"INP3:STAT ON", b"INP4:STAT OFF")
-for _n in (b"1", b"3"):
-    DAQ_CONFIGURE += checked(b"INP" + _n + b":RANG 10", b"INP" + _n + b":IEPE OFF")
-    DAQ_CONFIGURE += [(b"INP" + _n + b":RANG?\n", b"10\n"),
-                      (b"INP" + _n + b":SCAL?\n", b"1.192092896E-06\n")]
-DAQ_CONFIGURE += checked(b"ACQ:SRAT 1000") + [(b"ACQ:SRAT?\n", b"1000.000000\n")]
-DAQ_CONFIGURE += checked(b"ACQ:POIN 4", b"TRIG:SOUR EXT")
+
+
+def daq_configure(rate: bytes = b"1000", points: bytes = b"4") -> list:
+    """What configuring inputs 1 and 3 (10 V, no IEPE) at ``rate`` for ``points`` exchanges."""
+    script = checked(b"INP1:STAT ON", b"INP2:STAT OFF", b"INP3:STAT ON", b"INP4:STAT OFF")
+    for n in (b"1", b"3"):
+        script += checked(b"INP" + n + b":RANG 10", b"INP" + n + b":IEPE OFF")
+        script += [(b"INP" + n + b":RANG?\n", b"10\n"),
+                   (b"INP" + n + b":SCAL?\n", b"1.192092896E-06\n")]
+    script += checked(b"ACQ:SRAT " + rate) + [(b"ACQ:SRAT?\n", rate + b".000000\n")]
+    return script + checked(b"ACQ:POIN " + points, b"TRIG:SOUR EXT")
+
+
+DAQ_CONFIGURE = daq_configure()
 
 
 def _daq(peer):
@@ -307,7 +314,8 @@ def _daq(peer):
 
 def _block(codes) -> bytes:
     payload = np.asarray(codes, dtype="<i4").tobytes()
-    return b"#2" + str(len(payload)).encode() + payload + b"\n"
+    length = str(len(payload)).encode()
+    return b"#" + str(len(length)).encode() + length + payload + b"\n"
 
 
 def test_daq_configures_arms_and_streams_int32_blocks(tcp_peer):
@@ -356,17 +364,78 @@ def test_daq_stops_at_an_overloaded_input_and_names_it(tcp_peer):
     peer.expect_all()
 
 
-def test_daq_rejects_a_garbled_block_header(tcp_peer):
+@pytest.mark.parametrize("reply, message", [
+    (b"\xa32" + _block([[1, 2]])[2:],
+     r"garbled reply: reply starts with b'\\xa32', not an IEEE 488.2 block"),
+    (_block([[1, 2], [3, 4]])[:-1] + b";",
+     r"garbled reply: block not followed by a newline but by b';'"),
+], ids=["header", "terminator"])
+def test_daq_rejects_a_garbled_block(tcp_peer, reply, message):
     script = DAQ_OPEN + DAQ_CONFIGURE + checked(b"INIT")
-    script += [(b"ACQ:STAT?\n", b"RUN,2,0\n"), (b"FETC? 2\n", b"\xa32" + _block([[1, 2]])[2:])]
+    script += [(b"ACQ:STAT?\n", b"RUN,2,0\n"), (b"FETC? 2\n", reply)]
     peer = tcp_peer(script)
     daq = _daq(peer)
     try:
         daq.configure({"drive": 1, "vel": 3}, 1000.0, 0.004)
         daq.arm()
-        with pytest.raises(InstrumentError, match=r"garbled reply: reply starts with b'\\xa32', "
-                                                  r"not an IEEE 488.2 block"):
+        with pytest.raises(InstrumentError, match=message):
             daq.read_block(2.0)
+    finally:
+        daq.close()
+    peer.expect_all()
+
+
+def test_daq_reads_a_block_in_one_read_even_when_its_data_is_all_newline_bytes(tcp_peer,
+                                                                               monkeypatch):
+    """A 0.1 s block of two inputs at 204.8 kS/s (160 kB) whose codes are made of newline bytes,
+    the read termination character: the driver asks the VISA library for the data in one read
+    after the header, not one read per newline (pyvisa-py's socket session ends a read at each
+    while the termination character is enabled), and the next query reads its line again."""
+    codes = np.full((20480, 2), 0x0A0A0A0A, dtype="<i4")
+    codes[::7, 1] = -0x0A0A0A0B
+    script = DAQ_OPEN + daq_configure(b"204800", b"20480") + checked(b"INIT")
+    script += [(b"ACQ:STAT?\n", b"RUN,20480,0\n"), (b"FETC? 20480\n", _block(codes)),
+               (b"ACQ:STAT?\n", b"DONE,0,0\n")]
+    peer = tcp_peer(script)
+    daq = scpi_daq.PLUGIN.open(peer.address, settings(scpi_daq, block_duration=0.1), {})
+    try:
+        daq.configure({"drive": 1, "vel": 3}, 204800.0, 0.1)
+        daq.arm()
+        visalib = daq.link._resource.visalib
+        asked = []
+
+        def counted(session, count):
+            asked.append(count)
+            return read(session, count)
+
+        read = visalib.read
+        monkeypatch.setattr(visalib, "read", counted)
+        block = daq.read_block(2.0)
+    finally:
+        daq.close()
+    peer.expect_all()
+    scale = 1.192092896e-06
+    np.testing.assert_array_equal(block["drive"], codes[:, 0] * scale)
+    np.testing.assert_array_equal(block["vel"], codes[:, 1] * scale)
+    # the status reply, the block's "#6", "163840", its data with the newline; the status reply
+    assert len(asked) == 5, asked
+    assert asked[1:4] == [2, 6, 163841]
+
+
+def test_daq_names_a_block_cut_short(tcp_peer):
+    script = DAQ_OPEN + DAQ_CONFIGURE + checked(b"INIT")
+    script += [(b"ACQ:STAT?\n", b"RUN,2,0\n"), (b"FETC? 2\n", _block([[1, 2], [3, 4]])[:12])]
+    peer = tcp_peer(script)
+    daq = scpi_daq.PLUGIN.open(peer.address, settings(scpi_daq, block_duration=0.002,
+                                                      timeout_s=0.3), {})
+    try:
+        daq.configure({"drive": 1, "vel": 3}, 1000.0, 0.004)
+        daq.arm()
+        with pytest.raises(InstrumentError, match=r"^scpi-daq at TCPIP0::127\.0\.0\.1::\d+::SOCKET: "
+                                                  r"no reply within 0\.3 s \(after sending "
+                                                  r"'FETC\? 2'\)$"):
+            daq.read_block(2.0)
+        assert daq.link.broken  # the safe state reconnects
     finally:
         daq.close()
     peer.expect_all()
