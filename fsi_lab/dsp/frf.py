@@ -221,12 +221,6 @@ def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float
             fn[i] = fp[i]
             warnings.append(f"peak at {fp[i]:.4g} Hz: the modal fit failed; its natural "
                             "frequency is the peak's and it has no damping ratio")
-        elif math.isfinite(hp[i]) and m.bins_across >= 4.0 \
-                and abs(hp[i] / m.damping_ratio - 1.0) > 0.25:
-            warnings.append(f"peak at {m.frequency_hz:.4g} Hz: the half-power damping "
-                            f"{hp[i]:.3g} and the modal fit's {m.damping_ratio:.3g} differ by "
-                            "more than 25 % on a resolved peak: another mode or a nonlinearity "
-                            "shapes the peak")
     return FRF(frequency=f, h1=h1, h2=h2, coherence=np.clip(coh, 0.0, 1.0),
                natural_frequencies=fn,
                natural_frequency_ci95=np.array([m.frequency_ci95_hz for m in modes]
