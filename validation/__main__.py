@@ -9,6 +9,9 @@ never happen); and the peer method's bias and coverage in the same trials.
 Targets (the issue's): at 1 % noise C_i within 2 % and C_f within 5 % (bias), at 3 % within 5 %
 and 10 %; coverage 90 to 98 %; natural frequencies within 0.2 %.
 
+Real recordings that PyPI packages ship follow, against their documented reference values
+(:mod:`validation.real_data`; the filter ``real`` selects them alone).
+
 Usage: ``python -m validation [TRIALS] [NAME FILTER...]`` (default 40 trials).
 """
 
@@ -18,6 +21,7 @@ import math
 import sys
 import time
 
+from validation import real_data
 from validation.cases import matrix
 from validation.run import Row, evaluate
 
@@ -89,10 +93,14 @@ def main() -> int:
     args = sys.argv[1:]
     trials = int(args.pop(0)) if args and args[0].isdigit() else 40
     cases = [c for c in matrix() if not args or any(a in c.name for a in args)]
+    real = [n for n in real_data.RECORDS if not args or any(a in f"real {n}" for a in args)]
     started = time.perf_counter()
     print(f"validation: {len(cases)} cases x {trials} trials ...", file=sys.stderr, flush=True)
-    rows = evaluate(cases, trials)
-    print(render(rows))
+    if cases:
+        print(render(evaluate(cases, trials)))
+    if real:
+        print(f"\nReal recordings ({', '.join(real)}; validation/real_data.py):\n")
+        print(real_data.render(real_data.evaluate(real)))
     print(f"\n{len(cases) * trials} trials in {time.perf_counter() - started:.0f} s",
           file=sys.stderr)
     return 0

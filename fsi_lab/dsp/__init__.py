@@ -23,5 +23,8 @@ integrate
 backbone, damping, equivalent_damping
     Backbone and damping curves; C_i and C_f by harmonic balance (the paper's Eqs. 24-25).
 frf
-    H1 / H2 transfer functions.
+    H1 / H2 transfer functions; natural frequencies and damping ratios of their peaks.
+modal_fit
+    A mode fitted to an FRF peak through the Welch estimate's leakage, with a jackknife
+    interval.
 """

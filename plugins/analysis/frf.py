@@ -29,8 +29,9 @@ PLUGIN = AnalysisPlugin(
     ),
     run=Deferred("fsi_lab.plugins.analysis._frf:run"),
     help="H1 and H2 frequency response of the channel over the reference channel (base "
-         "acceleration) by Welch averaging, coherence, natural frequencies by interpolated "
-         "peak picking and half-power damping ratios.",
+         "acceleration) by Welch averaging, coherence; natural frequencies and damping ratios "
+         "of the peaks by a modal fit that models the window's leakage, with 95 % intervals; "
+         "half-power damping ratios beside them.",
 )
 
 

@@ -214,6 +214,13 @@ def test_frf_plugin_with_and_without_reference():
     frf_summary = summary["tip"]["frf"]
     assert frf_summary["natural_frequencies_hz"][0] == pytest.approx(18.67, rel=0.01)
     assert frf_summary["damping_ratios"][0] == pytest.approx(0.02, rel=0.15)
+    lo, hi = frf_summary["damping_ratio_ci95"][0]
+    assert lo < frf_summary["damping_ratios"][0] < hi
+    assert frf_summary["half_power_damping_ratios"][0] == pytest.approx(0.02, rel=0.15)
+    assert frf_summary["resolution_hz"] == pytest.approx(fs / 2 ** 14)
+    assert isinstance(frf_summary["warnings"], list)
+    assert groups["tip/frf"]["datasets"]["damping_ratio_ci95"].shape == (
+        len(frf_summary["damping_ratios"]), 2)
     assert groups["tip/frf"]["units"]["h1_magnitude"] == "m/s/(m/s^2)"
     _, summary = run(channels, ("frf",), analysis={"channels": ["tip"]})
     assert "reference" in summary["tip"]["errors"][0]["message"]
