@@ -1,25 +1,111 @@
 """Runs the profile's analysis chain over the channels of a run and collects the results.
 
-A failing analysis is recorded (in the run file and the summary) with its reason; the chain goes
-on with the other channels, and with the analyses that do not need the failed one.
+Each analysis declares the kinds of typed result it requires, uses and provides
+(:class:`fsi_lab.contract.AnalysisPlugin`); :func:`check_chain` holds a chain to them when the
+profile is checked, and :func:`run_chain` hands each analysis the typed results of the earlier
+ones and the channel's shared record (:class:`fsi_lab.contract.SharedRecord`: its spectrum,
+computed once). A failing analysis is recorded (in the run file and the summary) with its
+reason; the chain goes on with the other channels, and with the analyses that do not need the
+failed one.
 """
 
 from __future__ import annotations
 
 import traceback
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
-from fsi_lab.contract import AnalysisContext, AnalysisResult, ChannelData
-from fsi_lab.errors import FsiLabError
+from fsi_lab.contract import (
+    AnalysisContext,
+    AnalysisPlugin,
+    AnalysisResult,
+    ChannelData,
+    Result,
+    SharedRecord,
+)
+from fsi_lab.errors import FsiLabError, ParameterError
 from fsi_lab.events import EventBus, Progress
 from fsi_lab.registry import Registry
-from fsi_lab.runfile import write_analysis
 
 #: Chain used for data that comes without a profile (``fsi-lab import``), where installed.
 DEFAULT_CHAIN = ("spectrum", "hvd", "integrate", "instantaneous", "backbone", "damping",
                  "equivalent-damping")
 ANALYSED_QUANTITIES = ("velocity", "displacement")
+
+
+def check_chain(chain: Sequence[str], registry: Registry, where: str = "analysis.chain") -> None:
+    """Check that every analysis of ``chain`` finds what it declares it needs before it.
+
+    Each kind an analysis ``requires`` must be provided by an analysis earlier in the chain
+    (or, as the contract read before typed results, name an analysis earlier in the chain); a
+    kind it ``uses`` must not be provided only by an analysis after it (it would do without it,
+    and the analyses after both would mix the two).
+
+    Parameters
+    ----------
+    chain
+        Names of the analysis plugins, in order (each must be loaded).
+    registry
+        Loaded plugins.
+    where
+        Profile key named in the message.
+
+    Raises
+    ------
+    ParameterError
+        Naming the analysis, the kind it misses, and which analysis to add or move.
+    """
+    plugins = [registry.get("analysis", name) for name in chain]
+    installed = [registry.get("analysis", name) for name in registry.names("analysis")]
+    for i, plugin in enumerate(plugins):
+        before, after = plugins[:i], plugins[i + 1:]
+        for kind in plugin.requires:
+            if any(p.provides == kind or p.name == kind for p in before):
+                continue
+            later = [p.name for p in after if p.provides == kind or p.name == kind]
+            givers = [p.name for p in installed if p.provides == kind or p.name == kind]
+            if later:
+                hint = f"{later[0]} provides it after {plugin.name}: move {later[0]} before it"
+            elif givers:
+                hint = f"add {' or '.join(givers)} before {plugin.name}"
+            else:
+                hint = "no installed analysis provides it"
+            raise ParameterError(f"{where}: {plugin.name} requires the {kind!r} result, which no "
+                                 f"analysis before it in the chain provides; {hint} (chain: "
+                                 f"{', '.join(chain)})")
+        for kind in plugin.uses:
+            if any(p.provides == kind for p in before):
+                continue
+            later = [p.name for p in after if p.provides == kind]
+            if later:
+                raise ParameterError(
+                    f"{where}: {plugin.name} uses the {kind!r} result of {later[0]}, which runs "
+                    f"after it; move {later[0]} before {plugin.name} (chain: "
+                    f"{', '.join(chain)})")
+
+
+def _stored(plugin: AnalysisPlugin, out: Any) -> tuple[AnalysisResult, Result | None]:
+    """What the chain keeps of what ``plugin.run`` returned: the stored form and the typed
+    result handed to later analyses; TypeError saying what the plugin should return."""
+    if isinstance(out, Result):
+        if out.kind != plugin.provides:
+            declared = f"declares provides={plugin.provides!r}" if plugin.provides else \
+                "declares no provides"
+            raise TypeError(f"returned a result of kind {out.kind!r} but {declared}; declare "
+                            f"provides={out.kind!r}")
+        record = out.record()
+        if not isinstance(record, AnalysisResult):
+            raise TypeError(f"{type(out).__name__}.record() returned {type(record).__name__}, "
+                            "expected AnalysisResult")
+        return record, out
+    if isinstance(out, AnalysisResult):
+        if plugin.provides is not None:
+            raise TypeError(f"returned an AnalysisResult but declares provides="
+                            f"{plugin.provides!r}; return the typed result of that kind (an "
+                            "fsi_lab.contract.Result), whose record() is stored")
+        return out, None
+    raise TypeError(f"returned {type(out).__name__}, expected "
+                    + ("a Result" if plugin.provides else "an AnalysisResult"))
 
 
 def merge_summary(into: dict[str, Any], part: Mapping[str, Any]) -> None:
@@ -99,29 +185,29 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
         channel_summary: dict[str, Any] = {"components": []}
         results: dict[str, AnalysisResult] = {}
         failed: dict[str, str] = {}
+        provided: dict[str, Result] = {}
+        unavailable: dict[str, str] = {}
+        shared = SharedRecord(channels[channel_name])
         for plugin_name in chain:
             bus.emit(Progress("analysis", done / total, f"{channel_name}: {plugin_name}"))
             done += 1
             key = f"{channel_name}/{plugin_name}"
             plugin_params = dict(params.get(plugin_name, {}))
+            plugin = None
             try:
                 plugin = registry.get("analysis", plugin_name)
-                missing = [r for r in plugin.requires if r not in results]
+                missing = [_missing(kind, unavailable, failed) for kind in plugin.requires
+                           if kind not in provided and kind not in results]
                 if missing:
-                    raise FsiLabError(
-                        f"needs {', '.join(missing)} earlier in the chain on this channel, "
-                        "which did not run or failed"
-                    )
+                    raise FsiLabError(f"needs {'; '.join(missing)}")
                 context = AnalysisContext(
-                    channel=channels[channel_name], channels=channels, results=results,
+                    channel=channels[channel_name], channels=channels, results=dict(results),
                     specimen=specimen, mass_per_length=mass_per_length,
                     reference=analysis.get("reference"), failed=dict(failed),
+                    provided=dict(provided), unavailable=dict(unavailable), shared=shared,
+                    plugin=plugin_name, declared=plugin.requires + plugin.uses,
                 )
-                result = plugin.run(context, plugin_params)
-                if not isinstance(result, AnalysisResult):
-                    raise TypeError(
-                        f"returned {type(result).__name__}, expected AnalysisResult"
-                    )
+                record, typed = _stored(plugin, plugin.run(context, plugin_params))
             except Exception as exc:  # noqa: BLE001 - recorded, the chain goes on
                 message = str(exc) if isinstance(exc, FsiLabError) else (
                     f"{type(exc).__name__}: {exc}"
@@ -136,14 +222,29 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                                          "traceback": traceback.format_exc()},
                                "params": plugin_params}
                 failed[plugin_name] = message
+                if plugin is not None and plugin.provides is not None:
+                    provided.pop(plugin.provides, None)
+                    unavailable[plugin.provides] = plugin_name
                 continue
-            results[plugin_name] = result
-            groups[key] = {"datasets": result.datasets, "units": result.units,
-                           "attrs": {"status": "ok", **result.attrs}, "params": plugin_params}
-            merge_summary(channel_summary, result.summary)
+            results[plugin_name] = record
+            if typed is not None:
+                provided[typed.kind] = typed
+                unavailable.pop(typed.kind, None)
+            groups[key] = {"datasets": record.datasets, "units": record.units,
+                           "attrs": {"status": "ok", **record.attrs}, "params": plugin_params}
+            merge_summary(channel_summary, record.summary)
         summary[channel_name] = channel_summary
     bus.emit(Progress("analysis", 1.0, "analysis done"))
     return groups, summary
+
+
+def _missing(kind: str, unavailable: Mapping[str, str], failed: Mapping[str, str]) -> str:
+    """Why a required ``kind`` is not there, in words."""
+    provider = unavailable.get(kind) or (kind if kind in failed else None)
+    if provider is not None:
+        return (f"the {kind!r} result, which {provider} failed to give on this channel "
+                f"({failed.get(provider, 'failed')})")
+    return f"the {kind!r} result earlier in the chain on this channel, which did not run"
 
 
 def analyse_and_store(path: Path, channels: Mapping[str, ChannelData],
@@ -152,6 +253,8 @@ def analyse_and_store(path: Path, channels: Mapping[str, ChannelData],
                       mass_per_length: float | None = None,
                       bus: EventBus | None = None) -> dict[str, Any]:
     """Run the chain and store it in the run file; returns the ``analyze --json`` object."""
+    from fsi_lab.runfile import write_analysis  # (h5py: not needed to check a chain)
+
     groups, channel_summaries = run_chain(channels, analysis, params, registry, specimen,
                                           mass_per_length, bus)
     summary = {"run": str(path), "channels": channel_summaries}

@@ -355,6 +355,9 @@ def cmd_plugins(args) -> int:
         descriptor = registry.descriptors.get(record["kind"] or "", {}).get(record["name"])
         record["params"] = [p.as_dict() for p in descriptor.params] if descriptor else []
         record["help"] = getattr(descriptor, "help", "") if descriptor else ""
+        if record["kind"] == "analysis" and descriptor:   # the result kinds it declares
+            record.update(requires=list(descriptor.requires), uses=list(descriptor.uses),
+                          provides=descriptor.provides)
     records.sort(key=lambda r: (r["kind"] or "", r["name"]))
     commands = [{"name": command.name if command else ep.name,
                  "distribution": ep.dist.name if ep.dist else "",
@@ -372,6 +375,11 @@ def cmd_plugins(args) -> int:
         if args.verbose:
             if record["kind"] == "command":
                 print(f"    fsi-lab {record['name']}: {record['help']}")
+            for key in ("requires", "uses"):
+                if record.get(key):
+                    print(f"    {key} {', '.join(record[key])}")
+            if record.get("provides"):
+                print(f"    provides {record['provides']}")
             for p in record["params"]:
                 unit = f" [{p['unit']}]" if p["unit"] else ""
                 print(f"    {p['name']}{unit} = {p['default']!r}: {p['help']}")

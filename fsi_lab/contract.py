@@ -9,16 +9,19 @@ from __future__ import annotations
 
 import abc
 import importlib
-from collections.abc import Callable, Iterator, Mapping, MutableMapping
+from collections.abc import Callable, Hashable, Iterator, Mapping, MutableMapping
 from dataclasses import dataclass, field, fields
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
+from fsi_lab.errors import AnalysisError
 from fsi_lab.params import Param
 
 KINDS = ("instrument", "excitation", "analysis")
 ROLES = ("source", "amplifier", "vibrometer", "acquisition")
+
+R = TypeVar("R", bound="Result")
 
 
 @dataclass(frozen=True)
@@ -491,7 +494,10 @@ class ChannelData:
 
 @dataclass
 class AnalysisResult:
-    """What an analysis returns for one channel.
+    """What the run file and the JSON summary keep of one analysis on one channel.
+
+    A typed :class:`Result` gives it from :meth:`Result.record`; an analysis that provides
+    nothing to later analyses may return it directly.
 
     Attributes
     ----------
@@ -505,7 +511,9 @@ class AnalysisResult:
         JSON-ready dictionary merged into the channel's summary (``fsi-lab analyze --json``);
         a ``"components"`` list is merged with other plugins' entries by ``"index"``.
     values
-        Any Python object handed to later analyses of the chain (``context.results``).
+        Any Python object, found by later analyses in ``context.results[plugin].values`` (how
+        results passed between analyses before typed results; kept for the plugins written
+        so).
     """
 
     datasets: dict[str, np.ndarray] = field(default_factory=dict)
@@ -513,6 +521,129 @@ class AnalysisResult:
     attrs: dict[str, Any] = field(default_factory=dict)
     summary: dict[str, Any] = field(default_factory=dict)
     values: Any = None
+
+
+class Result(abc.ABC):
+    """A typed result that an analysis hands to the later analyses of the chain.
+
+    A subclass (normally a dataclass) names its :attr:`kind`, the name analyses give in their
+    ``requires``, ``uses`` and ``provides``; a later analysis receives the object itself from
+    :meth:`AnalysisContext.result`, and the run file and the JSON summary keep what
+    :meth:`record` gives.
+    """
+
+    #: Name of the result kind: lower-case words joined by dashes (``"components"``).
+    kind: ClassVar[str] = ""
+
+    @abc.abstractmethod
+    def record(self) -> AnalysisResult:
+        """What the run file (datasets with units, attributes) and the summary keep of it."""
+
+
+def kind_name(kind: str | type[Result]) -> str:
+    """The name of a result kind given by name or by its :class:`Result` class.
+
+    Raises
+    ------
+    TypeError
+        Neither a non-empty string nor a :class:`Result` subclass with a ``kind``.
+    """
+    if isinstance(kind, type) and issubclass(kind, Result):
+        if not kind.kind:
+            raise TypeError(f"{kind.__name__} names no kind (set its class attribute 'kind')")
+        return kind.kind
+    if isinstance(kind, str) and kind:
+        return kind
+    raise TypeError(f"{kind!r} is not a result kind: expected its name (a non-empty string) or "
+                    "its fsi_lab.contract.Result class")
+
+
+@dataclass(frozen=True)
+class RecordSpectrum:
+    """Single-sided amplitude spectrum of a whole record
+    (:func:`fsi_lab.dsp.spectrum.amplitude_spectrum`, detrended), zero-padded to a fast FFT
+    length.
+
+    Attributes
+    ----------
+    frequency
+        Frequencies, Hz, from 0 to ``sample_rate / 2`` in steps of ``sample_rate / nfft``.
+    amplitude
+        Amplitude in the unit of the record: a steady sinusoid of amplitude A shows a peak of
+        height A.
+    window
+        Window (:data:`fsi_lab.dsp.choices.WINDOWS`).
+    samples
+        Length of the record.
+    nfft
+        FFT length: the smallest fast length (``scipy.fft.next_fast_len``) of at least
+        ``samples`` (a record of 5 998 615 samples is transformed as 6 000 000: 0.2 s instead
+        of 1.3 s).
+    sample_rate
+        Hz.
+    """
+
+    frequency: np.ndarray
+    amplitude: np.ndarray
+    window: str
+    samples: int
+    nfft: int
+    sample_rate: float
+
+
+def record_spectrum(x: Any, sample_rate: float, window: str = "decay") -> RecordSpectrum:
+    """The :class:`RecordSpectrum` of samples ``x`` (any unit) taken at ``sample_rate`` Hz.
+
+    Raises
+    ------
+    AnalysisError
+        As :func:`fsi_lab.dsp.spectrum.amplitude_spectrum` (non-finite or constant samples,
+        too few of them, an unknown window).
+    """
+    import scipy.fft
+
+    from fsi_lab.dsp.spectrum import amplitude_spectrum
+
+    samples = int(np.size(x))
+    nfft = scipy.fft.next_fast_len(max(samples, 1), real=True)
+    freqs, amplitude = amplitude_spectrum(x, sample_rate, window=window, nfft=nfft)
+    return RecordSpectrum(freqs, amplitude, window, samples, nfft, float(sample_rate))
+
+
+class SharedRecord:
+    """What the analyses of one channel share, each computed once, when first asked: the
+    record's spectrum per window (:meth:`spectrum`) and other values derived from the record
+    (:meth:`once`).
+
+    The chain makes one for each analysed channel and gives it to every analysis of that
+    channel (:attr:`AnalysisContext.shared`), so that a 600 s record's spectrum is computed once
+    for the chain rather than once per analysis that looks at it.
+
+    Parameters
+    ----------
+    channel
+        The channel whose record is shared.
+    """
+
+    def __init__(self, channel: ChannelData) -> None:
+        self.channel = channel
+        self._spectra: dict[str, RecordSpectrum] = {}
+        self._values: dict[Hashable, Any] = {}
+
+    def spectrum(self, window: str = "decay") -> RecordSpectrum:
+        """The record's :class:`RecordSpectrum` with ``window``, computed on the first call."""
+        found = self._spectra.get(window)
+        if found is None:
+            found = record_spectrum(self.channel.data, self.channel.sample_rate, window)
+            self._spectra[window] = found
+        return found
+
+    def once(self, key: Hashable, compute: Callable[[], Any]) -> Any:
+        """``compute()`` on the first call with ``key``, the same object on the later ones (a
+        value derived from the record that several analyses use, such as its noise level)."""
+        if key not in self._values:
+            self._values[key] = compute()
+        return self._values[key]
 
 
 @dataclass
@@ -526,7 +657,8 @@ class AnalysisContext:
     channels
         Every channel of the run by name (for transfer functions and the modal model).
     results
-        Results of the analyses run earlier in the chain on this channel, by plugin name.
+        What the analyses that ran earlier in the chain on this channel keep
+        (:class:`AnalysisResult`), by plugin name.
     specimen
         The beam and fluid (:class:`fsi_lab.specimen.Specimen`) when the run has one, else None.
     mass_per_length
@@ -538,6 +670,19 @@ class AnalysisContext:
     failed
         Analyses that ran earlier in the chain on this channel and failed, by plugin name, with
         their error messages (an analysis that would use one must not quietly do without).
+    provided
+        Typed results of the analyses that ran earlier on this channel, by kind: read them with
+        :meth:`result`.
+    unavailable
+        Kinds whose analysis failed earlier on this channel, with the name of that analysis.
+    shared
+        What the analyses of this channel share (:class:`SharedRecord`: its spectrum); made
+        for the channel when not given.
+    plugin
+        Name of the analysis given the context, for messages (None when called directly).
+    declared
+        Kinds the analysis declared in ``requires`` and ``uses``: :meth:`result` gives no
+        other (None: any, when an analysis is called directly).
     """
 
     channel: ChannelData
@@ -548,22 +693,103 @@ class AnalysisContext:
     reference: str | None = None
     progress: Callable[[float], None] = lambda fraction: None
     failed: Mapping[str, str] = field(default_factory=dict)
+    provided: Mapping[str, Result] = field(default_factory=dict)
+    unavailable: Mapping[str, str] = field(default_factory=dict)
+    shared: SharedRecord | None = None
+    plugin: str | None = None
+    declared: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        if self.shared is None:
+            self.shared = SharedRecord(self.channel)
+
+    def result(self, kind: str | type[R]) -> R | None:
+        """The typed result of ``kind`` (its name, or its :class:`Result` class) that an
+        earlier analysis provided on this channel; None when none in the chain provides it.
+
+        Raises
+        ------
+        AnalysisError
+            The analysis that provides it failed earlier on this channel (the message says
+            which and why): an analysis must not quietly do without a result the chain asked
+            for.
+        TypeError
+            The analysis reads a kind it declared in neither ``requires`` nor ``uses``, or the
+            result is not of the class asked for.
+        """
+        name = kind_name(kind)
+        if self.declared is not None and name not in self.declared:
+            raise TypeError(f"{self.plugin or 'the analysis'} reads the {name!r} result but "
+                            "declares it in neither requires nor uses; declare it (uses when "
+                            "the analysis can do without it)")
+        found = self.provided.get(name)
+        if found is not None:
+            if isinstance(kind, type) and not isinstance(found, kind):
+                raise TypeError(f"the {name!r} result is a {type(found).__name__}; expected "
+                                f"{kind.__name__}")
+            return found  # type: ignore[return-value]
+        provider = self.unavailable.get(name)
+        if provider is not None:
+            raise AnalysisError(
+                f"{provider} failed earlier in the chain on this channel, so its {name!r} "
+                f"result is missing ({provider}: {self.failed.get(provider, 'failed')})")
+        return None
+
+    def spectrum(self, window: str = "decay") -> RecordSpectrum:
+        """The channel's spectrum with ``window``, shared by the analyses of the channel
+        (:meth:`SharedRecord.spectrum`)."""
+        assert self.shared is not None
+        return self.shared.spectrum(window)
+
+
+def _kinds(value: Any, what: str, plugin: str) -> tuple[str, ...]:
+    """``value`` (a tuple of kinds) as names; TypeError saying what to write otherwise."""
+    if isinstance(value, str) or (isinstance(value, type) and issubclass(value, Result)):
+        raise TypeError(f"analysis {plugin!r}: {what} must be a tuple of result kinds; got "
+                        f"{value!r}: write {what}=({kind_name(value)!r},)")
+    try:
+        return tuple(kind_name(k) for k in value)
+    except TypeError as exc:
+        raise TypeError(f"analysis {plugin!r}: {what}: {exc}") from None
 
 
 @dataclass(frozen=True)
 class AnalysisPlugin:
     """An analysis step of the chain.
 
-    ``run(context, params)`` returns an :class:`AnalysisResult` or raises
+    ``run(context, params)`` returns a typed :class:`Result` of the kind the plugin
+    ``provides`` (later analyses receive it; the run file and the summary keep its
+    :meth:`Result.record`), or an :class:`AnalysisResult` when it provides nothing; it raises
     :class:`fsi_lab.errors.AnalysisError` with a message naming the condition that prevents it.
-    ``requires`` names analyses that must have run earlier on the same channel.
+
+    ``requires`` names the kinds of result (:class:`Result` classes or their names) the
+    analysis cannot do without: the profile check refuses a chain where no analysis before it
+    provides one, and the chain does not run it on a channel where the analysis that provides
+    one failed. ``uses`` names those it uses when an earlier analysis provides them (it does
+    without otherwise); ``provides`` the kind of its own result. A name in ``requires`` that no
+    analysis provides but that is an analysis of the chain (``requires=("hvd",)``, as the
+    contract read before typed results) asks for that analysis to run earlier on the channel.
     """
 
     name: str
     params: tuple[Param, ...]
-    run: Callable[[AnalysisContext, dict[str, Any]], AnalysisResult]
+    run: Callable[[AnalysisContext, dict[str, Any]], Result | AnalysisResult]
     help: str = ""
-    requires: tuple[str, ...] = ()
+    requires: tuple[Any, ...] = ()
+    provides: Any = None
+    uses: tuple[Any, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "requires", _kinds(self.requires, "requires", self.name))
+        object.__setattr__(self, "uses", _kinds(self.uses, "uses", self.name))
+        if self.provides is not None:
+            if isinstance(self.provides, (tuple, list)):
+                raise TypeError(f"analysis {self.name!r}: provides names one result kind (the "
+                                f"kind of the Result its run returns); got {self.provides!r}")
+            try:
+                object.__setattr__(self, "provides", kind_name(self.provides))
+            except TypeError as exc:
+                raise TypeError(f"analysis {self.name!r}: provides: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -610,6 +836,10 @@ def check_descriptor(kind: str, descriptor: Any) -> None:
         raise ValueError(
             f"{descriptor.name}: role {descriptor.role!r} is not one of {', '.join(ROLES)}"
         )
+    if kind == "analysis" and descriptor.provides is not None \
+            and descriptor.provides in descriptor.requires + descriptor.uses:
+        raise ValueError(f"{descriptor.name}: provides {descriptor.provides!r} and also "
+                         "requires or uses it; an analysis reads what earlier ones provide")
     if kind == "instrument":
         for setting in ROLE_INTERFACES[descriptor.role].run_settings:
             problem = setting.problem(descriptor.params)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
+from fsi_lab.chain import check_chain
 from fsi_lab.contract import ROLES
 from fsi_lab.errors import ParameterError, PluginError, ProfileError
 from fsi_lab.inputfiles import MAX_PROFILE_BYTES, nesting, read_text
@@ -449,6 +450,7 @@ def _validate(raw, path, text, registry, overrides, complete=True, bench_kept=Tr
         descriptor = _plugin(registry, "analysis", name, f"analysis.{name}")
         analysis_params[name] = validate(descriptor.params, plugin_tables.pop(name, {}),
                                          f"analysis.{name}")
+    check_chain(analysis["chain"], registry)   # each finds what it requires before it
     # A chain shortened with --set leaves the other plugins' tables unused, not wrong.
     chain_overridden = any(item.partition("=")[0].strip() == "analysis.chain"
                            for item in overrides)

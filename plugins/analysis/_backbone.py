@@ -7,24 +7,20 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.contract import AnalysisContext, AnalysisResult
+from fsi_lab.contract import AnalysisContext
 from fsi_lab.dsp._signal import fail
 from fsi_lab.dsp.backbone import Backbone
 from fsi_lab.dsp.decays import smooth_per_decay
 from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
 from fsi_lab.plugins.analysis._chain import (
     Component,
-    decay_attrs,
     decay_labels,
-    decay_summary,
     displacement_components,
-    error_entries,
     guarded,
-    jsonable,
     per_component,
-    stack_rows,
     velocity_components,
 )
+from fsi_lab.plugins.analysis.results import Backbones
 
 
 def decay_backbone(inst: Instantaneous, c: Component, smooth: int = 0,
@@ -62,7 +58,7 @@ def trusted_backbone(c: Component, params: dict[str, Any], plugin: str,
         return decay_backbone(inst, c, params["smooth_points"], params.get("decay_only", True))
 
 
-def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+def run(context: AnalysisContext, params: dict[str, Any]) -> Backbones:
     with guarded("backbone", context):
         disp = displacement_components(context, "backbone")
     done, errors = per_component("backbone", context, disp,
@@ -75,33 +71,5 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                 vdone[c.index] = trusted_backbone(c, params, "backbone", context)
             except Exception:  # noqa: BLE001 - the velocity backbone is optional
                 pass
-    count = len(disp)
-    t0 = {c.index: c.t0 for c in disp}
-    entries = []
-    for k, bb in done.items():
-        e = {"index": k, "backbone": {"amplitude": jsonable(bb.amplitude),
-                                      "frequency_hz": jsonable(bb.frequency),
-                                      **decay_summary(bb.decays, t0[k])}}
-        if k in vdone:
-            e["backbone_velocity"] = {"amplitude": jsonable(vdone[k].amplitude),
-                                      "frequency_hz": jsonable(vdone[k].frequency)}
-        entries.append(e)
-    err_entries, err_attrs = error_entries(errors, "backbone")
-    datasets = {"time": stack_rows({k: b.time for k, b in done.items()}, count),
-                "amplitude": stack_rows({k: b.amplitude for k, b in done.items()}, count),
-                "frequency": stack_rows({k: b.frequency for k, b in done.items()}, count),
-                "decay": stack_rows({k: b.decay.astype(np.float64) for k, b in done.items()},
-                                    count)}
-    units = {"time": "s", "amplitude": "m", "frequency": "Hz", "decay": ""}
-    if vdone:
-        datasets["velocity_amplitude"] = stack_rows({k: b.amplitude for k, b in vdone.items()},
-                                                    count)
-        datasets["velocity_frequency"] = stack_rows({k: b.frequency for k, b in vdone.items()},
-                                                    count)
-        units.update(velocity_amplitude="m/s", velocity_frequency="Hz")
-    return AnalysisResult(datasets=datasets, units=units,
-                          attrs={"rows": "one row per component, padded with NaN",
-                                 **decay_attrs({k: b.decays for k, b in done.items()}, t0),
-                                 **err_attrs},
-                          summary={"components": entries + err_entries},
-                          values={"displacement": done, "velocity": vdone})
+    return Backbones(displacement=done, velocity=vdone, t0s={c.index: c.t0 for c in disp},
+                     count=len(disp), errors=errors)

@@ -2,15 +2,20 @@
 
 Conventions of the chain (documented for plugin users in each plugin's help):
 
+- Results pass between the plugins as typed objects (:mod:`.results`): each plugin declares
+  the kinds it requires, uses and provides, and reads them with ``context.result(kind)``.
 - Components are numbered from 0 (``"index"`` in the summary, row of the 2-D HVD datasets).
-  When ``hvd`` ran earlier on the channel its components are analysed one by one; otherwise
-  the whole channel is component 0.
+  When ``hvd`` ran earlier on the channel its components (:class:`.results.Components`) are
+  analysed one by one; otherwise the whole channel is component 0.
 - Amplitudes in summaries are in metres of displacement (``integrate`` output when it ran,
   else the channel integrated on the fly, or the channel itself if it is a displacement).
 - A failure on one component is recorded (``summary`` entry ``"error"`` and attribute
-  ``component_<k>_error``) and the others go on; the plugin fails only if every component does.
-  A component ``hvd`` marks as not analysable (one that switches between two modes whose
-  envelopes cross) carries ``hvd``'s message through every later plugin instead of results.
+  ``component_<k>_error``, from the typed result's ``errors``) and the others go on; the plugin
+  fails only if every component does. A component ``hvd`` refuses
+  (:attr:`.results.Components.refused`: one that switches between two modes whose envelopes
+  cross) carries ``hvd``'s message through every later plugin instead of results.
+- The channel's spectrum is computed once for the whole chain (``context.spectrum``, at a fast
+  FFT length), and so is its noise level (:func:`channel_noise`).
 - Cycles whose amplitude is below 10 x the noise left in a component are not measured (unless
   the plugin's ``min_amplitude`` is set): the white-noise RMS of the raw channel (from its
   spectrum above 3 x the dominant frequency), scaled to the component's band (an HVD component
@@ -31,15 +36,30 @@ from __future__ import annotations
 
 import math
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from fsi_lab.contract import AnalysisContext
+from fsi_lab.contract import AnalysisContext, RecordSpectrum, record_spectrum
 from fsi_lab.dsp.components import BandComponents
-from fsi_lab.dsp.decays import FreeDecays, split_decays
+from fsi_lab.dsp.decays import FreeDecays, decay_segments, split_decays
+from fsi_lab.dsp.spectrum import (
+    MIN_SEGMENT,
+    SpectralPeaks,
+    averaged_spectrum,
+    find_peaks_interpolated,
+)
 from fsi_lab.errors import AnalysisError
+from fsi_lab.plugins.analysis.results import (  # noqa: F401 - the plugins import them from here
+    Components,
+    Integrated,
+    decay_attrs,
+    decay_summary,
+    error_entries,
+    jsonable,
+    stack_rows,
+)
 
 #: Dynamic range of HVD components: cycles below this fraction of the largest envelope of the
 #: record are decomposition residue (about 1e-4) rather than signal.
@@ -92,19 +112,8 @@ class Component:
     frequency: float | None = None
 
 
-@dataclass
-class ComponentSignals:
-    """Signals per component handed down the chain (``integrate`` values)."""
-
-    quantity: str
-    unit: str
-    sample_rate: float
-    signals: dict[int, np.ndarray]
-    edge_masks: dict[int, np.ndarray | None]
-    noise_floors: dict[int, float | None] = field(default_factory=dict)
-    settles: dict[int, float] = field(default_factory=dict)
-    t0s: dict[int, float] = field(default_factory=dict)
-    frequencies: dict[int, float | None] = field(default_factory=dict)
+#: Signals per component handed down the chain: the ``integrate`` plugin's typed result.
+ComponentSignals = Integrated
 
 
 def where(plugin: str, context: AnalysisContext) -> str:
@@ -122,13 +131,11 @@ def guarded(plugin: str, context: AnalysisContext) -> Iterator[None]:
         raise AnalysisError(text if text.startswith(prefix) else f"{prefix}: {text}") from None
 
 
-_NOISE_CACHE: dict[int, tuple[Any, tuple[float, float]]] = {}
-
-
 def channel_noise(context: AnalysisContext) -> tuple[float, float]:
     """White-noise RMS of the raw channel and its dominant frequency.
 
-    Computed once per channel data array (every plugin of the chain asks).
+    Computed once per channel for the whole chain (every plugin of the chain asks), from the
+    channel's shared spectra (``context.spectrum``).
 
     Parameters
     ----------
@@ -138,36 +145,69 @@ def channel_noise(context: AnalysisContext) -> tuple[float, float]:
     Returns
     -------
     tuple of float
-        The RMS (unit of the channel) of the white noise, from the channel's spectrum above
-        3 x the dominant frequency (:func:`.instantaneous.noise_rms`), and that dominant
-        frequency, Hz; ``(0.0, 0.0)`` when the spectrum shows no peak.
+        The RMS (unit of the channel) of the white noise, from the channel's Hann spectrum
+        above 3 x the dominant frequency (as :func:`fsi_lab.dsp.instantaneous.noise_rms`), and
+        that dominant frequency (the largest peak of its ``decay``-window spectrum), Hz;
+        ``(0.0, 0.0)`` when the spectrum shows no peak.
     """
-    data = context.channel.data
-    hit = _NOISE_CACHE.get(id(data))
-    if hit is not None and hit[0] is data:
-        return hit[1]
-    value = _channel_noise_uncached(context)
-    if len(_NOISE_CACHE) > 16:
-        _NOISE_CACHE.clear()
-    _NOISE_CACHE[id(data)] = (data, value)
-    return value
+    assert context.shared is not None
+    return context.shared.once("channel_noise", lambda: _channel_noise(context))
 
 
-def _channel_noise_uncached(context: AnalysisContext) -> tuple[float, float]:
-    from fsi_lab.dsp.instantaneous import noise_rms
-    from fsi_lab.dsp.spectrum import spectral_peaks
-
-    ch = context.channel
-    x = np.asarray(ch.data, dtype=np.float64)
+def _channel_noise(context: AnalysisContext) -> tuple[float, float]:
     try:
-        peaks = spectral_peaks(x, ch.sample_rate, window="decay", min_relative=0.05,
-                               max_peaks=1, smoothing=0.05)
+        decay = context.spectrum("decay")
+        peaks = find_peaks_interpolated(decay.frequency, decay.amplitude, min_relative=0.05,
+                                        max_peaks=1, smoothing=0.05, _func="spectral_peaks")
     except AnalysisError:
         return 0.0, 0.0
     if peaks.frequencies.size == 0:
         return 0.0, 0.0
     f_dom = float(peaks.frequencies[0])
-    return noise_rms(x, float(ch.sample_rate), f_dom), f_dom
+    return noise_from_spectrum(context.spectrum("hann"), f_dom), f_dom
+
+
+def noise_from_spectrum(spectrum: RecordSpectrum, f_dom: float) -> float:
+    """RMS of the white noise in a record, from the median of its Hann amplitude spectrum
+    above 3 ``f_dom`` (Hz), as :func:`fsi_lab.dsp.instantaneous.noise_rms` finds it: a
+    Rayleigh-distributed bin's median is ``sigma sqrt(ln 2) sqrt(sum w^2)`` before the
+    amplitude scaling ``2 / sum w``. 0 when fewer than 8 bins lie above."""
+    n = spectrum.samples
+    w = np.hanning(n)
+    k0 = int(np.ceil(3.0 * f_dom * spectrum.nfft / spectrum.sample_rate))
+    if k0 >= spectrum.amplitude.size - 8:
+        return 0.0
+    med = float(np.median(spectrum.amplitude[k0:])) * 0.5 * float(w.sum())
+    return med / (math.sqrt(math.log(2.0)) * math.sqrt(float(np.sum(w * w))))
+
+
+def free_decay_peaks_of(context: AnalysisContext, x: np.ndarray | None = None,
+                        min_relative: float = 0.01, smoothing: float = 0.05) -> SpectralPeaks:
+    """:func:`fsi_lab.dsp.spectrum.free_decay_peaks` of the channel (or of ``x``, samples of
+    another record at the channel's rate), from the channel's shared ``decay`` spectrum (or
+    ``x``'s own, at a fast length): the peaks of the whole record for one free decay, of its
+    decays' averaged spectrum for several (an impulse train)."""
+    fs = float(context.channel.sample_rate)
+    if x is None:
+        x = np.asarray(context.channel.data, dtype=np.float64)
+        spectrum = context.spectrum("decay")
+    else:
+        spectrum = record_spectrum(x, fs, "decay")
+    fmin = 2.0 * fs / x.size
+    peaks = find_peaks_interpolated(spectrum.frequency, spectrum.amplitude,
+                                    min_relative=min_relative, smoothing=smoothing, fmin=fmin,
+                                    _func="free_decay_peaks")
+    if peaks.frequencies.size == 0:
+        return peaks
+    segments = decay_segments(x, fs, 1.0 / float(peaks.frequencies[0]))
+    shortest = min(stop - start for start, stop in segments)
+    if len(segments) < 2 or shortest < MIN_SEGMENT:
+        return peaks
+    f, a = averaged_spectrum(x, fs, segments, window="decay")
+    merged = find_peaks_interpolated(f, a, min_relative=min_relative, smoothing=smoothing,
+                                     fmin=max(fmin, 2.0 * fs / shortest),
+                                     _func="free_decay_peaks")
+    return merged if merged.frequencies.size else peaks
 
 
 def _floor(sigma: float, fs: float, f_k: float, band: float, order: int) -> float | None:
@@ -179,23 +219,21 @@ def _floor(sigma: float, fs: float, f_k: float, band: float, order: int) -> floa
 
 
 def components(context: AnalysisContext, order: int = 0) -> list[Component]:
-    """The channel's components: HVD's if it ran earlier in the chain, else the channel.
+    """The channel's components: HVD's if it ran earlier in the chain (the ``components``
+    result), else the channel.
 
     ``order`` (integrations the caller will apply) only scales the noise floors. Raises
     AnalysisError when HVD failed earlier in the chain: the whole channel is no stand-in for
     the components the chain asked for.
     """
-    if "hvd" in context.failed:
-        raise AnalysisError(f"hvd failed earlier in the chain on this channel, so there are no "
-                            f"components to analyse (hvd: {context.failed['hvd']})")
+    found = context.result(Components)     # (raises when hvd failed earlier)
     ch = context.channel
     fs = float(ch.sample_rate)
     sigma, f_dom = channel_noise(context)
-    hvd = context.results.get("hvd")
-    if hvd is not None and isinstance(hvd.values, BandComponents):
-        return _band_components(hvd.values, ch, order)
-    if hvd is not None and hvd.values is not None:
-        res = hvd.values
+    if found is not None and isinstance(found.decomposition, BandComponents):
+        return _band_components(found.decomposition, ch, order)
+    if found is not None:
+        res = found.decomposition
         out = []
         largest = float(np.max(res.envelopes[~res.edge_mask])) if (~res.edge_mask).any() \
             else float(np.max(res.envelopes))
@@ -232,25 +270,24 @@ def _band_components(res: BandComponents, ch: Any, order: int) -> list[Component
 
 
 def displacement_components(context: AnalysisContext, plugin: str) -> list[Component]:
-    """Components as displacement (m): from ``integrate`` if it ran, else integrated here."""
+    """Components as displacement (m): from ``integrate`` if it ran (the ``integrated``
+    result), else integrated here."""
     from fsi_lab.dsp.integrate import integrate
 
-    integ = context.results.get("integrate")
-    if integ is not None and isinstance(integ.values, ComponentSignals) \
-            and integ.values.quantity == "displacement":
-        v = integ.values
-        return [Component(k, sig, "displacement", v.unit, v.sample_rate, v.edge_masks.get(k),
-                          v.noise_floors.get(k), v.settles.get(k, 0.0), v.t0s.get(k, 0.0),
-                          v.frequencies.get(k)) for k, sig in sorted(v.signals.items())]
+    context.result(Components)      # (a failed decomposition is the first reason to give)
+    integ = context.result(Integrated)
+    if integ is not None and integ.quantity == "displacement":
+        return _integrated_components(integ)
     quantity = component_quantity(context)
     if quantity == "displacement":
         return components(context)
-    hvd = context.results.get("hvd")
-    if quantity in ("velocity", "acceleration") and hvd is not None \
-            and isinstance(hvd.values, BandComponents):
+    found = context.result(Components)
+    if quantity in ("velocity", "acceleration") and found is not None \
+            and isinstance(found.decomposition, BandComponents):
         # Band by band: a band holds no zero frequency, so no high-pass is needed.
-        comps = _band_components(hvd.values.integrated(1 if quantity == "velocity" else 2),
-                                 context.channel, 0)
+        comps = _band_components(
+            found.decomposition.integrated(1 if quantity == "velocity" else 2),
+            context.channel, 0)
         order = 1 if quantity == "velocity" else 2
         return [Component(c.index, c.signal, "displacement", "m", c.sample_rate, c.edge_mask,
                           c.noise_floor / (2 * math.pi * c.frequency) ** order, 0.0, 0.0,
@@ -272,8 +309,9 @@ def displacement_components(context: AnalysisContext, plugin: str) -> list[Compo
 def component_quantity(context: AnalysisContext) -> str:
     """What the channel's components measure: the channel's quantity, or a velocity when
     the ``bands`` decomposition integrated an acceleration band by band."""
-    hvd = context.results.get("hvd")
-    if hvd is not None and isinstance(hvd.values, BandComponents) and hvd.values.integrate:
+    found = context.result(Components)
+    if found is not None and isinstance(found.decomposition, BandComponents) \
+            and found.decomposition.integrate:
         return "velocity"
     return context.channel.quantity
 
@@ -283,16 +321,12 @@ def velocity_components(context: AnalysisContext) -> list[Component] | None:
     acceleration (a displacement is not differentiated: it would amplify noise)."""
     from fsi_lab.dsp.integrate import integrate
 
-    quantity = component_quantity(context)
+    quantity = component_quantity(context)        # (raises first when hvd failed)
     if quantity == "velocity":
         return components(context)
-    integ = context.results.get("integrate")
-    if integ is not None and isinstance(integ.values, ComponentSignals) \
-            and integ.values.quantity == "velocity":
-        v = integ.values
-        return [Component(k, sig, "velocity", v.unit, v.sample_rate, v.edge_masks.get(k),
-                          v.noise_floors.get(k), v.settles.get(k, 0.0), v.t0s.get(k, 0.0),
-                          v.frequencies.get(k)) for k, sig in sorted(v.signals.items())]
+    integ = context.result(Integrated)
+    if integ is not None and integ.quantity == "velocity":
+        return _integrated_components(integ)
     if quantity == "acceleration":
         return [Component(c.index, integrate(c.signal, c.sample_rate, order=1), "velocity",
                           "m/s", c.sample_rate, c.edge_mask, c.noise_floor, c.settle, c.t0,
@@ -301,31 +335,31 @@ def velocity_components(context: AnalysisContext) -> list[Component] | None:
     return None
 
 
-def hvd_errors(context: AnalysisContext) -> dict[int, str]:
-    """The components that ``hvd`` (earlier in the chain) marked as not analysable, with its
-    message: its attributes ``component_<k>_error`` (a component that switches between two
-    modes, :func:`fsi_lab.dsp.mode_switch.mode_switches`)."""
-    res = context.results.get("hvd")
-    attrs = getattr(res, "attrs", None) or {}
-    out = {}
-    for key, message in attrs.items():
-        head, _, tail = key.partition("_")
-        index = tail[:-len("_error")] if tail.endswith("_error") else ""
-        if head == "component" and index.isdigit():
-            out[int(index)] = str(message)
-    return out
+def _integrated_components(v: Integrated) -> list[Component]:
+    """The components of ``integrate``'s result."""
+    return [Component(k, sig, v.quantity, v.unit, v.sample_rate, v.edge_masks.get(k),
+                      v.noise_floors.get(k), v.settles.get(k, 0.0), v.t0s.get(k, 0.0),
+                      v.frequencies.get(k)) for k, sig in sorted(v.signals.items())]
+
+
+def refused_components(context: AnalysisContext) -> dict[int, str]:
+    """The components that ``hvd`` (earlier in the chain) refuses, with its message
+    (:attr:`.results.Components.refused`: one that switches between two modes,
+    :func:`fsi_lab.dsp.mode_switch.mode_switches`)."""
+    found = context.result(Components)
+    return dict(found.refused) if found is not None else {}
 
 
 def per_component(plugin: str, context: AnalysisContext, comps: list[Component],
                   work: Callable[[Component], Any]) -> tuple[dict[int, Any], dict[int, str]]:
     """Run ``work`` on each component; collect results and per-component error messages.
 
-    A component that ``hvd`` marked as not analysable (:func:`hvd_errors`) is not worked on:
+    A component that ``hvd`` refuses (:func:`refused_components`) is not worked on:
     its error is ``hvd``'s message, so every later plugin reports it rather than numbers.
     Raises AnalysisError (naming plugin, channel and every component's reason) when all fail.
     """
     done: dict[int, Any] = {}
-    marked = hvd_errors(context)
+    marked = refused_components(context)
     errors: dict[int, str] = dict(marked)
     for c in comps:
         if c.index in errors:
@@ -341,13 +375,6 @@ def per_component(plugin: str, context: AnalysisContext, comps: list[Component],
             for k, m in sorted(errors.items()))
         raise AnalysisError(f"{where(plugin, context)}: {reasons}")
     return done, errors
-
-
-def error_entries(errors: dict[int, str], key: str) -> tuple[list[dict], dict[str, str]]:
-    """Summary entries and attributes recording per-component failures."""
-    entries = [{"index": k, key: {"error": m}} for k, m in errors.items()]
-    attrs = {f"component_{k}_error": m for k, m in errors.items()}
-    return entries, attrs
 
 
 def trusted_span(times: np.ndarray, comp: Component, period: float) -> np.ndarray:
@@ -404,43 +431,3 @@ def trusted_times(times: np.ndarray, comp: Component, period: float,
     free vibration - and the HVD filters smear the onset over about 1 / cutoff) to just before
     the next build-up (:func:`decay_labels`)."""
     return decay_labels(times, comp, period, amplitude, decay_only)[0] >= 0
-
-
-def decay_summary(decays: FreeDecays | None, t0: float = 0.0) -> dict[str, Any]:
-    """``decays`` (count), ``decay_starts_s`` and ``decay_ends_s`` (free parts, s from the
-    channel's first sample given the component's ``t0``) for a summary entry; ``{}`` when the
-    record was not split (``decay_only`` off)."""
-    if decays is None:
-        return {}
-    return {"decays": decays.count, "decay_starts_s": jsonable(decays.starts + t0),
-            "decay_ends_s": jsonable(decays.ends + t0)}
-
-
-def decay_attrs(decays: dict[int, FreeDecays | None], t0s: dict[int, float]) -> dict[str, Any]:
-    """Attributes ``component_<k>_decays``, ``component_<k>_decay_starts_s`` and
-    ``component_<k>_decay_ends_s`` (s from the channel's first sample) of the split records."""
-    return {f"component_{k}_{key}": value for k, d in sorted(decays.items())
-            for key, value in decay_summary(d, t0s[k]).items()}
-
-
-def jsonable(values: Any) -> Any:
-    """Python floats / lists with NaN and inf replaced by None."""
-    if isinstance(values, np.ndarray):
-        values = values.tolist()
-    if isinstance(values, (list, tuple)):
-        return [jsonable(v) for v in values]
-    if isinstance(values, (np.floating, float)):
-        v = float(values)
-        return v if math.isfinite(v) else None
-    if isinstance(values, np.integer):
-        return int(values)
-    return values
-
-
-def stack_rows(rows: dict[int, np.ndarray], count: int) -> np.ndarray:
-    """2-D array (count x max length) of 1-D rows by index, padded with NaN."""
-    width = max((r.size for r in rows.values()), default=0)
-    out = np.full((count, width), np.nan)
-    for k, r in rows.items():
-        out[k, :r.size] = r
-    return out

@@ -4,26 +4,21 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import Any
 
 import numpy as np
 
-from fsi_lab.contract import AnalysisContext, AnalysisResult
+from fsi_lab.contract import AnalysisContext
 from fsi_lab.dsp.damping import DampingCurve, damping_from_peaks
 from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
 from fsi_lab.plugins.analysis._chain import (
     Component,
-    decay_attrs,
     decay_labels,
-    decay_summary,
     displacement_components,
-    error_entries,
     guarded,
-    jsonable,
     per_component,
-    stack_rows,
 )
+from fsi_lab.plugins.analysis.results import DampingCurves
 
 
 def decay_peaks(inst: Instantaneous, c: Component, decay_only: bool = True):
@@ -56,7 +51,7 @@ def curve_for(c: Component, params: dict[str, Any]) -> DampingCurve:
     return dataclasses.replace(curve, decays=decays)
 
 
-def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+def run(context: AnalysisContext, params: dict[str, Any]) -> DampingCurves:
     with guarded("damping", context):
         disp = displacement_components(context, "damping")
 
@@ -65,27 +60,5 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
             return curve_for(c, params)
 
     done, errors = per_component("damping", context, disp, work)
-    count = len(disp)
-    t0 = {c.index: c.t0 for c in disp}
-    entries = [{"index": k, "damping": {"amplitude": jsonable(d.amplitude),
-                                        "zeta": jsonable(d.zeta), "method": d.method,
-                                        **({"params": d.params} if d.params else {}),
-                                        **decay_summary(d.decays, t0[k])}}
-               for k, d in done.items()]
-    err_entries, err_attrs = error_entries(errors, "damping")
-    names = ("time", "amplitude", "zeta", "frequency", "decay_rate")
-    datasets = {n: stack_rows({k: getattr(d, n) for k, d in done.items()}, count)
-                for n in names}
-    datasets["velocity_amplitude"] = stack_rows(
-        {k: 2.0 * math.pi * d.frequency * d.amplitude for k, d in done.items()}, count)
-    datasets["decay"] = stack_rows({k: d.decay.astype(np.float64) for k, d in done.items()},
-                                   count)
-    return AnalysisResult(
-        datasets=datasets,
-        units={"time": "s", "amplitude": "m", "zeta": "", "frequency": "Hz",
-               "decay_rate": "1/s", "velocity_amplitude": "m/s", "decay": ""},
-        attrs={"method": params["method"],
-               "velocity_amplitude": "2 pi f times the displacement amplitude",
-               "rows": "one row per component, padded with NaN",
-               **decay_attrs({k: d.decays for k, d in done.items()}, t0), **err_attrs},
-        summary={"components": entries + err_entries}, values=done)
+    return DampingCurves(curves=done, method=params["method"],
+                         t0s={c.index: c.t0 for c in disp}, count=len(disp), errors=errors)

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.contract import AnalysisContext, AnalysisResult
+from fsi_lab.contract import AnalysisContext
 from fsi_lab.dsp.components import BandComponents
 from fsi_lab.dsp.damping import damping_decrement
 from fsi_lab.dsp.equivalent_damping import (
@@ -17,16 +17,21 @@ from fsi_lab.dsp.equivalent_damping import (
     equivalent_damping_from_envelope,
 )
 from fsi_lab.errors import AnalysisError
+from fsi_lab.params import validate
 from fsi_lab.plugins.analysis._chain import (
     components,
     decay_summary,
     displacement_components,
-    error_entries,
     guarded,
-    jsonable,
     per_component,
-    stack_rows,
     where,
+)
+from fsi_lab.plugins.analysis.damping import PLUGIN as DAMPING
+from fsi_lab.plugins.analysis.results import (
+    CoefficientFit,
+    Components,
+    DampingCoefficients,
+    DampingCurves,
 )
 
 
@@ -131,15 +136,15 @@ def _law_points(mode: Any, mass: float, scale: float) -> tuple[np.ndarray, np.nd
 
 
 def _run_law(context: AnalysisContext, params: dict[str, Any], mass: float, mass_source: str
-             ) -> AnalysisResult:
+             ) -> DampingCoefficients:
     """Method ``law``: C_i and C_f from the linear + quadratic law fitted by the ``bands``
     decomposition (:mod:`fsi_lab.dsp.identify`), with the law the record prefers."""
     plugin = "equivalent-damping"
     with guarded(plugin, context):
         comps = components(context)            # (refuses when hvd failed earlier)
-    hvd = context.results.get("hvd")
-    res = hvd.values if hvd is not None else None
-    if not isinstance(res, BandComponents) or res.identification is None:
+    found = context.result(Components)
+    ident = found.identification if found is not None else None
+    if ident is None:
         raise AnalysisError(
             f"{where(plugin, context)}: method 'law' uses the damping laws fitted by hvd "
             "(method 'bands') earlier in the chain on this channel; put hvd before it, or use "
@@ -152,7 +157,7 @@ def _run_law(context: AnalysisContext, params: dict[str, Any], mass: float, mass
     conventions: dict[int, str] = {}
 
     def work(c):
-        mode = res.identification.modes[c.index]
+        mode = ident.modes[c.index]
         scale, conventions[c.index] = amplitude_convention(context, params, mode.frequency_hz)
         entry = _law_entry(mode, mass, scale, params["confidence"])
         amplitude, c_q = _law_points(mode, mass, scale)
@@ -163,36 +168,23 @@ def _run_law(context: AnalysisContext, params: dict[str, Any], mass: float, mass
 
 
 def _result(done: dict[int, dict], errors: dict[int, str], conventions: dict[int, str],
-            count: int, mass: float, mass_source: str, params: dict[str, Any]
-            ) -> AnalysisResult:
-    """The plugin's result from per-component entries (each with ``amplitude`` and ``c_q``
-    arrays for the datasets)."""
-    entries = []
-    for k, r in done.items():
-        summary = {key: jsonable(v) for key, v in r.items() if key not in ("amplitude", "c_q")}
-        summary.update(mass_per_length=mass, method=params["method"],
-                       amplitude_convention=conventions.get(k, "measured"))
-        entries.append({"index": k, "equivalent_damping": summary})
-    err_entries, err_attrs = error_entries(errors, "equivalent_damping")
-    attrs = {"mass_per_length": mass, "mass_per_length_source": mass_source,
-             "method": params["method"], "weighting": params["weighting"],
-             "confidence": params["confidence"],
-             "amplitude_convention": "; ".join(f"component {k}: {v}"
-                                               for k, v in sorted(conventions.items())),
-             **err_attrs}
-    for k, r in done.items():
-        for key in ("c_i", "c_f", "r2"):
-            attrs[f"component_{k}_{key}"] = float(r[key])
-        if "preferred_law" in r:
-            attrs[f"component_{k}_preferred_law"] = r["preferred_law"]
-    return AnalysisResult(
-        datasets={"amplitude": stack_rows({k: r["amplitude"] for k, r in done.items()}, count),
-                  "c_q": stack_rows({k: r["c_q"] for k, r in done.items()}, count)},
-        units={"amplitude": "m", "c_q": "kg/(m s)"},
-        attrs=attrs, summary={"components": entries + err_entries}, values=done)
+            count: int, mass: float, mass_source: str, params: dict[str, Any],
+            warning: str | None = None) -> DampingCoefficients:
+    """The plugin's result from per-component entries (the summary's items, with ``amplitude``
+    and ``c_q`` arrays for the datasets)."""
+    fits = {k: CoefficientFit(c_i=float(r["c_i"]), c_f=float(r["c_f"]),
+                              amplitude=np.asarray(r["amplitude"], dtype=np.float64),
+                              c_q=np.asarray(r["c_q"], dtype=np.float64),
+                              details={key: v for key, v in r.items()
+                                       if key not in ("c_i", "c_f", "amplitude", "c_q")})
+            for k, r in done.items()}
+    return DampingCoefficients(fits=fits, mass_per_length=mass, mass_source=mass_source,
+                               method=params["method"], weighting=params["weighting"],
+                               confidence=params["confidence"], conventions=conventions,
+                               count=count, warning=warning, errors=errors)
 
 
-def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+def run(context: AnalysisContext, params: dict[str, Any]) -> DampingCoefficients:
     plugin = "equivalent-damping"
     if context.mass_per_length is not None:
         mass = float(context.mass_per_length)
@@ -206,8 +198,8 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
             "fluid mass: pass --mass-per-length KG_PER_M or give the profile a [specimen]")
     fallback = None
     if params["method"] == "law":
-        hvd = context.results.get("hvd")
-        if hvd is None or isinstance(hvd.values, BandComponents):
+        found = context.result(Components)
+        if found is None or isinstance(found.decomposition, BandComponents):
             return _run_law(context, params, mass, mass_source)
         # Feldman's HVD components carry no law fit: the paper's regression, said so.
         params = {**params, "method": "regression"}
@@ -218,10 +210,10 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     from fsi_lab.dsp.damping import damping_from_peaks
     from fsi_lab.plugins.analysis._damping import curve_for, trusted_peaks
 
-    prior = context.results.get("damping")
-    prior_curves = prior.values if prior is not None and isinstance(prior.values, dict) else {}
-    defaults = {"method": "decrement", "span": 2, "window": 6, "smooth_points": 0,
-                "offset": "cycles", "min_amplitude": None, "decay_only": True}
+    prior = context.result(DampingCurves)
+    prior_curves = prior.curves if prior is not None else {}
+    # Without damping earlier in the chain, its curves as damping gives them by default.
+    defaults = validate(DAMPING.params, {}, "analysis.damping")
     conventions: dict[int, str] = {}
 
     def scale_for(k: int, f_hz: float) -> float:
@@ -255,8 +247,4 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                     "damping_method": curve.method}
 
     done, errors = per_component(plugin, context, disp, work)
-    result = _result(done, errors, conventions, len(disp), mass, mass_source, params)
-    if fallback:
-        for entry in result.summary["components"]:
-            entry.setdefault("warnings", []).append(fallback)
-    return result
+    return _result(done, errors, conventions, len(disp), mass, mass_source, params, fallback)

@@ -12,13 +12,14 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.contract import AnalysisContext, AnalysisResult
+from fsi_lab.contract import AnalysisContext
 from fsi_lab.dsp.components import band_components
 from fsi_lab.dsp.decays import QUIET_LEVEL, quiet_times
 from fsi_lab.dsp.hvd import PEAK_SMOOTHING, PEAK_THRESHOLD, band_around, hvd
 from fsi_lab.dsp.identify import identify
-from fsi_lab.dsp.spectrum import free_decay_peaks
-from fsi_lab.plugins.analysis._chain import guarded
+from fsi_lab.errors import AnalysisError
+from fsi_lab.plugins.analysis._chain import channel_noise, free_decay_peaks_of, guarded, where
+from fsi_lab.plugins.analysis.results import Components
 
 
 def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
@@ -29,11 +30,10 @@ def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
 
     The reference acceleration is integrated to the channel's quantity with
     :func:`.integrate.integrate`, high-passed at half the lowest spectral peak of the channel
-    (so the base motion at the beam's modes is kept).
+    (so the base motion at the beam's modes is kept; from the channel's shared spectrum, as
+    :func:`fsi_lab.dsp.integrate.lowest_mode` finds it).
     """
-    from fsi_lab.dsp.integrate import integrate, lowest_mode
-    from fsi_lab.errors import AnalysisError
-    from fsi_lab.plugins.analysis._chain import where
+    from fsi_lab.dsp.integrate import integrate
 
     ch = context.channel
     data = np.asarray(ch.data, dtype=np.float64)
@@ -59,8 +59,8 @@ def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
         base = np.asarray(ref.data, dtype=np.float64)
     else:
         with guarded(plugin, context):
-            f_lo, _ = lowest_mode(data, float(ch.sample_rate), plugin)
-            base = integrate(ref.data, ch.sample_rate, order=order, highpass=0.5 * f_lo)
+            base = integrate(ref.data, ch.sample_rate, order=order,
+                             highpass=0.5 * lowest_peak(context, plugin))
     # The channels may start at different times (a vibrometer's signal delay makes its t0
     # negative): take the base motion at the channel's own sample times.
     shift = float(ch.t0) - float(ref.t0)
@@ -70,13 +70,24 @@ def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
     return data - base, ref_name
 
 
+def lowest_peak(context: AnalysisContext, plugin: str) -> float:
+    """Lowest significant spectral peak of the channel, Hz (as
+    :func:`fsi_lab.dsp.integrate.lowest_mode` finds it, from the shared spectrum)."""
+    peaks = free_decay_peaks_of(context)
+    if peaks.frequencies.size == 0:
+        fs, n = float(context.channel.sample_rate), context.channel.data.size
+        raise AnalysisError(f"{where(plugin, context)}: found no spectral peak above the lowest "
+                            f"resolvable frequency {2.0 * fs / n:.3g} Hz, so no high-pass corner "
+                            "can be chosen for the base motion")
+    return float(peaks.frequencies.min())
+
+
 def switch_message(context: AnalysisContext, k: int, pair: tuple[float, float],
                    peaks: np.ndarray) -> str:
     """The error recorded for component ``k`` that switches between the modes ``pair`` (Hz,
     :attr:`HVDResult.switches`): what happened, and the two ways out (an impulse width whose
     half-sine spectrum is zero on the higher mode; a ``band_hz`` around each mode, from the
     record's spectral ``peaks``, Hz)."""
-    from fsi_lab.plugins.analysis._chain import where
     high = max(pair)
     bands = [(f, band_around(f, peaks)) for f in sorted(pair)] if peaks.size else []
     hint = "; ".join(f"[{b[0]:g}, {b[1]:g}] for the {f:.1f} Hz mode" for f, b in bands if b)
@@ -95,13 +106,13 @@ _IDENTIFY_AS = {"velocity": "velocity", "displacement": "displacement",
                 "acceleration": "acceleration", "voltage": "displacement"}
 
 
-def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+def run(context: AnalysisContext, params: dict[str, Any]) -> Components:
     if params["method"] == "bands":
         return _run_bands(context, params)
     return _run_hvd(context, params)
 
 
-def _run_bands(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+def _run_bands(context: AnalysisContext, params: dict[str, Any]) -> Components:
     """One component per mode: :func:`fsi_lab.dsp.identify.identify` and
     :func:`fsi_lab.dsp.components.band_components`."""
     ch = context.channel
@@ -116,42 +127,15 @@ def _run_bands(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResu
                          decay_starts=(starts + list(quiet)) or None,
                          reference=base_on_channel_clock(context))
         res = band_components(data, fs, ident, integrate=int(quantity == "acceleration"))
-    comps = []
-    for k, mode in enumerate(ident.modes):
-        good = ~res.edge_mask[k]
-        comps.append({
-            "index": k, "frequency_hz": mode.frequency_hz,
-            "frequency_ci95_hz": list(mode.frequency_ci),
-            "damped_frequency_hz": mode.damped_frequency_hz,
-            "spectral_peak_hz": mode.spectral_peak_hz, "band_hz": list(mode.band_hz),
-            "extrema": mode.extrema_count, "decays": len(mode.decays),
-            "hvd_peak_envelope": float(res.envelopes[k][good].max()) if good.any() else None,
-            "warnings": list(mode.warnings)})
-    flat = np.array([list(m.band_hz) for m in ident.modes])
-    unit = ch.unit if quantity != "acceleration" else "m/s"
-    notes = list(ident.notes)
-    return AnalysisResult(
-        datasets={"components": res.components, "envelopes": res.envelopes,
-                  "frequencies": res.frequencies, "residual": res.residual,
-                  "edge_mask": res.edge_mask.astype(np.uint8), "cutoffs": res.cutoffs,
-                  "bands": flat},
-        units={"components": unit, "envelopes": unit, "frequencies": "Hz",
-               "residual": ch.unit, "edge_mask": "", "cutoffs": "Hz", "bands": "Hz"},
-        attrs={"method": "bands", "n_components": res.n_components, "sample_rate": fs,
-               "relative_to": relative_to if relative_to else "none (the channel as measured)",
-               "start_s": 0.0,
-               "start_rule": "each free decay from its largest sample"
-               + ("" if params["start_s"] is None else f", not before {params['start_s']:g} s")
-               + (f", and not before the base has calmed down ({QUIET_LEVEL:g} of its peak "
-                  f"envelope) at {', '.join(f'{s:.4g}' for s in quiet)} s" if len(quiet)
-                  else ""),
-               "edge_mask_meaning": "1 outside the free part of every decay (excitation, "
-                                    "build-ups): not used",
-               "band_hz": list(params["band_hz"]) if params["band_hz"] is not None
-               else "none (the whole record)",
-               "order": "components by decreasing energy of their free decays; row k = index k",
-               "noise_rms": ident.noise_rms, "notes": notes},
-        summary={"components": comps, **({"notes": notes} if notes else {})}, values=res)
+    return Components(
+        decomposition=res, method="bands",
+        unit=ch.unit if quantity != "acceleration" else "m/s", channel_unit=ch.unit,
+        relative_to=relative_to,
+        start_rule="each free decay from its largest sample"
+        + ("" if params["start_s"] is None else f", not before {params['start_s']:g} s")
+        + (f", and not before the base has calmed down ({QUIET_LEVEL:g} of its peak "
+           f"envelope) at {', '.join(f'{s:.4g}' for s in quiet)} s" if len(quiet) else ""),
+        band_hz=params["band_hz"])
 
 
 def base_on_channel_clock(context: AnalysisContext) -> np.ndarray | None:
@@ -184,14 +168,15 @@ def base_quiet(context: AnalysisContext) -> np.ndarray:
     return times + (float(ref.t0) - float(ch.t0))
 
 
-def _auto_components(data: np.ndarray, fs: float) -> int:
+def _auto_components(context: AnalysisContext, data: np.ndarray) -> int:
     """Feldman's HVD with ``components`` unset: one per significant spectral peak of the free
-    decays (at most 7, his limit)."""
-    peaks = free_decay_peaks(data, fs, min_relative=PEAK_THRESHOLD, smoothing=PEAK_SMOOTHING)
+    decays of ``data`` (the decomposed part of the channel; at most 7, his limit)."""
+    peaks = free_decay_peaks_of(context, data, min_relative=PEAK_THRESHOLD,
+                                smoothing=PEAK_SMOOTHING)
     return int(min(max(peaks.frequencies.size, 1), 7))
 
 
-def _run_hvd(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+def _run_hvd(context: AnalysisContext, params: dict[str, Any]) -> Components:
     ch = context.channel
     data, relative_to = relative_signal(context, params["relative"])
     if params["start_s"] is None:
@@ -199,7 +184,6 @@ def _run_hvd(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult
         # largest sample (0 for a record that starts with the decay); for several decays (an
         # impulse train) at the largest sample of the first one.
         from fsi_lab.dsp.decays import first_decay_peak
-        from fsi_lab.plugins.analysis._chain import channel_noise
         sigma, f_dom = channel_noise(context)
         fs = float(ch.sample_rate)
         i0 = first_decay_peak(data, fs, 1.0 / f_dom, 10.0 * sigma) if f_dom > 0 \
@@ -209,45 +193,17 @@ def _run_hvd(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult
         i0 = int(round(params["start_s"] * float(ch.sample_rate)))
         start_rule = "given"
     if i0 >= data.size - 32:
-        from fsi_lab.errors import AnalysisError
-        from fsi_lab.plugins.analysis._chain import where
         raise AnalysisError(f"{where('hvd', context)}: start_s = {i0 / ch.sample_rate:g} s leaves "
                             f"{max(data.size - i0, 0)} samples of a {data.size / ch.sample_rate:g}"
                             " s record; expected a start inside the record")
     with guarded("hvd", context):
-        count = params["components"] or _auto_components(data[i0:], float(ch.sample_rate))
+        count = params["components"] or _auto_components(context, data[i0:])
         res = hvd(data[i0:], ch.sample_rate, count, params["cutoff_hz"],
                   padding=params["padding"], band=params["band_hz"])
     res = dataclasses.replace(res, t0=i0 / float(ch.sample_rate))
-    from fsi_lab.plugins.analysis._chain import error_entries
-    errors = {k: switch_message(context, k, pair, res.peaks)
-              for k, pair in enumerate(res.switches) if pair is not None}
-    comps = []
-    for k in range(res.n_components):
-        good = ~res.edge_mask[k]
-        comps.append({"index": k, "frequency_hz": res.mean_frequency(k),
-                      "cutoff_hz": float(res.cutoffs[k]),
-                      "hvd_peak_envelope": float(res.envelopes[k][good].max())
-                      if good.any() else None,
-                      "warnings": ["frequency_hz is HVD's envelope-weighted mean frequency, not "
-                                   "the small-amplitude natural frequency (method = 'bands' "
-                                   "gives that)"],
-                      **({"hvd": {"error": errors[k]}} if k in errors else {})})
-    return AnalysisResult(
-        datasets={"components": res.components, "envelopes": res.envelopes,
-                  "frequencies": res.frequencies, "residual": res.residual,
-                  "edge_mask": res.edge_mask.astype(np.uint8), "cutoffs": res.cutoffs},
-        units={"components": ch.unit, "envelopes": ch.unit, "frequencies": "Hz",
-               "residual": ch.unit, "edge_mask": "", "cutoffs": "Hz"},
-        # (rows start at start_s: sample j of a row is at t = start_s + j / sample_rate)
-        attrs={"method": "hvd", "n_components": res.n_components,
-               "sample_rate": res.sample_rate, "padding": params["padding"],
-               "relative_to": relative_to if relative_to else "none (the channel as measured)",
-               "start_s": res.t0, "start_rule": start_rule,
-               "edge_mask_meaning": "1 where the sample is too close to a record end to be "
-                                    "trusted (within 1 / cutoff)",
-               "band_hz": list(res.band) if res.band is not None
-               else "none (the whole record)",
-               "order": "components sorted by decreasing RMS envelope; row k = index k",
-               **error_entries(errors, "hvd")[1]},
-        summary={"components": comps}, values=res)
+    refused = {k: switch_message(context, k, pair, res.peaks)
+               for k, pair in enumerate(res.switches) if pair is not None}
+    return Components(decomposition=res, method="hvd", unit=ch.unit, channel_unit=ch.unit,
+                      relative_to=relative_to, start_rule=start_rule,
+                      band_hz=list(res.band) if res.band is not None else None,
+                      padding=params["padding"], refused=refused)

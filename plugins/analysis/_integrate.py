@@ -5,29 +5,25 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
-from fsi_lab.contract import AnalysisContext, AnalysisResult
+from fsi_lab.contract import AnalysisContext
 from fsi_lab.dsp.components import BandComponents
 from fsi_lab.dsp.integrate import integrate
 from fsi_lab.errors import AnalysisError
 from fsi_lab.plugins.analysis._chain import (
     SI_UNITS,
-    ComponentSignals,
     component_quantity,
     components,
-    error_entries,
     guarded,
     per_component,
-    stack_rows,
     where,
 )
+from fsi_lab.plugins.analysis.results import Components, Integrated
 
 _ORDER = {("velocity", "displacement"): 1, ("acceleration", "velocity"): 1,
           ("acceleration", "displacement"): 2}
 
 
-def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+def run(context: AnalysisContext, params: dict[str, Any]) -> Integrated:
     ch = context.channel
     target = params["target"]
     quantity = component_quantity(context)
@@ -41,9 +37,9 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
             f"({ch.unit}) to {target}; expected a velocity or acceleration channel (or "
             f"target = the channel's own quantity)")
     comps = components(context, order)
-    hvd = context.results.get("hvd")
-    bands = hvd.values.integrated(order) if order and hvd is not None \
-        and isinstance(hvd.values, BandComponents) else None
+    found = context.result(Components)
+    bands = found.decomposition.integrated(order) if order and found is not None \
+        and isinstance(found.decomposition, BandComponents) else None
 
     def work(c):
         if order == 0:
@@ -54,21 +50,11 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
             return integrate(c.signal, c.sample_rate, order=order, highpass=params["highpass_hz"])
 
     done, errors = per_component("integrate", context, comps, work)
-    unit = SI_UNITS[target]
-    entries = [{"index": k, f"{target}_peak": float(np.max(np.abs(s)))} for k, s in done.items()]
-    err_entries, err_attrs = error_entries(errors, "integrate")
-    values = ComponentSignals(quantity=target, unit=unit, sample_rate=float(ch.sample_rate),
-                              signals=done,
-                              edge_masks={c.index: c.edge_mask for c in comps},
-                              noise_floors={c.index: c.noise_floor for c in comps},
-                              settles={c.index: c.settle for c in comps},
-                              t0s={c.index: c.t0 for c in comps},
-                              frequencies={c.index: c.frequency for c in comps})
-    return AnalysisResult(
-        datasets={"signals": stack_rows(done, len(comps))},
-        units={"signals": unit},
-        attrs={"quantity": target, "order": order, "from_quantity": ch.quantity,
-               "start_s": comps[0].t0,
-               "highpass_hz": params["highpass_hz"] if params["highpass_hz"] is not None
-               else "auto (half the lowest spectral peak)", **err_attrs},
-        summary={"components": entries + err_entries}, values=values)
+    return Integrated(quantity=target, unit=SI_UNITS[target], sample_rate=float(ch.sample_rate),
+                      signals=done, edge_masks={c.index: c.edge_mask for c in comps},
+                      noise_floors={c.index: c.noise_floor for c in comps},
+                      settles={c.index: c.settle for c in comps},
+                      t0s={c.index: c.t0 for c in comps},
+                      frequencies={c.index: c.frequency for c in comps},
+                      order=order, from_quantity=ch.quantity, highpass_hz=params["highpass_hz"],
+                      count=len(comps), start_s=comps[0].t0, errors=errors)

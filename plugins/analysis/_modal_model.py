@@ -115,11 +115,7 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.contract import (
-    AnalysisContext,
-    AnalysisResult,
-    ChannelData,
-)
+from fsi_lab.contract import AnalysisContext, ChannelData
 from fsi_lab.dsp.components import BandComponents
 from fsi_lab.errors import AnalysisError
 from fsi_lab.plugins.analysis._chain import (
@@ -127,14 +123,13 @@ from fsi_lab.plugins.analysis._chain import (
     SI_UNITS,
     components,
     displacement_components,
-    error_entries,
     guarded,
-    jsonable,
     per_component,
     stack_rows,
     where,
 )
 from fsi_lab.plugins.analysis.modal_model import PLUGIN_NAME
+from fsi_lab.plugins.analysis.results import Components, DampingCoefficients, ModalComparison
 
 #: A model component is paired with a measured one when their mean frequencies differ by less.
 MATCH_TOLERANCE = 0.25
@@ -231,13 +226,12 @@ def _pick_damping(context: AnalysisContext, params: dict[str, Any], freqs: dict[
     given_i, given_f = params["c_i"], params["c_f"]
     if given_i is not None and given_f is not None:
         return float(given_i), float(given_f), "given"
-    ed = context.results.get("equivalent-damping")
-    fits = ed.values if ed is not None and isinstance(ed.values, dict) else {}
+    found = context.result(DampingCoefficients)
+    fits = found.fits if found is not None else {}
     wanted = params["mode"]
     chosen = None
     for k in sorted(fits):
-        fit = fits[k]
-        ci, cf = float(fit.get("c_i", math.nan)), float(fit.get("c_f", math.nan))
+        ci, cf = fits[k].c_i, fits[k].c_f
         mode = mode_of(freqs.get(k, 0.0), natural)
         if wanted is not None:
             if mode == wanted:
@@ -253,8 +247,7 @@ def _pick_damping(context: AnalysisContext, params: dict[str, Any], freqs: dict[
                 f"{where(PLUGIN_NAME, context)}: needs C_i and C_f: run equivalent-damping "
                 f"earlier in the chain on this channel, or give {PLUGIN_NAME}.{missing}")
         have = ", ".join(f"component {k} (mode {mode_of(freqs.get(k, 0.0), natural)}: C_i = "
-                         f"{fits[k].get('c_i', math.nan):.4g}, C_f = "
-                         f"{fits[k].get('c_f', math.nan):.4g})" for k in sorted(fits))
+                         f"{fits[k].c_i:.4g}, C_f = {fits[k].c_f:.4g})" for k in sorted(fits))
         what = (f"no component of mode {wanted}" if wanted is not None
                 else "no physical fit (C_i >= 0 and C_f >= 0)")
         raise AnalysisError(
@@ -361,7 +354,7 @@ def _check_inputs(context: AnalysisContext) -> ChannelData:
 
 
 # ----------------------------------------------------------------------------- plugin
-def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
+def run(context: AnalysisContext, params: dict[str, Any]) -> ModalComparison:
     from fsi_lab.dsp.hvd import hvd
     from fsi_lab.errors import ParameterError
     from fsi_lab.modelling import beam_model
@@ -369,13 +362,13 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     ch = context.channel
     here = where(PLUGIN_NAME, context)
     ref = _check_inputs(context)
-    hvd_result = context.results["hvd"]
-    res_m = hvd_result.values
+    measured = context.result(Components)
+    res_m = measured.decomposition
     fs = float(ch.sample_rate)
     k_total = res_m.n_components
     i0 = int(round(float(res_m.t0) * fs))
-    relative = not str(hvd_result.attrs.get("relative_to", "none")).startswith("none")
-    padding = hvd_result.attrs.get("padding", "predict")
+    relative = measured.relative_to is not None
+    padding = measured.padding or "predict"
 
     try:
         model = beam_model(context.specimen, {"modes": params["modes"], "c_i": 0.0, "c_f": 0.0,
@@ -413,8 +406,8 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
             res_s = dataclasses.replace(res_s, t0=float(res_m.t0))
     model_ch = ChannelData(name=ch.name, data=y_s, sample_rate=fs, quantity=ch.quantity,
                            unit=ch.unit, t0=ch.t0)
-    model_ctx = AnalysisContext(channel=model_ch, channels={ch.name: model_ch},
-                                results={"hvd": AnalysisResult(values=res_s)},
+    model_ctx = AnalysisContext(channel=model_ch, channels={ch.name: model_ch}, results={},
+                                provided={Components.kind: Components(res_s)},
                                 specimen=context.specimen, reference=None)
     freqs_s = np.array([res_s.mean_frequency(j) for j in range(k_total)])
 
@@ -559,34 +552,10 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
     v_err = math.sqrt(float(np.mean((vs - vm) ** 2)) / float(np.mean(vm ** 2))) \
         if vm.size and np.any(vm) else math.nan
 
-    top = {"c_i": c_i, "c_f": c_f, "c_source": c_source, "modes": model.modes,
-           "projection": params["projection"],
-           "natural_frequencies_hz": [float(f) for f in natural],
-           "coordinate": "relative" if relative else "absolute", "oversampling": factor,
-           "velocity_rms_error": v_err}
-    entries = [{"index": k, "modal_model": {key: jsonable(v) for key, v in r["figures"].items()}}
-               for k, r in done.items()]
-    err_entries, err_attrs = error_entries(errors, "modal_model")
-    attrs: dict[str, Any] = {
-        "c_i": c_i, "c_f": c_f, "c_source": c_source, "modes": model.modes,
-        "projection": params["projection"], "damping_method": params["damping_method"],
-        "coordinate": ("relative to the base (measured: hvd.relative_signal; model: its own "
-                       "relative motion, Eq. 13)" if relative else "absolute (as measured)"),
-        "oversampling": factor, "start_s": float(res_m.t0), "sample_rate": fs,
-        "velocity_rms_error": v_err,
-        "rows": "one row per measured component (index k), padded with NaN",
-        "time_base": "velocity_* sample j at t = start_s + j / sample_rate from the channel's "
-                     "first sample (the decomposed part of the record); envelope_* at "
-                     "envelope_time",
-        **err_attrs,
-    }
-    for k, r in done.items():
-        for key, v in r["figures"].items():
-            if v is not None:
-                attrs[f"component_{k}_{key}"] = v
-    return AnalysisResult(
-        datasets=datasets, units=units, attrs=attrs,
-        summary={"modal_model": {key: jsonable(v) for key, v in top.items()},
-                 "components": entries + err_entries},
-        values={"model_hvd": res_s, "model_signal": y_s, "model": model,
-                "figures": {k: r["figures"] for k, r in done.items()}})
+    return ModalComparison(
+        c_i=c_i, c_f=c_f, c_source=c_source, model=model, natural_frequencies_hz=list(natural),
+        relative=relative, oversampling=factor, velocity_rms_error=v_err,
+        figures={k: r["figures"] for k, r in done.items()}, model_components=res_s,
+        model_signal=y_s, curves=datasets, units=units, projection=params["projection"],
+        damping_method=params["damping_method"], start_s=float(res_m.t0), sample_rate=fs,
+        count=count, errors=errors)

@@ -10,6 +10,7 @@ from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS
+from fsi_lab.plugins.analysis.results import Backbones, Components, Integrated
 
 PLUGIN = AnalysisPlugin(
     name="backbone",
@@ -20,6 +21,8 @@ PLUGIN = AnalysisPlugin(
         DECAY_ONLY,
     ),
     run=Deferred("fsi_lab.plugins.analysis._backbone:run"),
+    uses=(Components, Integrated),
+    provides=Backbones,
     help="Backbone curves: zero-crossing frequency against displacement amplitude (m) and "
          "against velocity amplitude (m/s), per component; the untrusted record ends are left "
          "out.",

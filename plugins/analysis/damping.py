@@ -11,6 +11,7 @@ from fsi_lab.dsp.choices import DAMPING_METHODS as METHODS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS
+from fsi_lab.plugins.analysis.results import Components, DampingCurves, Integrated
 
 PLUGIN = AnalysisPlugin(
     name="damping",
@@ -28,6 +29,8 @@ PLUGIN = AnalysisPlugin(
         DECAY_ONLY,
     ),
     run=Deferred("fsi_lab.plugins.analysis._damping:run"),
+    uses=(Components, Integrated),
+    provides=DampingCurves,
     help="Damping ratio against displacement amplitude (m) per component, from the refined "
          "extrema; the untrusted record ends are left out.",
 )

@@ -11,6 +11,12 @@ from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import WEIGHTINGS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis.results import (
+    Components,
+    DampingCoefficients,
+    DampingCurves,
+    Integrated,
+)
 
 METHODS = ("law", "regression", "envelope")
 
@@ -39,6 +45,8 @@ PLUGIN = AnalysisPlugin(
                    "frequency."),
     ),
     run=Deferred("fsi_lab.plugins.analysis._equivalent_damping:run"),
+    uses=(Components, Integrated, DampingCurves),
+    provides=DampingCoefficients,
     help="Linear (C_i, kg/(m s)) and quadratic (C_f, kg/m^2) damping per length from the "
          "damping curve by harmonic balance (Eqs. 24-25), with R^2 and 95 % intervals; needs "
          "mu + M from --mass-per-length or the profile's [specimen].",

@@ -12,6 +12,7 @@ from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import PADDINGS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis.results import Components
 
 METHODS = ("bands", "hvd")
 
@@ -51,6 +52,7 @@ PLUGIN = AnalysisPlugin(
                    "when the chain has a base acceleration reference."),
     ),
     run=Deferred("fsi_lab.plugins.analysis._hvd:run"),
+    provides=Components,
     help="Decomposition into one component per mode (relative to the base when a reference "
          "acceleration is given), by decreasing amplitude: mode bands with the identification "
          "of each mode (default), or Feldman's Hilbert Vibration Decomposition. Later "

@@ -11,6 +11,7 @@ from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import OFFSETS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis.results import Components, InstantaneousCurves, Integrated
 
 #: Parameters shared by the plugins that measure extrema (backbone, damping).
 INSTANT_PARAMS = (
@@ -37,6 +38,8 @@ PLUGIN = AnalysisPlugin(
         *INSTANT_PARAMS,
     ),
     run=Deferred("fsi_lab.plugins.analysis._instantaneous:run"),
+    uses=(Components, Integrated),
+    provides=InstantaneousCurves,
     help="Instantaneous frequency f = 1/(t[i+1] - t[i-1]) from interpolated zero crossings "
          "(offset removed first) and instantaneous amplitude at refined extrema, per component, "
          "on the displacement when the channel gives one.",

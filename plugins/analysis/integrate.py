@@ -9,6 +9,7 @@ from __future__ import annotations
 from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis.results import Components, Integrated
 
 PLUGIN = AnalysisPlugin(
     name="integrate",
@@ -21,6 +22,8 @@ PLUGIN = AnalysisPlugin(
                    "lowest spectral peak of the record."),
     ),
     run=Deferred("fsi_lab.plugins.analysis._integrate:run"),
+    uses=(Components,),
+    provides=Integrated,
     help="Integrates velocity to displacement (or acceleration to velocity/displacement) in "
          "the frequency domain with the zero-frequency and drift content removed, per HVD "
          "component when hvd ran earlier.",

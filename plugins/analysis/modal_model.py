@@ -12,6 +12,12 @@ from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import DAMPING_METHODS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis.results import (
+    Components,
+    DampingCoefficients,
+    Integrated,
+    ModalComparison,
+)
 
 PLUGIN_NAME = "modal-model"
 
@@ -40,7 +46,9 @@ PLUGIN = AnalysisPlugin(
                    "(paper: 5; 0 = none)."),
     ),
     run=Deferred("fsi_lab.plugins.analysis._modal_model:run"),
-    requires=("hvd",),
+    requires=(Components,),
+    uses=(Integrated, DampingCoefficients),
+    provides=ModalComparison,
     help="Runs the beam model (Eq. 20) with the measured base acceleration and the identified "
          "(or given) C_i and C_f, processes its output like the measurement (HVD, zero "
          "crossings, backbone, damping) and reports measured vs model with error figures "

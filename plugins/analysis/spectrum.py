@@ -10,6 +10,7 @@ from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import WINDOWS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis.results import Spectrum
 
 PLUGIN = AnalysisPlugin(
     name="spectrum",
@@ -27,6 +28,7 @@ PLUGIN = AnalysisPlugin(
                    "(0.02 = +-2 %), for noisy or chirped spectra."),
     ),
     run=Deferred("fsi_lab.plugins.analysis._spectrum:run"),
+    provides=Spectrum,
     help="Single-sided amplitude spectrum of the channel with interpolated peak frequencies "
          "(the paper's Figs. 5, 9, 11).",
 )

@@ -103,7 +103,9 @@ def test_descriptor_honours_the_contract():
     (descriptor,) = module.fsi_lab_analyses()
     check_descriptor("analysis", descriptor)
     assert descriptor.name == "modal-model"
-    assert descriptor.requires == ("hvd",)
+    assert descriptor.requires == ("components",)
+    assert descriptor.uses == ("integrated", "damping-coefficients")
+    assert descriptor.provides == "modal-comparison"
     assert all(p.help for p in descriptor.params)
     defaults = validate(descriptor.params, {}, "analysis.modal-model")
     assert defaults["c_i"] is None and defaults["c_f"] is None and defaults["modes"] == 4
@@ -318,13 +320,13 @@ def test_the_plugin_can_be_called_directly():
     hvd = reg.get("analysis", "hvd")
     context = AnalysisContext(channel=channels["tip"], channels=channels, results={},
                               specimen=SPECIMEN, reference="base")
-    results = {"hvd": hvd.run(context, validate(hvd.params, {}, "hvd"))}
-    context = AnalysisContext(channel=channels["tip"], channels=channels, results=results,
-                              specimen=None, reference="base")
+    provided = {"components": hvd.run(context, validate(hvd.params, {}, "hvd"))}
+    context = AnalysisContext(channel=channels["tip"], channels=channels, results={},
+                              provided=provided, specimen=None, reference="base")
     params = validate(PLUGIN.params, {"c_i": 0.65, "c_f": 33.0}, "modal-model")
     with pytest.raises(AnalysisError, match=r"\[specimen\]"):
         PLUGIN.run(context, params)
-    context = AnalysisContext(channel=channels["tip"], channels=channels, results=results,
-                              specimen=SPECIMEN, reference="base")
+    context = AnalysisContext(channel=channels["tip"], channels=channels, results={},
+                              provided=provided, specimen=SPECIMEN, reference="base")
     result = PLUGIN.run(context, params)
-    assert result.values["figures"][0]["envelope_rms_error"] < 0.005
+    assert result.figures[0]["envelope_rms_error"] < 0.005

@@ -265,18 +265,21 @@ def test_band_hz_parameter_is_declared_and_parsed():
 
 
 def test_a_refused_component_carries_the_message_and_the_others_are_worked_on():
-    """The chain's per-component rule: hvd's ``component_<k>_error`` is recorded for k by every
-    later plugin without working on it; the other components are worked on as usual, and the
-    plugin fails only when no component is left (naming the refused ones)."""
-    from fsi_lab.contract import AnalysisContext, AnalysisResult
-    from fsi_lab.plugins.analysis._chain import Component, hvd_errors, per_component
+    """The chain's per-component rule: a component hvd refuses (its typed result's
+    ``refused``, stored as ``component_<k>_error``) is recorded for k by every later plugin
+    without working on it; the other components are worked on as usual, and the plugin fails
+    only when no component is left (naming the refused ones)."""
+    from fsi_lab.contract import AnalysisContext
+    from fsi_lab.plugins.analysis._chain import Component, per_component, refused_components
+    from fsi_lab.plugins.analysis.results import Components
 
     ch = ChannelData("tip", np.ones(8), 100.0, "velocity", "m/s")
     comps = [Component(k, np.zeros(8), "velocity", "m/s", 100.0) for k in range(3)]
-    context = AnalysisContext(channel=ch, channels={"tip": ch}, results={
-        "hvd": AnalysisResult(attrs={"component_1_error": "hvd on channel 'tip': switches",
-                                     "component_count": 3})})
-    assert hvd_errors(context) == {1: "hvd on channel 'tip': switches"}
+    found = Components(decomposition=None, method="hvd",
+                       refused={1: "hvd on channel 'tip': switches"})
+    context = AnalysisContext(channel=ch, channels={"tip": ch}, results={},
+                              provided={"components": found})
+    assert refused_components(context) == {1: "hvd on channel 'tip': switches"}
     worked = []
     done, errors = per_component("damping", context, comps,
                                  lambda c: worked.append(c.index) or c.index)

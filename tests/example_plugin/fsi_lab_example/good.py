@@ -1,11 +1,20 @@
-"""A working third-party plugin: one excitation and two analyses."""
+"""A working third-party plugin: one excitation and four analyses.
+
+``rms`` and ``crossings`` provide nothing to later analyses and return an AnalysisResult;
+``component-rms`` requires the built-in ``hvd``'s typed components and provides a typed result
+of its own kind; ``hvd-count`` is written to the contract that preceded typed results (it
+requires the analysis ``hvd`` by name and reads its stored attributes).
+"""
+
+from dataclasses import dataclass
 
 import numpy as np
 
-from fsi_lab.contract import AnalysisPlugin, AnalysisResult, ExcitationPlugin
+from fsi_lab.contract import AnalysisPlugin, AnalysisResult, ExcitationPlugin, Result
 from fsi_lab.errors import AnalysisError
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.plugins.analysis.results import Components
 
 
 def _chirp(params, rate):
@@ -33,6 +42,34 @@ def _crossings(context, params):
     return AnalysisResult(summary={"components": [{"index": 0, "crossings": count}]})
 
 
+@dataclass
+class ComponentRms(Result):
+    """RMS of each component of the decomposition, in the unit of the components."""
+
+    kind = "component-rms"
+
+    rms: np.ndarray
+    unit: str
+
+    def record(self):
+        return AnalysisResult(
+            datasets={"rms": self.rms}, units={"rms": self.unit},
+            attrs={"largest": float(self.rms.max())},
+            summary={"components": [{"index": k, "component_rms": float(v)}
+                                    for k, v in enumerate(self.rms)]})
+
+
+def _component_rms(context, params):
+    components = context.result(Components)        # hvd's, typed (required: always there)
+    rows = components.decomposition.components
+    return ComponentRms(rms=np.sqrt(np.mean(rows**2, axis=1)), unit=components.unit)
+
+
+def _hvd_count(context, params):
+    # Written before typed results: hvd named as an analysis, its stored attributes read.
+    return AnalysisResult(summary={"hvd_count": int(context.results["hvd"].attrs["n_components"])})
+
+
 @hookimpl
 def fsi_lab_excitations():
     return [ExcitationPlugin(
@@ -53,4 +90,8 @@ def fsi_lab_analyses():
         AnalysisPlugin("crossings", (Param("minimum", "int", "", 1, minimum=0,
                                            help="Fewest zero crossings accepted."),),
                        _crossings, help="Counts zero crossings."),
+        AnalysisPlugin("component-rms", (), _component_rms, requires=(Components,),
+                       provides=ComponentRms, help="RMS of each hvd component."),
+        AnalysisPlugin("hvd-count", (), _hvd_count, requires=("hvd",),
+                       help="Number of hvd components."),
     ]
