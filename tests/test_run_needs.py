@@ -130,5 +130,6 @@ def test_simulate_refuses_a_record_it_cannot_hold(tmp_path, duration, rate):
                             rate, "-o", str(out))
     assert code == 2 and err.count("fsi-lab: error:") == 1 and "Traceback" not in err, err
     assert f"--duration {float(duration):g} s at --rate {float(rate):g} Hz makes" in err
-    assert "expected 2 to 20,480,000 (the simulation is held in memory)" in err
+    assert "expected 2 to 2,147,483,648: change --duration or --rate" in err
     assert not out.exists()
+
