@@ -53,6 +53,10 @@ class Biquads:
             rows.append([b[0] / a[0], b[1] / a[0], b[2] / a[0], a[1] / a[0], a[2] / a[0]])
         self._coef = np.ascontiguousarray(rows, dtype=np.float64).reshape(-1, 5)
         self.state = np.zeros((self._coef.shape[0], 2))
+        # Load (or compile) the kernel now, not at the first block: a simulated bench runs its
+        # world in the runner's process, where a pause of the first call during the record
+        # (the GIL held while numba loads its cache) would starve the amplifier's watchdog.
+        self.advance(np.zeros(0))
 
     def advance(self, x: np.ndarray) -> np.ndarray:
         """The outputs of every section for the next block ``x``, shape ``(sections, len(x))``
