@@ -20,8 +20,9 @@ from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChange
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
 EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "aborted": 130}
-#: Most samples per channel ``fsi-lab simulate`` writes (100 s at 204.8 kHz).
-MAX_SIMULATED_SAMPLES = 20_480_000
+#: Most samples per channel ``fsi-lab simulate`` writes (about 2.9 hours at 204.8 kHz; it
+#: simulates and writes a block at a time, so the bound is the disk: see cmd_simulate).
+MAX_SIMULATED_SAMPLES = 2**31
 LEVELS = {"DEBUG": 10, "INFO": 20, "WARNING": 30, "ERROR": 40}
 
 
@@ -483,12 +484,27 @@ def cmd_model(args) -> int:
     return 0
 
 
+def _check_room(output: Path, size: float) -> None:
+    """Raise InputFileError when the folder of ``output`` (or its nearest existing parent) has
+    less free space than ``size`` bytes and 5 % to spare."""
+    import shutil
+
+    folder = output.absolute().parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    free = shutil.disk_usage(folder).free
+    if size * 1.05 > free:
+        raise InputFileError(
+            f"{output}: the simulated record would take {size / 1e9:.3g} GB and {folder} has "
+            f"{free / 1e9:.3g} GB free; shorten --duration, lower --rate or write elsewhere")
+
+
 def cmd_simulate(args) -> int:
     from fsi_lab.errors import ProfileError, RunAborted
     from fsi_lab.preflight import prepare_excitation
     from fsi_lab.runfile import new_run_path, software_version
     from fsi_lab.signals import RunSignals
-    from fsi_lab.simulation import simulate_run
+    from fsi_lab.simulation import SIMULATED_CHANNELS, simulate_run
 
     registry, profile = _model_profile(args)
     if profile.excitation_plugin is None:
@@ -500,10 +516,11 @@ def cmd_simulate(args) -> int:
     if not 2 <= samples <= MAX_SIMULATED_SAMPLES:
         raise InputFileError(
             f"--duration {args.duration:g} s at --rate {args.rate:g} Hz makes {samples:,.0f} "
-            f"samples per channel; expected 2 to {MAX_SIMULATED_SAMPLES:,} (the simulation is "
-            "held in memory): change --duration or --rate")
+            f"samples per channel; expected 2 to {MAX_SIMULATED_SAMPLES:,}: change --duration "
+            "or --rate")
     if args.output.exists():
         raise InputFileError(f"{args.output}: already exists; choose another output file")
+    _check_room(args.output, samples * len(SIMULATED_CHANNELS) * 8)
     waveform, rate = prepare_excitation(profile, registry)
     _, run_uuid, started = new_run_path(args.output.parent)
     bus = EventBus()
