@@ -13,7 +13,7 @@ import math
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 from fsi_lab.errors import FsiLabError, InputFileError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
@@ -839,22 +839,32 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, started_with: Sequence[int] = ()) -> int:
     """``fsi-lab``: run a command and return its exit code.
 
     From the first line, Ctrl+C and SIGTERM end the command with exit code 130 and one message
     (a run first puts its bench in the safe state and finalises its file); the signal is also
     noted, so that one whose exception a library swallows is raised at the next checkpoint.
+
+    Parameters
+    ----------
+    argv
+        The command line after ``fsi-lab``; ``sys.argv[1:]`` when None.
+    started_with
+        Signals noted while the command was being imported (:mod:`fsi_lab.launch`, the
+        console script's entry point, notes them): the first ends the command at once.
     """
     global _json_emitted
     note = SignalNote()
     signals = RunSignals(on_signal=note)
-    signals.install()
-    wants_json = False
+    argv = sys.argv[1:] if argv is None else list(argv)
+    wants_json = "--json" in argv
     try:
+        signals.install()
         _json_emitted = False
-        argv = sys.argv[1:] if argv is None else list(argv)
-        wants_json = "--json" in argv
+        if started_with:  # noted by the launcher before these handlers were in place
+            note(started_with[0])
+            note.check()
         args = build_parser(json_requested=wants_json).parse_args(argv)
         args.signals, args.signal_note = signals, note
         return _run_command(args)
