@@ -330,6 +330,67 @@ def _analyze_batch(args) -> int:
     return code
 
 
+def aggregate_tasks(paths: list[Path], sets: list[str], mass_per_length: float | None):
+    """The run files ``fsi-lab aggregate`` takes: the files given, or of one directory the
+    completed runs of its sequence (labelled by their place in it), or its run files."""
+    from fsi_lab.aggregate_extract import ExtractTask
+    from fsi_lab.seqfile import SEQUENCE_FILE, load_record
+    from fsi_lab.sequence import extract_tasks
+
+    if len(paths) == 1 and paths[0].is_dir():
+        directory = paths[0]
+        if (directory / SEQUENCE_FILE).exists():
+            return extract_tasks(load_record(directory), sets, mass_per_length)
+        files = sorted(p for p in directory.glob("*.h5") if p.name != SEQUENCE_FILE)
+        if not files:
+            raise InputFileError(f"{directory}: holds no run file (*.h5) and no sequence; "
+                                 "expected run files or the --out directory of fsi-lab "
+                                 "sequence")
+        paths = files
+    names = [path.name for path in paths]
+    return [ExtractTask(str(path), tuple(sets), mass_per_length,
+                        path.name if names.count(path.name) == 1 else str(path))
+            for path in dict.fromkeys(paths)]
+
+
+def cmd_aggregate(args) -> int:
+    """``fsi-lab aggregate RUN.h5 ... | DIR``: the runs' modes grouped by frequency, C_i and
+    C_f fitted to the union of their free decays, backbones and damping curves on one
+    amplitude axis, the spread between runs (fsi_lab.aggregate)."""
+    from fsi_lab.aggregate import aggregate_extracts, extract_runs, format_aggregate
+    from fsi_lab.batch import require_mass_per_length
+    from fsi_lab.executor import make_executor
+
+    require_mass_per_length(args.mass_per_length)
+    tasks = aggregate_tasks(args.runs, args.set, args.mass_per_length)
+    executor = make_executor(args.jobs, args.scheduler)
+    bus = EventBus()
+    console = Console(args.quiet or args.json, args.verbose)
+    bus.subscribe(console)
+    try:
+        with executor:
+            bus.log("INFO", f"identifying the modes of {len(tasks)} run"
+                            f"{'s' * (len(tasks) != 1)} with {executor.describe()}")
+
+            def done(count: int) -> None:
+                bus.emit(Progress("aggregate", count / len(tasks),
+                                  f"{count} of {len(tasks)} runs"))
+                args.signal_note.check()
+
+            extracts = extract_runs(tasks, executor, done)
+        agg = aggregate_extracts(extracts)
+    finally:
+        console.close()
+    for run in agg["runs"]:
+        for error in run["errors"]:
+            print(f"[error] {run['label']}: {error}", file=sys.stderr)
+    if args.json:
+        _emit_json({**agg, "executor": executor.as_json()})
+    else:
+        print(format_aggregate(agg))
+    return agg["exit_code"]
+
+
 def cmd_import(args) -> int:
     from fsi_lab.csv_import import import_csv
 
@@ -841,6 +902,26 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
                    help="mu + M for data without a specimen (kg/m)")
     common(p)
     p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser("aggregate", help="one answer from many runs: modes grouped by "
+                                         "frequency, C_i and C_f fitted to all their decays, "
+                                         "backbones and damping on one amplitude axis, the "
+                                         "spread between runs")
+    p.add_argument("runs", type=Path, nargs="+", metavar="RUN.h5|DIR",
+                   help="run files, or a directory: the completed runs of its sequence, or its "
+                        "run files")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override an analysis parameter of every run, e.g. "
+                        "analysis.hvd.components=1")
+    p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
+                   help="mu + M for runs without a specimen (kg/m)")
+    p.add_argument("--jobs", type=_jobs, metavar="N",
+                   help="identify the runs in N local worker processes")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="identify the runs on the Dask scheduler at ADDRESS "
+                        "(fsi-lab[cluster])")
+    common(p)
+    p.set_defaults(func=cmd_aggregate)
 
     p = sub.add_parser("import", help="turn a CSV file ('name [unit]' header) into a run file")
     p.add_argument("csv", type=Path)
