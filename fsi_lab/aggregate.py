@@ -29,7 +29,6 @@ from typing import Any
 import numpy as np
 
 from fsi_lab.aggregate_extract import ExtractTask, ModeExtract, RunExtract, extract_run
-from fsi_lab.aggregate_fit import fit_union
 from fsi_lab.errors import FsiLabError
 
 #: Modes of different runs closer than this (relative) to a group's median natural frequency
@@ -174,6 +173,8 @@ def _group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
                               f"{', '.join(labels[p] for p, m in members if m in differing)}); "
                               "aggregate the runs of one beam")
     else:
+        from fsi_lab.aggregate_fit import fit_union
+
         try:
             union = fit_union([m.run_decays() for m in modes])
         except FsiLabError as exc:

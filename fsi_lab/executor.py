@@ -22,7 +22,6 @@ cluster.
 from __future__ import annotations
 
 import abc
-import os
 import queue
 import signal
 import time
@@ -41,6 +40,8 @@ POLL_S = 0.5
 STOP_WAIT_S = 5.0
 #: How long a Dask scheduler gets to answer when the executor connects, s.
 CONNECT_TIMEOUT_S = 20.0
+#: What a local worker sends when it starts a task (its function's module imported).
+STARTED = "started"
 #: The address form a Dask scheduler is given by.
 SCHEDULER_EXAMPLE = "tcp://127.0.0.1:8786"
 
@@ -123,8 +124,9 @@ class Executor(abc.ABC):
         items
             Its arguments (picklable).
         task_timeout
-            Longest time one task may run, s (None: no limit); a task that runs longer fails
-            and its worker is stopped (not enforced in-process).
+            Longest time one task may run, s, from when its worker starts it (None: no limit);
+            a task that runs longer fails and its worker is stopped (not enforced in-process;
+            on a cluster, from when it was sent).
         """
         raise NotImplementedError  # each executor below implements it
 
@@ -177,7 +179,11 @@ def _worker_loop(conn) -> None:
             return
         if message is None:
             return
-        func, item = message
+        func, item = message  # (unpickled: the function's module is imported by now)
+        try:
+            conn.send(STARTED)  # a task's time limit counts from here
+        except (OSError, EOFError):
+            return
         outcome = call_task(func, item)
         try:
             conn.send(outcome)
@@ -194,7 +200,7 @@ class _Worker:
     process: Any
     conn: Any
     task: int | None = None
-    started: float = 0.0
+    started: float | None = None  # when it started the task (monotonic s), None before
 
 
 def describe_exit(code: int | None) -> str:
@@ -251,7 +257,7 @@ class LocalProcesses(Executor):
                 while pending and (idle or len(busy) < self.workers):
                     worker = idle.pop() if idle else self._start()
                     index = pending.popleft()
-                    worker.task, worker.started = index, time.monotonic()
+                    worker.task, worker.started = index, None
                     busy.append(worker)
                     try:
                         worker.conn.send((func, items[index]))
@@ -282,8 +288,11 @@ class LocalProcesses(Executor):
         index = worker.task
         if worker.conn in ready or worker.process.sentinel in ready:
             try:
-                if worker.conn.poll():
-                    return _result(index, worker.conn.recv()), True
+                while worker.conn.poll():
+                    message = worker.conn.recv()
+                    if message != STARTED:
+                        return _result(index, message), True
+                    worker.started = time.monotonic()
             except (EOFError, OSError):
                 pass
             if worker.process.sentinel in ready or not worker.process.is_alive():
@@ -292,7 +301,8 @@ class LocalProcesses(Executor):
                 worker.conn.close()
                 return TaskResult(index, error=f"its worker process ended while working on it "
                                                f"({how})", exit_code=1, worker_died=True), False
-        if task_timeout is not None and time.monotonic() - worker.started > task_timeout:
+        if task_timeout is not None and worker.started is not None \
+                and time.monotonic() - worker.started > task_timeout:
             self._kill(worker)
             return TaskResult(index, error=f"took longer than {task_timeout:g} s: its worker "
                                            "process was stopped", exit_code=1), False
@@ -358,10 +368,15 @@ class DaskExecutor(Executor):
                 f"--scheduler {address}: no Dask scheduler answered there within "
                 f"{connect_timeout:g} s ({type(exc).__name__}: {exc}); expected the address of "
                 f"a running scheduler, e.g. {SCHEDULER_EXAMPLE}") from None
-        try:
+        try:  # tasks sent to a scheduler without workers would wait for ever
+            self.client.wait_for_workers(1, timeout=connect_timeout)
             self.workers = max(1, len(self.client.scheduler_info()["workers"]))
-        except Exception:  # noqa: BLE001 - informational only
-            self.workers = 1
+        except Exception as exc:  # noqa: BLE001 - TimeoutError, or the scheduler went away
+            self.close()
+            raise ParameterError(
+                f"--scheduler {address}: the scheduler has no workers (none joined within "
+                f"{connect_timeout:g} s: {type(exc).__name__}: {exc}); start workers with "
+                f"dask worker {address} --nthreads 1") from None
 
     def describe(self) -> str:
         return f"the Dask scheduler at {self.address} ({self.workers} workers)"
@@ -448,13 +463,3 @@ def make_executor(jobs: int | None = None, scheduler: str | None = None) -> Exec
     if jobs is None or jobs == 1:
         return InProcess()
     return LocalProcesses(jobs)
-
-
-def default_jobs() -> int:
-    """The cores this process may use (at least 1)."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except (AttributeError, OSError):
-        return max(1, os.cpu_count() or 1)
-
-

@@ -84,8 +84,8 @@ def dask_cluster():
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
         cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                               host="127.0.0.1", dashboard_address=None, env=PINNED_ENV,
-                               silence_logs=50)
+                               host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                               env=PINNED_ENV, silence_logs=50)
         try:
             yield cluster
         finally:
