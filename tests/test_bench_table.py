@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from bench import bench_startup
+from bench import bench_analysis, bench_startup
 from bench.table import cache_times, cold_times, figure
 
 #: median (min-max, n=N) with a unit
@@ -58,3 +58,12 @@ def test_start_up_rows_are_cold_and_warm_with_the_floor_measured_as_many_times(t
     assert (rows[0].target, rows[0].met) == ("-", None)
     assert rows[1].target == "<= 0.5 s" and isinstance(rows[1].met, bool)
 
+
+def test_the_whole_chain_row_runs_the_default_chain_on_its_record():
+    from fsi_lab.chain import DEFAULT_CHAIN, run_chain
+
+    inputs = bench_analysis.chain_inputs(seconds=2.0)
+    assert inputs["channels"]["tip"].data.size == 2 * bench_analysis.CHAIN_FS
+    assert list(inputs["params"]) == list(DEFAULT_CHAIN)
+    _, summary = run_chain(**inputs)
+    assert "errors" not in summary["tip"], summary["tip"].get("errors")
