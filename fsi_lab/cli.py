@@ -716,16 +716,31 @@ def cmd_gui(args) -> int:
 EXIT_STRICT = 3
 
 
+def _warnings(entry: dict[str, Any]) -> list[tuple[str, str]]:
+    """Every warning of a channel's or a component's summary as (key, sentence): its own
+    ``warnings`` (key "") and those of each analysis that keeps them under its key (``frf``'s
+    at channel level, for one); a channel's components are not looked into."""
+    found = [("", w) for w in entry.get("warnings", [])]
+    for key, value in entry.items():
+        if isinstance(value, dict):
+            found.extend((key, w) for w in value.get("warnings", []))
+    return found
+
+
 def strict_problems(summary: dict[str, Any]) -> list[str]:
     """What makes ``--strict`` fail: every refused result (an analysis or a component that
-    failed) and every warning, one line each, naming the channel and component."""
+    failed) and every warning, channel-level or a component's, one line each, naming the
+    channel, and the analysis or component."""
     problems = []
     for channel, info in summary.get("channels", {}).items():
         for error in info.get("errors", []):
             problems.append(f"channel {channel}: {error['message']}")
+        problems.extend(f"channel {channel}{' ' + key if key else ''}: {w}"
+                        for key, w in _warnings(info))
         for component in info.get("components", []):
             where = f"channel {channel} component {component['index']}"
-            problems.extend(f"{where}: {w}" for w in component.get("warnings", []))
+            problems.extend(f"{where}{' ' + key if key else ''}: {w}"
+                            for key, w in _warnings(component))
             for value in component.values():
                 if isinstance(value, dict) and value.get("error"):
                     problems.append(f"{where}: {value['error']}")
@@ -783,6 +798,7 @@ def format_summary(summary: dict[str, Any]) -> str:
             f": spectrum peaks {', '.join(f'{p:.2f}' for p in peaks[:6])} Hz" if peaks else ""))
         for note in info.get("notes", []):
             lines.append(f"  note: {note}")
+        lines.extend(f"  {key + ' ' if key else ''}warning: {w}" for key, w in _warnings(info))
         for component in info.get("components", []):
             text = f"  component {component['index']}"
             if component.get("frequency_hz") is not None:
@@ -803,7 +819,8 @@ def format_summary(summary: dict[str, Any]) -> str:
                         label = f"{name[0].upper()}{name[1:]}"
                         text += f"; {label} is not resolved (its interval contains 0)"
             lines.append(text)
-            lines.extend(f"    warning: {w}" for w in component.get("warnings", []))
+            lines.extend(f"    {key + ' ' if key else ''}warning: {w}"
+                         for key, w in _warnings(component))
             # Per-component errors (hvd's on a component that switches modes is carried by
             # every later analysis): each distinct message once.
             seen: list[str] = []
