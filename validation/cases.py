@@ -63,6 +63,9 @@ class Case:
     expect
         ``"number"``: C_i and C_f within the targets (or warned); ``"refusal"``: the record
         holds no usable free decay, and the right answer is a clear refusal.
+    bench
+        For a row of the simulated wet bench (:mod:`validation.bench`): the ``--set``
+        overrides of profiles/wet-beam-sim.toml; ``modes`` then holds mode 2's truth only.
     """
 
     name: str
@@ -75,6 +78,7 @@ class Case:
     law: str = "quadratic"
     tags: tuple[str, ...] = field(default=())
     expect: str = "number"
+    bench: tuple[str, ...] = ()
 
     @property
     def truth(self) -> Mode:
@@ -169,15 +173,21 @@ def _mode_velocity(mode: Mode, case: Case) -> np.ndarray:
 
 @functools.lru_cache(maxsize=64)
 def clean_record(case: Case) -> np.ndarray:
-    """The case's noise-free velocity record, m/s (cached: every trial adds its own noise)."""
+    """The case's noise-free velocity record, m/s (cached: every trial adds its own noise); a
+    bench row's tip velocity and base acceleration (:func:`.bench.bench_record`)."""
+    if case.bench:
+        from validation.bench import bench_record
+
+        return bench_record(case)
     return np.sum([_mode_velocity(m, case) for m in case.modes], axis=0)
 
 
 def trial(case: Case, seed: int) -> np.ndarray:
-    """One noisy realisation of the case's record."""
+    """One noisy realisation of the case's record (each row of a bench record its own)."""
     clean = clean_record(case)
     rng = np.random.default_rng(seed)
-    return clean + case.noise * float(np.max(np.abs(clean))) * rng.standard_normal(clean.size)
+    scale = case.noise * np.max(np.abs(clean), axis=-1, keepdims=True)
+    return clean + scale * rng.standard_normal(clean.shape)
 
 
 # ----------------------------------------------------------------------------- the matrix
@@ -245,4 +255,6 @@ def impulse_train(spacing: float, *, peak: float = TRAIN_PEAK, duration: float =
 
 def matrix() -> list[Case]:
     """Every case of ``make validate``."""
-    return sdof_grid() + other_cases()
+    from validation.bench import bench_cases
+
+    return sdof_grid() + other_cases() + bench_cases()

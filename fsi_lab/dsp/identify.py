@@ -78,6 +78,9 @@ SPLIT_FLOOR = 4.0
 #: multiples of one frequency (within COMB_TOLERANCE of it) is a comb: excited periodically,
 #: too often for its decays to be told apart (a structure's modes are not harmonic).
 COMB_LINES, COMB_TOLERANCE = 4, 0.02
+#: A decay whose base (the reference) moves at more than this share of its largest envelope
+#: (the median over the decay) is forced, not free.
+FORCED_LEVEL = 0.02
 #: The decays are split on the record low-passed at this multiple of its dominant frequency.
 SPLIT_BAND = 8.0
 #: Spectral peaks below this fraction of the largest are not candidate modes.
@@ -345,7 +348,12 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
             if later and max(later) > free:
                 free, lead = max(later), 0
         out.append((max(0, free - lead), free, stop))
-    return [w for w in out if w[2] - w[0] >= 32]
+    out = [w for w in out if w[2] - w[0] >= 32]
+    # A window cut short by a late excitation end (a burst of random forcing split off as a
+    # decay) holds no decay; it is left out when another holds MIN_CYCLES cycles (all short:
+    # an impulse train too dense, which the candidates' notes then name).
+    enough = [w for w in out if (w[2] - w[1]) * f_dom >= MIN_CYCLES * fs]
+    return enough or out
 
 
 def _refuse_comb(frequencies: np.ndarray, f_dom: float) -> None:
@@ -377,6 +385,31 @@ def _spacing_advice(frequency: float) -> str:
     return (f"an impulse train's impulses must be at least {need:.2g} s apart ({MIN_CYCLES + 1} "
             f"cycles of the {frequency:.4g} Hz mode), and further apart when its decays are "
             "slow to fall below half their start")
+
+
+def _unforced(windows: list[tuple[int, int, int]], reference: np.ndarray, fs: float,
+              f_dom: float) -> list[tuple[int, int, int]]:
+    """The windows whose base (``reference``, the base acceleration) is still while they last:
+    the median of its envelope over the free part below :data:`FORCED_LEVEL` of its largest.
+    Refuses the record when none is: a base that keeps moving (random or continuous
+    excitation) forces the structure throughout, and no decay is free."""
+    from scipy.signal import hilbert
+
+    ref = reference - float(np.median(reference))
+    env = np.abs(hilbert(ref))
+    top = float(np.max(env))
+    if top <= 0.0:
+        return windows
+    level = [float(np.median(env[free:stop])) / top for _, free, stop in windows]
+    kept = [w for w, v in zip(windows, level) if v < FORCED_LEVEL]
+    if kept:
+        return kept
+    raise fail("identify", f"the base (the reference channel) keeps moving after every "
+                           f"excitation: its envelope stays at {100 * min(level):.0f} % of its "
+                           f"largest or more over each decay (a free decay needs it below "
+                           f"{100 * FORCED_LEVEL:.0f} %): the record holds no free decay (a "
+                           "random or continuous excitation), and C_i and C_f need free decays; "
+                           "end the excitation well before the record ends")
 
 
 def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
@@ -1216,6 +1249,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     windows = _windows(record, fs, f_dom, sigma, decay_starts)
     if not windows:
         raise fail(func, "found no free decay of at least 32 samples")
+    if reference is not None:
+        windows = _unforced(windows, reference, fs, f_dom)
     cand_f, cand_a, notes = _candidates(record, fs, windows, int(components)
                                         if components != "auto" else "auto", band_t, f_dom)
     if len(windows) == 1:

@@ -374,3 +374,27 @@ def test_decays_too_short_for_the_start_test_are_warned():
     mode = identify(trial(case, 0), case.fs).modes[0]
     assert mode.start_drift["untested"] == 1.0
     assert any("too short" in w for w in mode.warnings)
+
+
+# ----------------------------------------------------------------------------- the wet bench
+def test_random_excitation_through_the_whole_record_is_refused_and_its_end_is_waited_for():
+    """The simulated wet bench driven by the random plugin: noise through the whole record
+    (4 s) leaves no free decay, and with the base acceleration as the reference the record is
+    refused saying so (it gave a component at 82 Hz with C_i 2.5 and C_f 49, warned); one
+    second of noise is followed by a free decay, analysed from after the noise (the bursts of
+    the noise are no decays: they cut windows of 15 ms that hid every mode below 133 Hz)."""
+    from fsi_lab.dsp.decays import quiet_times
+    from validation.bench import bench_case
+
+    whole = bench_case("random", ("excitation.plugin=random", "run.duration=4",
+                                  "excitation.duration=4"))
+    x = trial(whole, 0)
+    with pytest.raises(AnalysisError, match="keeps moving after every excitation.*no free "
+                                            "decay"):
+        identify(x[0], whole.fs, reference=x[1])
+    early = bench_case("random", ("excitation.plugin=random", "run.duration=4"))
+    x = trial(early, 0)
+    found = identify(x[0], early.fs, reference=x[1],
+                     decay_starts=list(quiet_times(x[1], early.fs)))
+    assert [start / early.fs > 1.0 for _, start, _ in found.free_windows] == [True]
+    assert any(abs(m.frequency_hz / 17.1 - 1) < 0.02 for m in found.modes)
