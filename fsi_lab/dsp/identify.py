@@ -232,8 +232,8 @@ class ModeIdentification:
         Largest filter correction applied to an extremum, relative to that extremum.
     start_drift
         ``dropped``: first extrema of each decay left out because the law did not hold there
-        yet (:func:`_stable_start`); ``untested``: 1 when the decays were too short for that
-        test; ``a`` and ``beta``: how far the quadratic law's
+        yet (:func:`_stable_start`); ``untested``: 1 when most extrema lie in decays too short
+        for that test; ``a`` and ``beta``: how far the quadratic law's
         coefficients still move, in standard errors, when more are left out (its covariance
         is widened when more than chance allows); ``split_a``, ``split_beta``: how far they
         differ between the larger and the smaller half of the extrema, in standard errors
@@ -906,9 +906,16 @@ def _drift(mode: _Mode, decays: list[dict], follow: str) -> tuple[LawFit, dict[s
     trial = dataclasses.replace(mode, decays=decays, fits={})
     _fit_all(trial, follow, ("quadratic",))
     full = trial.fits["quadratic"]
-    drop = max(2, int(LATE_SHARE * min(d["amplitude"].size for d in decays)))
-    late_decays = _drop_first(decays, drop)
-    if late_decays is None:
+    # Decays too short to lose their first extrema (the last of a train, cut by the record's
+    # end) are left out of the later fit: it is still fitted to a part of the same extrema.
+    sizes = [d["amplitude"].size for d in decays]
+    long = [d for d, n in zip(decays, sizes) if n >= 2 * MIN_CYCLES + 2]
+    if not long:
+        return full, {}
+    drop = max(2, int(LATE_SHARE * min(d["amplitude"].size for d in long)))
+    late_decays = [_part(d, slice(drop, None)) for d in long
+                   if d["amplitude"].size - drop >= 2 * MIN_CYCLES]
+    if not late_decays:
         return full, {}
     late = dataclasses.replace(mode, decays=late_decays, fits={})
     _fit_all(late, follow, ("quadratic",))
@@ -958,7 +965,9 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
     if worst > DRIFT_Z:
         mode.fits["quadratic"] = dataclasses.replace(
             mode.fits["quadratic"], cov=mode.fits["quadratic"].cov * (worst / DRIFT_Z) ** 2)
-    return {**z, "dropped": float(tried), "untested": float(not z),
+    sizes = np.array([d["amplitude"].size for d in mode.decays])
+    short = float(np.sum(sizes[sizes < 2 * MIN_CYCLES + 2])) / float(np.sum(sizes))
+    return {**z, "dropped": float(tried), "untested": float(not z or short > 0.5),
             **_start_sensitivity(mode, follow, tried, shortest)}
 
 
@@ -1120,10 +1129,12 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    "with this law (a base still moving, a law that misfits the large cycles); "
                    f"their intervals are widened {drift / DRIFT_Z:.1f}-fold")
     if m.start_drift.get("untested"):
-        longest = max(d.amplitude.size for d in m.decays)
-        out.append(f"the free decays are too short (at most {longest} extrema above the noise "
-                   "floor each) to test whether their first cycles already follow the law: C_i "
-                   "and C_f assume they do, and rest on the few cycles of each decay")
+        short = 2 * MIN_CYCLES + 2
+        count = sum(d.amplitude.size < short for d in m.decays)
+        out.append(f"{count} of the {len(m.decays)} free decays are too short (fewer than "
+                   f"{short} extrema above the noise floor) to test whether their first cycles "
+                   "already follow the law: C_i and C_f assume they do, and rest on the few "
+                   "cycles of each decay")
     start = max((m.start_drift.get(f"start_{name}", 1.0) for name in ("a", "beta")
                  if quad is not None and _relative_width(quad, name) > START_WARNING_WIDTH),
                 default=1.0)
