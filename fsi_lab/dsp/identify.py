@@ -6,10 +6,15 @@ interval, its backbone (frequency against amplitude), the fits of the candidate 
 (:mod:`.laws`) with the one the record prefers, and sentences saying how far to trust each
 number. The steps:
 
-1. **Free decays.** The record is split into its free decays (:func:`.decays.decay_segments`:
-   a step or ramp derivative gives one, an impulse train one per impulse); each is analysed on
-   its own window, from its largest sample (the end of the excitation; later when the caller
-   knows the excitation ends later) to just before the next build-up.
+1. **Free decays.** The record is split into its free decays (:func:`.decays.decay_segments`
+   on half-period maxima of the record low-passed at :data:`SPLIT_BAND` times its dominant
+   frequency: a step or ramp derivative gives one, an impulse train one per impulse); each is
+   analysed on its own window, from its largest sample (a quarter period later when an
+   excitation inside the record precedes it; later still when the caller knows the excitation
+   ends later) to just before the next build-up. Decays whose base (the reference) still moves
+   are left out, and a record with none is refused (random excitation through the record), as
+   is one excited too often to split (its spectrum a comb of harmonic lines: :data:`COMB_LINES`),
+   with the impulse spacing it would need.
 2. **Modes.** The peaks of the decays' averaged spectrum (:func:`.spectrum.averaged_spectrum`)
    of at least :data:`MODE_THRESHOLD` of the largest are candidate modes; those the sampling
    cannot resolve (fewer than :data:`MIN_SAMPLES_PER_CYCLE` samples per cycle) or the windows
@@ -28,7 +33,9 @@ number. The steps:
    fitted model itself: the model decays of every mode are put through the same padding,
    filters and extremum search, and the difference from the model's exact extrema is taken
    off the measured ones; the linear frequency is adjusted the same way from the crossings.
-   The fits are then repeated until they settle (:data:`MAX_PASSES`).
+   The fits are then repeated until they settle (:data:`MAX_PASSES`), the last time with the
+   record's noise added to the model, whose spread of the coefficients widens their intervals
+   where the fit's own covariance falls short (:func:`_noise_spread`).
 7. **Backbone.** Frequency ``1 / (t[i+1] - t[i-1])`` at each zero crossing against the
    displacement amplitude (the geometric mean of the two neighbouring extrema). The natural
    frequency is the backbone's small-amplitude limit: the damping's share of each period is
@@ -1205,7 +1212,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     ------
     AnalysisError
         A record that cannot be read (see :func:`._signal.as_record`), an unknown quantity or
-        law, no oscillation, or no mode with a free decay above the noise.
+        law, no oscillation, or no mode with a free decay above the noise: among them a record
+        excited too often for its decays to be told apart and one whose ``reference`` keeps
+        moving (no decay is free), each named with what it would need.
 
     Examples
     --------
