@@ -1,10 +1,12 @@
 """``make validate``: the validation matrix, one row per case with known truth.
 
 Columns: bias and RMS error of C_i and C_f (% of the truth) and the coverage of their 95 %
-intervals over the trials; the natural frequency's largest error (%); the share of trials whose
+intervals over the trials; the natural frequency's RMS error (%); the share of trials whose
 preferred damping law is the record's own, warned, and refused; the silent misses (a number off
 by more than the target with an interval that excludes the truth and no warning: what must
-never happen); and the peer method's bias and coverage in the same trials.
+never happen); and the peer method's bias and coverage in the same trials (on the wet bench's
+rows the peer's C_f is that of the measured amplitude, without the modal conversion, and its
+C_i and C_f see every mode of the record at once: read it as a reference only).
 
 Targets (the issue's): at 1 % noise C_i within 2 % and C_f within 5 % (bias), at 3 % within 5 %
 and 10 %; coverage 90 to 98 %; natural frequencies within 0.2 %.
