@@ -60,6 +60,12 @@ class Case:
         Noise RMS as a fraction of the record's largest value.
     law
         The damping law the record follows (``"quadratic"``, ``"viscous"``, ``"coulomb"``).
+    expect
+        ``"number"``: C_i and C_f within the targets (or warned); ``"refusal"``: the record
+        holds no usable free decay, and the right answer is a clear refusal.
+    bench
+        For a row of the simulated wet bench (:mod:`validation.bench`): the ``--set``
+        overrides of profiles/wet-beam-sim.toml; ``modes`` then holds mode 2's truth only.
     """
 
     name: str
@@ -71,6 +77,8 @@ class Case:
     noise: float = 0.01
     law: str = "quadratic"
     tags: tuple[str, ...] = field(default=())
+    expect: str = "number"
+    bench: tuple[str, ...] = ()
 
     @property
     def truth(self) -> Mode:
@@ -165,15 +173,21 @@ def _mode_velocity(mode: Mode, case: Case) -> np.ndarray:
 
 @functools.lru_cache(maxsize=64)
 def clean_record(case: Case) -> np.ndarray:
-    """The case's noise-free velocity record, m/s (cached: every trial adds its own noise)."""
+    """The case's noise-free velocity record, m/s (cached: every trial adds its own noise); a
+    bench row's tip velocity and base acceleration (:func:`.bench.bench_record`)."""
+    if case.bench:
+        from validation.bench import bench_record
+
+        return bench_record(case)
     return np.sum([_mode_velocity(m, case) for m in case.modes], axis=0)
 
 
 def trial(case: Case, seed: int) -> np.ndarray:
-    """One noisy realisation of the case's record."""
+    """One noisy realisation of the case's record (each row of a bench record its own)."""
     clean = clean_record(case)
     rng = np.random.default_rng(seed)
-    return clean + case.noise * float(np.max(np.abs(clean))) * rng.standard_normal(clean.size)
+    scale = case.noise * np.max(np.abs(clean), axis=-1, keepdims=True)
+    return clean + scale * rng.standard_normal(clean.shape)
 
 
 # ----------------------------------------------------------------------------- the matrix
@@ -209,15 +223,38 @@ def other_cases() -> list[Case]:
         Case("viscous + Coulomb", (Mode(WET_F, c_i=0.3, friction=0.4, x0=1e-3),),
              duration=3.0, law="coulomb"),
     ]
-    for spacing in (0.5, 1.0, 2.0):
-        count = int(6.0 // spacing)
-        impulses = tuple((0.1 + k * spacing, 0.01, 1500.0 * (1.0 - 0.5 * k / count))
-                         for k in range(count))
-        cases.append(Case(f"impulse train, {spacing:g} s apart", (Mode(WET_F, c_f=WET_C_F),),
-                          duration=0.1 + count * spacing, impulses=impulses))
+    for spacing in (0.25, 0.5, 1.0, 2.0):
+        cases.append(impulse_train(spacing))
+    # Impulses 2 cycles apart: each restarts the motion before its decay can be told from the
+    # next (the identification must refuse, naming the spacing it needs).
+    cases.append(impulse_train(0.12, duration=3.0, expect="refusal"))
+    # Impulses 40 times stronger: 22 mm at the tip, where the quadratic drag damps the first
+    # half cycle past critical (an equivalent damping ratio of about 2); the decay falls into
+    # the 1 % noise (of its peak) within a few cycles and no mode rings freely.
+    cases.append(impulse_train(1.0, peak=1500.0, expect="refusal",
+                               name="impulse train, 1 s apart, overdriven (22 mm)"))
     return cases
+
+
+#: Peak acceleration (m/s^2, per unit mass) of the trains' first 10 ms half-sine impulse: the
+#: wet beam's mode 2 then starts its decay at about 0.19 m/s (1.8 mm), the SDOF grid's range.
+TRAIN_PEAK = 40.0
+
+
+def impulse_train(spacing: float, *, peak: float = TRAIN_PEAK, duration: float = 6.0,
+                  expect: str = "number", name: str | None = None) -> Case:
+    """The wet beam's mode 2 struck by half-sine impulses ``spacing`` s apart over about
+    ``duration`` s, their peaks falling from ``peak`` to half of it (decays from several
+    amplitudes, as the impulse-train excitation's descending order gives)."""
+    count = int(round(duration / spacing))
+    impulses = tuple((0.1 + k * spacing, 0.01, peak * (1.0 - 0.5 * k / count))
+                     for k in range(count))
+    return Case(name or f"impulse train, {spacing:g} s apart", (Mode(WET_F, c_f=WET_C_F),),
+                duration=0.1 + count * spacing, impulses=impulses, expect=expect)
 
 
 def matrix() -> list[Case]:
     """Every case of ``make validate``."""
-    return sdof_grid() + other_cases()
+    from validation.bench import bench_cases
+
+    return sdof_grid() + other_cases() + bench_cases()

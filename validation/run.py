@@ -113,6 +113,10 @@ def peer_estimate(case: Case, x: np.ndarray) -> Estimate:
 def run_trial(args: tuple[Case, int]) -> tuple[Estimate, Estimate]:
     case, seed = args
     x = trial(case, seed)
+    if case.bench:
+        from validation.bench import bench_estimate
+
+        return bench_estimate(case, x), peer_estimate(case, x[0])
     return fsi_lab_estimate(case, x), peer_estimate(case, x)
 
 

@@ -16,7 +16,8 @@ record), with no knowledge of the excitation, so it works as well on imported da
 - it does start only when that rise is abrupt (:data:`ABRUPT`): an excitation (an impulse)
   lifts the amplitude far faster than the decay after it lets it down, whereas two modes
   beating, or a resonance passed during a sweep, swell about as slowly as they fade;
-- the previous decay ends at its lowest amplitude before the rise (that point included);
+- the previous decay ends at its lowest amplitude before the rise (that point included; the
+  last of equally low ones, as where amplitudes below a noise floor count as the floor);
 - a decay's peak is its largest amplitude, and its free part runs from the peak plus
   ``settle`` to the end of the decay minus ``guard``. A decay too short for both (its free part
   would hold no point) is left out; its points belong to no decay.
@@ -148,8 +149,8 @@ def split_decays(times: Any, amplitude: Any, *, settle: float = 0.0, guard: floa
         return FreeDecays(empty, empty, empty, empty, np.empty(0, dtype=np.int64))
     # mean[i] pairs a[i] and a[i + 1]; at a low m, mean[m] < mean[m - 1] gives
     # a[m + 1] <= a[m - 1]: a[m + 1] is still the decay, its last point.
-    mean = np.sqrt(a[:-1] * a[1:]) if a.size > 1 else a.copy()
-    lows = _abrupt_lows(mean, _rise_lows(mean, rise, confirm), abrupt)
+    mean = np.sqrt(a[:-1]) * np.sqrt(a[1:]) if a.size > 1 else a.copy()   # (no underflow)
+    lows = _abrupt_lows(mean, _rise_lows(mean, rise, confirm), abrupt, rise)
     last = [m + 1 for m in lows]
     edges = [0, *(i + 1 for i in last), a.size]
     peaks = [lo + int(np.argmax(a[lo:hi])) for lo, hi in zip(edges[:-1], edges[1:])]
@@ -199,15 +200,19 @@ def _rise_lows(mean: np.ndarray, rise: float, confirm: int) -> list[int]:
             pk = mn = i
         elif v > av[pk]:
             pk = mn = i
-        elif v < av[mn]:
+        elif v <= av[mn]:
             mn = i
     return lows
 
 
-def _abrupt_lows(mean: np.ndarray, lows: list[int], abrupt: float) -> list[int]:
-    """The ``lows`` (indices of ``mean``) whose rise is abrupt: the swell from each low to the
-    largest value before the next low (or the end) is less than ``abrupt`` times the fade after
-    that largest value (see :data:`ABRUPT`).
+def _abrupt_lows(mean: np.ndarray, lows: list[int], abrupt: float, rise: float) -> list[int]:
+    """The ``lows`` (indices of ``mean``) whose rise is abrupt: the swell up to the largest
+    value before the next low (or the end) is less than ``abrupt`` times the fade after it.
+
+    Swell and fade are the areas above the low of the run of points around that largest value
+    that stays above ``rise`` times the low: the rise that started the decay and the fall back
+    to that level. A long lull before the rise (noise a little above the low, over many
+    points) is no swell, and a fade that lingers on far below the peak no fade.
 
     The areas are sums over the points, not integrals in time: the sequence has holes where
     points were left out (cycles below the noise floor, at the lows), which an integral would
@@ -215,9 +220,14 @@ def _abrupt_lows(mean: np.ndarray, lows: list[int], abrupt: float) -> list[int]:
     """
     keep = []
     for lo, hi in zip(lows, [*lows[1:], mean.size - 1]):
-        excess = np.maximum(mean[lo:hi + 1] - mean[lo], 0.0)
+        seg = mean[lo:hi + 1]
+        excess = np.maximum(seg - seg[0], 0.0)
         pk = int(np.argmax(excess))
-        if float(np.sum(excess[1:pk])) < abrupt * float(np.sum(excess[pk + 1:])):
+        low = np.flatnonzero(seg <= rise * seg[0])
+        first = int(low[low < pk].max()) + 1 if np.any(low < pk) else 1
+        after = low[low > pk]
+        last = int(after.min()) if after.size else seg.size
+        if float(np.sum(excess[first:pk])) < abrupt * float(np.sum(excess[pk + 1:last])):
             keep.append(lo)
     return keep
 
@@ -284,7 +294,8 @@ def first_decay_peak(x: Any, fs: float, block: float, floor: float = 0.0) -> int
     return int(ib[keep][int(np.searchsorted(tb[keep], decays.peaks[0]))])
 
 
-def decay_segments(x: Any, fs: float, period: float) -> list[tuple[int, int]]:
+def decay_segments(x: Any, fs: float, period: float, floor: float = 0.0,
+                   confirm: int = CONFIRM) -> list[tuple[int, int]]:
     """Index ranges ``[start, stop)`` of the free decays of a raw record, for estimates (a
     spectrum) that must not span two excitations.
 
@@ -300,7 +311,14 @@ def decay_segments(x: Any, fs: float, period: float) -> list[tuple[int, int]]:
     fs
         Sample rate, Hz.
     period
-        Block length, s: about one period of the record's dominant oscillation.
+        Block length, s: about one period of the record's dominant oscillation (half of one
+        is enough: ``|x|`` peaks every half period).
+    floor
+        Noise level, unit of x: block maxima below it count as ``floor``, so that a new decay
+        must rise :data:`RISE_FACTOR` times above the noise, not above a lull of the noise.
+    confirm
+        Consecutive block points that must stay above the rise threshold
+        (:func:`split_decays`).
 
     Returns
     -------
@@ -320,7 +338,8 @@ def decay_segments(x: Any, fs: float, period: float) -> list[tuple[int, int]]:
     tb, ib, mb = tb[above], ib[above], mb[above]
     if tb.size < 4:
         return whole
-    decays = split_decays(tb, mb)
+    mb = np.maximum(mb, float(floor))
+    decays = split_decays(tb, mb, confirm=confirm)
     if decays.count < 2:
         return whole
     starts = ib[np.searchsorted(tb, decays.peaks)]

@@ -6,10 +6,15 @@ interval, its backbone (frequency against amplitude), the fits of the candidate 
 (:mod:`.laws`) with the one the record prefers, and sentences saying how far to trust each
 number. The steps:
 
-1. **Free decays.** The record is split into its free decays (:func:`.decays.decay_segments`:
-   a step or ramp derivative gives one, an impulse train one per impulse); each is analysed on
-   its own window, from its largest sample (the end of the excitation; later when the caller
-   knows the excitation ends later) to just before the next build-up.
+1. **Free decays.** The record is split into its free decays (:func:`.decays.decay_segments`
+   on half-period maxima of the record low-passed at :data:`SPLIT_BAND` times its dominant
+   frequency: a step or ramp derivative gives one, an impulse train one per impulse); each is
+   analysed on its own window, from its largest sample (a quarter period later when an
+   excitation inside the record precedes it; later still when the caller knows the excitation
+   ends later) to just before the next build-up. Decays whose base (the reference) still moves
+   are left out, and a record with none is refused (random excitation through the record), as
+   is one excited too often to split (its spectrum a comb of harmonic lines: :data:`COMB_LINES`),
+   with the impulse spacing it would need.
 2. **Modes.** The peaks of the decays' averaged spectrum (:func:`.spectrum.averaged_spectrum`)
    of at least :data:`MODE_THRESHOLD` of the largest are candidate modes; those the sampling
    cannot resolve (fewer than :data:`MIN_SAMPLES_PER_CYCLE` samples per cycle) or the windows
@@ -28,7 +33,9 @@ number. The steps:
    fitted model itself: the model decays of every mode are put through the same padding,
    filters and extremum search, and the difference from the model's exact extrema is taken
    off the measured ones; the linear frequency is adjusted the same way from the crossings.
-   The fits are then repeated (:data:`CORRECTION_PASSES` times).
+   The fits are then repeated until they settle (:data:`MAX_PASSES`), the last time with the
+   record's noise added to the model, whose spread of the coefficients widens their intervals
+   where the fit's own covariance falls short (:func:`_noise_spread`).
 7. **Backbone.** Frequency ``1 / (t[i+1] - t[i-1])`` at each zero crossing against the
    displacement amplitude (the geometric mean of the two neighbouring extrema). The natural
    frequency is the backbone's small-amplitude limit: the damping's share of each period is
@@ -44,6 +51,7 @@ number. The steps:
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Sequence
@@ -51,7 +59,7 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.stats as sstats
 
-from fsi_lab.dsp._signal import as_record, check_rate, fail, smooth_step
+from fsi_lab.dsp._signal import _band_limited, as_record, check_rate, fail, smooth_step
 from fsi_lab.dsp.bands import ModeBands, split
 from fsi_lab.dsp.decays import decay_segments, first_decay_peak, quiet_times
 from fsi_lab.dsp.instantaneous import half_cycles
@@ -64,12 +72,24 @@ from fsi_lab.dsp.laws import (
     fit_law,
     simulate_decay,
 )
-from fsi_lab.dsp.spectrum import averaged_spectrum, find_peaks_interpolated
+from fsi_lab.dsp.spectrum import amplitude_spectrum, averaged_spectrum, find_peaks_interpolated
 from fsi_lab.errors import AnalysisError
 
 QUANTITIES = ("velocity", "displacement", "acceleration")
 #: A decay's free part starts earlier than its largest sample at extrema this close to it.
 LEVEL_BACK = 0.95
+#: The largest of white noise over half a period is about 3 times its RMS: a new free decay
+#: must rise well above this many times it (:func:`_windows`).
+SPLIT_FLOOR = 4.0
+#: A record with one free decay whose spectral peaks include COMB_LINES or more consecutive
+#: multiples of one frequency (within COMB_TOLERANCE of it) is a comb: excited periodically,
+#: too often for its decays to be told apart (a structure's modes are not harmonic).
+COMB_LINES, COMB_TOLERANCE = 4, 0.02
+#: A decay whose base (the reference) moves at more than this share of its largest envelope
+#: (the median over the decay) is forced, not free.
+FORCED_LEVEL = 0.02
+#: The decays are split on the record low-passed at this multiple of its dominant frequency.
+SPLIT_BAND = 8.0
 #: Spectral peaks below this fraction of the largest are not candidate modes.
 MODE_THRESHOLD = 0.01
 #: A candidate's spectral peak must stand this many times above the spectrum's noise level.
@@ -77,6 +97,8 @@ NOISE_MARGIN = 10.0
 #: A spectral peak is a mode of its own when the spectrum around it (its col) falls below this
 #: fraction of its height.
 VALLEY = 0.5
+#: The decays' averaged spectrum has at least this many bins per dominant frequency.
+SPECTRUM_BINS = 32
 #: Relative smoothing of the spectrum before the peak search: peaks closer merge.
 PEAK_SMOOTHING = 0.05
 #: Fewest samples per cycle of a mode.
@@ -87,8 +109,11 @@ MIN_CYCLES = 3
 FLOOR = 5.0
 #: ... judged on the fitted envelope, after a first fit on those above FIRST_FLOOR times it.
 FIRST_FLOOR = 3.0
-#: A coefficient whose 95 % interval is wider than +- this share of it gets a warning.
-POOR_PRECISION = 0.25
+#: A coefficient whose 95 % interval is wider than +- this share of it gets a warning: at such
+#: a precision the estimates also carry a bias of a third of a standard error or more (at 3 %
+#: noise and 500 Hz, intervals of +-15 to 35 % came with biases of +6 % (C_i) and -7 % (C_f),
+#: beyond the 5 % and 10 % the validation holds them to).
+POOR_PRECISION = 0.15
 #: A cubic stiffness is fitted only when it moves the frequency by this share or more.
 STIFFNESS_SHIFT = 2e-3
 #: A mode is free once the base motion in its band has fallen below this share of its peak.
@@ -111,8 +136,10 @@ START_Z = 2.0
 START_WARNING, START_WARNING_WIDTH = 1.5, 0.05
 #: A filter correction larger than this share of an extremum gets a warning.
 CORRECTION_WARNING = 0.5
-#: Passes of the filter correction (step 6).
-CORRECTION_PASSES = 2
+#: Most noise-free passes of the filter correction (step 6), each repeated while the
+#: quadratic law still moves by PASS_TOLERANCE of its standard errors or more; then one pass
+#: with the record's noise.
+MAX_PASSES, PASS_TOLERANCE = 4, 0.3
 #: Noisy model records measured in the last pass (an even number: antithetic pairs).
 NOISE_REALIZATIONS = 16
 #: Extrema at each end of a decay whose error spread is measured (the edge padding's).
@@ -217,11 +244,15 @@ class ModeIdentification:
         Largest filter correction applied to an extremum, relative to that extremum.
     start_drift
         ``dropped``: first extrema of each decay left out because the law did not hold there
-        yet (:func:`_stable_start`); ``a`` and ``beta``: how far the quadratic law's
+        yet (:func:`_stable_start`); ``untested``: 1 when most extrema lie in decays too short
+        for that test; ``a`` and ``beta``: how far the quadratic law's
         coefficients still move, in standard errors, when more are left out (its covariance
         is widened when more than chance allows); ``split_a``, ``split_beta``: how far they
         differ between the larger and the smaller half of the extrema, in standard errors
-        (:func:`_one_law`).
+        (:func:`_one_law`); ``start_a``, ``start_beta``: the factors their standard errors
+        were widened by for the start's sensitivity (:func:`_start_sensitivity`);
+        ``noise_a``, ``noise_beta``: those for the noise's spread through the filters'
+        padding (:func:`_noise_spread`).
     warnings
         Sentences on how far to trust the numbers; empty when every check passed.
     """
@@ -286,31 +317,111 @@ class Identification:
 
 
 # ----------------------------------------------------------------------------- steps
-def _windows(x: np.ndarray, fs: float, f_dom: float, floor: float,
+def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
              starts: Sequence[float] | None) -> list[tuple[int, int, int]]:
     """Free-decay windows ``(start, free, stop)``: analysis starts at ``start`` (a quarter
     period before the decay's largest sample, so an extremum there is a complete one),
-    extrema count from ``free`` (the largest sample, or a later excitation end)."""
+    extrema count from ``free`` (the largest sample, or a later excitation end).
+
+    The decays are split on the maxima of ``|x|`` over half periods (each holds an extremum)
+    of the record low-passed at :data:`SPLIT_BAND` times the dominant frequency (less
+    broadband noise: a fast decay stays above it for more cycles), those below
+    :data:`SPLIT_FLOOR` times that record's noise RMS counted as that floor."""
     n = x.size
     period = 1.0 / f_dom
-    segments = decay_segments(x, fs, period)
+    cutoff = SPLIT_BAND * f_dom
+    smooth, noise = x, sigma
+    if 1.25 * cutoff < 0.45 * fs:
+        smooth = _band_limited(x, fs, cutoff)
+        noise = sigma * math.sqrt(min(1.0, 1.125 * cutoff / (0.5 * fs)))
+    segments = decay_segments(smooth, fs, 0.5 * period, SPLIT_FLOOR * noise, confirm=2)
     if len(segments) == 1:
-        segments = [(first_decay_peak(x, fs, period, floor), n)]
+        segments = [(first_decay_peak(x, fs, period, 10.0 * sigma), n)]
+    else:
+        # Each decay's largest sample in the record itself (the low-pass moves it a little).
+        reach = max(1, int(0.25 * fs / f_dom))
+        segments = [(max(0, b - reach) + int(np.argmax(np.abs(x[max(0, b - reach):b + reach]))),
+                     e) for b, e in segments]
     out = []
     quarter = int(0.25 * fs / f_dom)
     for begin, stop in segments:
         free = _walk_back(x, fs, f_dom, begin)
         # Extrema nearly as large before the largest one: the record holds the free decay
         # from its start (release); the window opens a quarter period earlier so that its
-        # first extremum is a whole one. Otherwise the excitation's build-up comes first,
-        # and the window opens where it ends.
+        # first extremum is a whole one. Otherwise the excitation's build-up comes first: the
+        # largest sample is still forced (the velocity peaks while a pulse still pushes), so
+        # the window opens a quarter period after it, where a pulse no longer than that has
+        # ended; the band filters' padding is then fitted to free motion alone.
         lead = quarter if free < begin else 0
+        if free == begin and begin > 0:
+            free = min(begin + quarter, stop - 1)
         if starts is not None:
             later = [int(math.ceil(s * fs)) for s in starts if begin <= s * fs < stop]
             if later and max(later) > free:
                 free, lead = max(later), 0
         out.append((max(0, free - lead), free, stop))
-    return [w for w in out if w[2] - w[0] >= 32]
+    out = [w for w in out if w[2] - w[0] >= 32]
+    # A window cut short by a late excitation end (a burst of random forcing split off as a
+    # decay) holds no decay; it is left out when another holds MIN_CYCLES cycles (all short:
+    # an impulse train too dense, which the candidates' notes then name).
+    enough = [w for w in out if (w[2] - w[1]) * f_dom >= MIN_CYCLES * fs]
+    return enough or out
+
+
+def _refuse_comb(frequencies: np.ndarray, f_dom: float) -> None:
+    """Refuse a record whose one free decay shows a comb of spectral lines (:data:`COMB_LINES`
+    consecutive multiples of one frequency f0): it is excited every 1 / f0 s, too often for
+    the decays between to be told apart (:func:`_windows` found one), and each line would
+    pass for a mode."""
+    f = np.sort(frequencies[frequencies > 0])
+    if f.size < COMB_LINES:
+        return
+    for f0 in np.unique(np.diff(f)):
+        n = np.rint(f / f0)
+        on = (n >= 1) & (np.abs(f - n * f0) <= COMB_TOLERANCE * f0)
+        multiples = np.unique(n[on]).astype(int)
+        run = max((len(list(g)) for _, g in itertools.groupby(
+            enumerate(multiples), key=lambda p: p[1] - p[0])), default=0)
+        if run >= COMB_LINES:
+            lines = ", ".join(f"{v:.4g}" for v in f[on][:6])
+            raise fail("identify", f"the record's spectrum is a comb of lines {f0:.4g} Hz apart "
+                                   f"({lines} Hz): it is excited every {1.0 / f0:.3g} s "
+                                   f"({f_dom / f0:.1f} cycles of its dominant oscillation at "
+                                   f"{f_dom:.4g} Hz), too often for one free decay to be told "
+                                   f"from the next; {_spacing_advice(f_dom)}")
+
+
+def _spacing_advice(frequency: float) -> str:
+    """What an impulse train needs for the mode at ``frequency`` (Hz)."""
+    need = (MIN_CYCLES + 1.0) / frequency
+    return (f"an impulse train's impulses must be at least {need:.2g} s apart ({MIN_CYCLES + 1} "
+            f"cycles of the {frequency:.4g} Hz mode), and further apart when its decays are "
+            "slow to fall below half their start")
+
+
+def _unforced(windows: list[tuple[int, int, int]], reference: np.ndarray, fs: float,
+              f_dom: float) -> list[tuple[int, int, int]]:
+    """The windows whose base (``reference``, the base acceleration) is still while they last:
+    the median of its envelope over the free part below :data:`FORCED_LEVEL` of its largest.
+    Refuses the record when none is: a base that keeps moving (random or continuous
+    excitation) forces the structure throughout, and no decay is free."""
+    from scipy.signal import hilbert
+
+    ref = reference - float(np.median(reference))
+    env = np.abs(hilbert(ref))
+    top = float(np.max(env))
+    if top <= 0.0:
+        return windows
+    level = [float(np.median(env[free:stop])) / top for _, free, stop in windows]
+    kept = [w for w, v in zip(windows, level) if v < FORCED_LEVEL]
+    if kept:
+        return kept
+    raise fail("identify", f"the base (the reference channel) keeps moving after every "
+                           f"excitation: its envelope stays at {100 * min(level):.0f} % of its "
+                           f"largest or more over each decay (a free decay needs it below "
+                           f"{100 * FORCED_LEVEL:.0f} %): the record holds no free decay (a "
+                           "random or continuous excitation), and C_i and C_f need free decays; "
+                           "end the excitation well before the record ends")
 
 
 def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
@@ -335,13 +446,13 @@ def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
 
 
 def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
-                components: Any, band: tuple[float, float] | None
+                components: Any, band: tuple[float, float] | None, f_dom: float
                 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Candidate mode frequencies (Hz) and spectral amplitudes from the windows' averaged
     spectrum, and notes on the peaks left out."""
     notes = []
     segs = [(a, c) for a, _, c in windows]
-    freqs, amp = averaged_spectrum(x, fs, segs)
+    freqs, amp = _decay_spectrum(x, fs, segs, f_dom)
     shortest = min(c - a for a, c in segs) / fs
     longest = max(c - a for a, c in segs) / fs
     # Every local peak first (a weak mode on a strong one's tail has little prominence), then
@@ -353,9 +464,16 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
     level = float(np.median(amp[_away_from(freqs, f)]))
     keep = np.ones(f.size, dtype=bool)
     for i, fi in enumerate(f):
-        if not _resolved(fi, float(a[i]), f[:i][keep[:i]], freqs, amp) \
-                or a[i] < NOISE_MARGIN * level:
+        col = _col(fi, float(a[i]), f[:i][keep[:i]], freqs, amp)
+        if col > VALLEY or a[i] < NOISE_MARGIN * level:
             keep[i] = False                 # a flank of a larger peak, or noise
+            if i == 0 and a[i] >= NOISE_MARGIN * level and f_dom * longest >= MIN_CYCLES:
+                notes.append(f"the largest spectral peak, at {fi:.4g} Hz, does not stand out "
+                             f"of the spectrum around it (it falls only to {100 * col:.0f} % "
+                             f"of its height within an octave; a mode falls below "
+                             f"{100 * VALLEY:.0f} %): no mode rings freely in the decays (one "
+                             "damped so heavily that it loses most of its amplitude within a "
+                             "cycle, or a response still forced)")
             continue
         if fs / fi < MIN_SAMPLES_PER_CYCLE:
             keep[i] = False
@@ -365,8 +483,13 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
         elif fi * longest < MIN_CYCLES:
             keep[i] = False
             notes.append(f"the spectral peak at {fi:.4g} Hz completes fewer than {MIN_CYCLES} "
-                         f"cycles in the longest free decay ({longest:.3g} s): left out")
+                         f"cycles in the longest free decay ({longest:.3g} s): left out"
+                         + (f" ({_spacing_advice(fi)})" if len(segs) > 1 else ""))
     f, a = f[keep], a[keep]
+    if f_dom * longest < MIN_CYCLES:
+        notes.append(f"the free decays last at most {longest:.3g} s, fewer than {MIN_CYCLES} "
+                     f"cycles of the record's dominant oscillation at {f_dom:.4g} Hz"
+                     + (f" ({_spacing_advice(f_dom)})" if len(segs) > 1 else ""))
     if band is not None and not np.any((f >= band[0]) & (f <= band[1])):
         listed = ", ".join(f"{v:.4g}" for v in np.sort(f)) or "none"
         raise fail("identify", f"band {band[0]:g} to {band[1]:g} Hz holds none of the record's "
@@ -378,6 +501,23 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                                + (f" ({', '.join(f'{v:.4g}' for v in f)} Hz)" if f.size
                                   else "") + "; ask for fewer or use components = 'auto'")
     return f, a, notes
+
+
+def _decay_spectrum(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f_dom: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """RMS average of the windows' amplitude spectra (as :func:`.spectrum.averaged_spectrum`),
+    on a grid of at most ``f_dom`` / :data:`SPECTRUM_BINS` (zero-padded): the free decays of a
+    dense impulse train last a few cycles, and their spectra's peaks must still fall between
+    bins, not on the grid's first."""
+    longest = max(c - a for a, c in segments)
+    nfft = max(longest, int(math.ceil(SPECTRUM_BINS * fs / f_dom)))
+    if nfft == longest:
+        return averaged_spectrum(x, fs, segments)
+    power = 0.0
+    for a, c in segments:
+        freqs, amp = amplitude_spectrum(x[a:c], fs, window="decay", nfft=nfft, _func="identify")
+        power = power + amp * amp
+    return freqs, np.sqrt(power / len(segments))
 
 
 def _away_from(freqs: np.ndarray, peaks: np.ndarray) -> np.ndarray:
@@ -405,13 +545,14 @@ def _noise_rms(x: np.ndarray, fs: float, peaks: np.ndarray) -> float:
     return med / (math.sqrt(math.log(2.0)) * math.sqrt(float(np.sum(w * w))))
 
 
-def _resolved(f: float, amplitude: float, others: np.ndarray, freqs: np.ndarray,
-              amp: np.ndarray) -> bool:
-    """Whether the spectral peak at ``f`` (Hz, of height ``amplitude``) stands out as a mode of
-    its own: it rises at least 1 / :data:`VALLEY` times above its col - the higher of the
-    lowest points of the spectrum (smoothed over +-2 %) between it and the nearest larger peak
-    on each side, or an octave away where there is none. A bump on the flank of a heavily
-    damped mode has no such col; a weak mode on the tail of a strong one has."""
+def _col(f: float, amplitude: float, others: np.ndarray, freqs: np.ndarray,
+         amp: np.ndarray) -> float:
+    """How far the spectral peak at ``f`` (Hz, of height ``amplitude``) stands out, as its col
+    over its height: the higher of the lowest points of the spectrum (smoothed over +-2 %)
+    between it and the nearest larger peak on each side, or an octave away where there is
+    none. A mode of its own has a col below :data:`VALLEY`; a bump on the flank of a heavily
+    damped mode has none (about 1), a weak mode on the tail of a strong one has. Infinite
+    when no bin lies between."""
     df = freqs[1] - freqs[0]
     width = max(1, int(0.02 * f / df))
     smooth = np.convolve(amp, np.ones(2 * width + 1) / (2 * width + 1), mode="same")
@@ -423,9 +564,9 @@ def _resolved(f: float, amplitude: float, others: np.ndarray, freqs: np.ndarray,
         lo, hi = sorted((f, edge))
         between = (freqs > lo) & (freqs < hi)
         if not between.any():
-            return False
+            return math.inf
         cols.append(float(np.min(smooth[between])))
-    return amplitude >= max(cols) / VALLEY
+    return max(cols) / amplitude if amplitude > 0 else math.inf
 
 
 def _extrema(signal: np.ndarray, fs: float, frequency: float, start: int, free: int,
@@ -456,8 +597,8 @@ def _too_short(windows: list[tuple[int, int, int]], modes: list[_Mode], fs: floa
     longest = max(c - b for _, b, c in windows) / fs
     lowest = min(m.frequency for m in modes)
     need = MIN_CYCLES / lowest
-    spacing = (f"; an impulse train's impulses must be more than {need:.2g} s apart (plus "
-               "the time its decays take to fall below the noise)" if len(windows) > 1 else "")
+    spacing = (f"; {_spacing_advice(lowest)} (and further still for the decays to last "
+               f"{need:.2g} s above the noise)" if len(windows) > 1 else "")
     return (f"no spectral peak has a free decay of {MIN_CYCLES} cycles above the noise floor: "
             f"the longest free decay lasts {longest:.3g} s, and the mode at {lowest:.4g} Hz "
             f"needs at least {need:.2g} s of free decay above the noise{spacing}; ")
@@ -602,6 +743,7 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
                                  max(scale.size - EDGE_EXTREMA, 0):scale.size]
                     scale[edge] = np.maximum(1.0, spread[edge])
                     corrected = measured - smear
+                    d["noise_dev"] = errors - smear
                 else:
                     smear = np.abs(hc.values[idx]) - exact
                     corrected = _unlifted(measured, mode.lift) - smear
@@ -611,6 +753,8 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
                 wild = ~((corrected > 0.5 * measured) & (corrected < 2.0 * measured))
                 corrected[wild] = measured[wild]
                 scale[wild] = np.maximum(scale[wild], WILD_SCALE)
+                if "noise_dev" in d:
+                    d["noise_dev"][:, wild] = 0.0
                 d["amplitude"], d["scale"] = corrected, scale
                 if (~wild).any():
                     mode.correction = max(mode.correction, float(np.max(
@@ -754,7 +898,8 @@ def _natural_frequency(mode: _Mode) -> tuple[float, tuple[float, float], float]:
 
 def _part(decay: dict, sel: slice) -> dict:
     """One decay with only the extrema ``sel`` (its per-extremum arrays sliced)."""
-    return {key: (val[sel] if key in ("times", "values", "amplitude", "scale") else val)
+    return {key: (val[sel] if key in ("times", "values", "amplitude", "scale")
+                  else val[:, sel] if key == "noise_dev" else val)
             for key, val in decay.items()}
 
 
@@ -773,9 +918,16 @@ def _drift(mode: _Mode, decays: list[dict], follow: str) -> tuple[LawFit, dict[s
     trial = dataclasses.replace(mode, decays=decays, fits={})
     _fit_all(trial, follow, ("quadratic",))
     full = trial.fits["quadratic"]
-    drop = max(2, int(LATE_SHARE * min(d["amplitude"].size for d in decays)))
-    late_decays = _drop_first(decays, drop)
-    if late_decays is None:
+    # Decays too short to lose their first extrema (the last of a train, cut by the record's
+    # end) are left out of the later fit: it is still fitted to a part of the same extrema.
+    sizes = [d["amplitude"].size for d in decays]
+    long = [d for d, n in zip(decays, sizes) if n >= 2 * MIN_CYCLES + 2]
+    if not long:
+        return full, {}
+    drop = max(2, int(LATE_SHARE * min(d["amplitude"].size for d in long)))
+    late_decays = [_part(d, slice(drop, None)) for d in long
+                   if d["amplitude"].size - drop >= 2 * MIN_CYCLES]
+    if not late_decays:
         return full, {}
     late = dataclasses.replace(mode, decays=late_decays, fits={})
     _fit_all(late, follow, ("quadratic",))
@@ -825,7 +977,10 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
     if worst > DRIFT_Z:
         mode.fits["quadratic"] = dataclasses.replace(
             mode.fits["quadratic"], cov=mode.fits["quadratic"].cov * (worst / DRIFT_Z) ** 2)
-    return {**z, "dropped": float(tried), **_start_sensitivity(mode, follow, tried, shortest)}
+    sizes = np.array([d["amplitude"].size for d in mode.decays])
+    short = float(np.sum(sizes[sizes < 2 * MIN_CYCLES + 2])) / float(np.sum(sizes))
+    return {**z, "dropped": float(tried), "untested": float(not z or short > 0.5),
+            **_start_sensitivity(mode, follow, tried, shortest)}
 
 
 def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
@@ -862,6 +1017,36 @@ def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
     factor = np.sqrt((variance + extra) / variance)
     mode.fits["quadratic"] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
     return {f"start_{name}": float(f) for name, f in zip(base.names, factor)}
+
+
+def _noise_spread(mode: _Mode) -> dict[str, float]:
+    """Step 8c: the spread of the quadratic law's coefficients over the noisy model records of
+    the correction (step 6): each realization's extremum errors, put through the fit's
+    whitening and its first-order influence (:attr:`.laws.LawFit.influence`), move the
+    coefficients as a refit would. The fit's own covariance treats each extremum's error as
+    the band's noise; the filters' padding at a decay's ends makes its first and last
+    extrema err together (the prediction that pads a window is fitted to noisy cycles), which
+    in short decays moves C_i and C_f more than that. Where the realizations spread a
+    coefficient more than its covariance says, its variance is raised to theirs. Returns
+    ``noise_a`` and ``noise_beta``: the factors the standard errors were widened by."""
+    base = mode.fits["quadratic"]
+    devs = [d.get("noise_dev") for d in mode.decays]
+    if base.influence is None or any(v is None for v in devs) \
+            or min(v.shape[0] for v in devs) < 4:
+        return {}
+    count = min(v.shape[0] for v in devs)
+    whiteners = [Whitener(d["times"], np.sign(d["values"]), mode.correlation,
+                          d.get("scale", np.ones(d["amplitude"].size))) for d in mode.decays]
+    moves = np.array([base.influence @ np.concatenate(
+        [w.apply(d["noise_dev"][r]) for w, d in zip(whiteners, mode.decays)])
+        for r in range(count)])
+    spread = np.var(moves, axis=0, ddof=1)
+    variance = np.diag(base.cov)
+    if not (np.all(np.isfinite(spread)) and np.all(variance > 0.0)):
+        return {}
+    factor = np.sqrt(np.maximum(spread / variance, 1.0))
+    mode.fits["quadratic"] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
+    return {f"noise_{name}": float(f) for name, f in zip(base.names, factor)}
 
 
 def _halves(decays: list[dict]) -> tuple[list[dict], list[dict]] | None:
@@ -955,6 +1140,13 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    "cycles of each decay are left out: the decay's start is not a free decay "
                    "with this law (a base still moving, a law that misfits the large cycles); "
                    f"their intervals are widened {drift / DRIFT_Z:.1f}-fold")
+    if m.start_drift.get("untested"):
+        short = 2 * MIN_CYCLES + 2
+        count = sum(d.amplitude.size < short for d in m.decays)
+        out.append(f"{count} of the {len(m.decays)} free decays are too short (fewer than "
+                   f"{short} extrema above the noise floor) to test whether their first cycles "
+                   "already follow the law: C_i and C_f assume they do, and rest on the few "
+                   "cycles of each decay")
     start = max((m.start_drift.get(f"start_{name}", 1.0) for name in ("a", "beta")
                  if quad is not None and _relative_width(quad, name) > START_WARNING_WIDTH),
                 default=1.0)
@@ -1025,7 +1217,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     ------
     AnalysisError
         A record that cannot be read (see :func:`._signal.as_record`), an unknown quantity or
-        law, no oscillation, or no mode with a free decay above the noise.
+        law, no oscillation, or no mode with a free decay above the noise: among them a record
+        excited too often for its decays to be told apart and one whose ``reference`` keeps
+        moving (no decay is free), each named with what it would need.
 
     Examples
     --------
@@ -1077,11 +1271,15 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                          f"{2.0 * fs / record.size:.3g} Hz")
     f_dom = float(top.frequencies[0])
     sigma = _noise_rms(record, fs, top.frequencies)
-    windows = _windows(record, fs, f_dom, 10.0 * sigma, decay_starts)
+    windows = _windows(record, fs, f_dom, sigma, decay_starts)
     if not windows:
         raise fail(func, "found no free decay of at least 32 samples")
+    if reference is not None:
+        windows = _unforced(windows, reference, fs, f_dom)
     cand_f, cand_a, notes = _candidates(record, fs, windows, int(components)
-                                        if components != "auto" else "auto", band_t)
+                                        if components != "auto" else "auto", band_t, f_dom)
+    if len(windows) == 1:
+        _refuse_comb(cand_f, f_dom)
     if cand_f.size == 0:
         where = f" inside {band_t[0]:g} to {band_t[1]:g} Hz" if band_t else ""
         raise fail(func, f"found no usable spectral peak{where}; "
@@ -1154,16 +1352,25 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         mode.fits = {}
         _fit_all(mode, follow, laws)
     # Step 6: filter correction, the last pass with the record's noise.
-    for n_pass in range(CORRECTION_PASSES):
-        last = n_pass == CORRECTION_PASSES - 1
+    # Noise-free passes until the quadratic law moves by less than PASS_TOLERANCE of its
+    # standard errors (a large smear, in short decays, takes several), then one with noise.
+    for n_pass in range(MAX_PASSES + 1):
+        last = n_pass == MAX_PASSES or (n_pass > 0 and moved < PASS_TOLERANCE)
+        before = [m.fits["quadratic"] for m in modes]
         _correct(modes, windows, bands, record, fs, follow, quantity, sigma if last else 0.0)
         for mode in modes:
             _fit_all(mode, follow, laws)
+        if last:
+            break
+        moved = max(float(np.max(np.abs(m.fits["quadratic"].params - b.params)
+                                 / np.maximum(m.fits["quadratic"].se, 1e-300)))
+                    for m, b in zip(modes, before))
     # Steps 7 and 8: where the laws start to hold; backbones and natural frequencies.
     results = []
     for mode in modes:
         mode.drift = _stable_start(mode, follow, laws)
         mode.drift.update(_one_law(mode, follow))
+        mode.drift.update(_noise_spread(mode))
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])

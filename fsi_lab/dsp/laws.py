@@ -341,6 +341,11 @@ class LawFit:
         Model extrema at the measured half cycles, per decay.
     w0, alpha, quantity
         The oscillator the law was fitted with.
+    influence
+        How the law parameters move with the extrema, to first order: ``influence @ e`` is
+        their change when the decays' whitened extremum errors (each decay's errors put
+        through its :class:`Whitener`, concatenated; U) change by ``e``. Shape
+        ``(len(params), count)``; None when not computed.
     """
 
     law: str
@@ -356,6 +361,7 @@ class LawFit:
     alpha: float = 0.0
     quantity: str = "velocity"
     names: tuple[str, ...] = field(default=())
+    influence: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def se(self) -> np.ndarray:
@@ -568,9 +574,13 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     dof = n - p - k
     s2 = rss / dof
     try:
-        cov_all = np.linalg.inv(jac.T @ jac) * s2
+        normal_inv = np.linalg.inv(jac.T @ jac)
     except np.linalg.LinAlgError:
-        cov_all = np.linalg.pinv(jac.T @ jac) * s2
+        normal_inv = np.linalg.pinv(jac.T @ jac)
+    cov_all = normal_inv * s2
+    # Gauss-Newton: the whitened residuals move by e / scale when the whitened errors move
+    # by e, the parameters by -(J^T J)^-1 J^T (e / scale) with J = res.jac = jac / scale.
+    influence = -(normal_inv @ res.jac.T)[:p] * scale
     kk = p + k + 1
     # Extrema are not measured better than RESOLUTION of the largest: below that, a better fit
     # is rounding, not evidence for a law.
@@ -580,7 +590,8 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     return LawFit(law=law, params=res.x[:p].copy(), cov=cov_all[:p, :p].copy(),
                   starts=np.exp(res.x[p:]), dof=dof, rss=rss, aicc=float(aicc),
                   residuals=[d - m for d, m in zip(decays, fitted)], model=fitted,
-                  w0=float(w0), alpha=float(alpha), quantity=quantity, names=LAWS[law])
+                  w0=float(w0), alpha=float(alpha), quantity=quantity, names=LAWS[law],
+                  influence=influence)
 
 
 @dataclass(frozen=True)
