@@ -57,19 +57,18 @@ def _fmt(errors: list[float]) -> str:
 def _registry():
     import importlib
 
-    from fsi_lab.registry import Registry
+    from fsi_lab.registry import Registry, add_plugin
 
     registry = Registry()
     for module in ("spectrum", "hvd", "integrate", "instantaneous", "backbone", "damping",
                    "equivalent_damping"):
-        mod = importlib.import_module(f"fsi_lab.plugins.analysis.{module}")
-        for descriptor in mod.fsi_lab_analyses():
-            registry.descriptors["analysis"][descriptor.name] = descriptor
+        add_plugin(registry, importlib.import_module(f"fsi_lab.plugins.analysis.{module}"),
+                   module)
     return registry
 
 
 def _chain_row() -> Row:
-    from fsi_lab.chain import DEFAULT_CHAIN, run_chain
+    from fsi_lab.chain import default_chain, run_chain
     from fsi_lab.contract import ChannelData
     from fsi_lab.params import validate
 
@@ -80,17 +79,18 @@ def _chain_row() -> Row:
     v = v + 0.005 * 0.06 * np.random.default_rng(0).standard_normal(t.size)
     channels = {"tip": ChannelData("tip", v, fs, "velocity", "m/s")}
     registry = _registry()
+    chain = default_chain(registry)
     params = {name: validate(registry.get("analysis", name).params, {}, name)
-              for name in DEFAULT_CHAIN}
+              for name in chain}
 
     def go():
-        return run_chain(channels, {"chain": list(DEFAULT_CHAIN)}, params, registry,
+        return run_chain(channels, {"chain": chain}, params, registry,
                          mass_per_length=0.13)
 
     go()
     elapsed = times(go)
     errors = go()[1]["tip"].get("errors")
-    return Row("analysis: whole chain (" + " > ".join(DEFAULT_CHAIN) + "), 10 s at 10 kHz, "
+    return Row("analysis: whole chain (" + " > ".join(chain) + "), 10 s at 10 kHz, "
                "in-process, warm", figure(elapsed) + (" (with errors)" if errors else ""), "-",
                "<= 0.5 s", median(elapsed) <= 0.5 and not errors)
 

@@ -7,7 +7,9 @@ the command line (``fsi-lab bench PROFILE``): its ``[specimen]``, ``[model]`` an
 and the ``fast``/``fault`` keys of ``[bench]``; run that profile (with the printed addresses)
 against the bench and the analysis finds the beam the profile describes.
 
-This module is imported to list the command: everything heavy is imported inside :func:`run`.
+This module is a plugin of the ``fsi_lab`` entry-point group (``sim-bench``): it adds the command
+through the ``fsi_lab_addcommands`` hook, and is imported whenever ``fsi-lab`` starts, so
+everything heavy is imported inside :func:`run`.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import sys
 from pathlib import Path
 
 from fsi_lab.contract import CliCommand
+from fsi_lab.hookspecs import hookimpl
 from fsi_lab.instruments.sim.faults import FAULTS, ROLES
 
 
@@ -124,6 +127,12 @@ COMMAND = CliCommand(
     configure=configure,
     run=run,
 )
+
+
+@hookimpl
+def fsi_lab_addcommands(subparsers) -> None:
+    """``fsi-lab bench``."""
+    COMMAND.add_to(subparsers)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -10,6 +10,7 @@ from __future__ import annotations
 from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import OFFSETS
 from fsi_lab.hookspecs import hookimpl
+from fsi_lab.presentation import SummaryText
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.results import Components, InstantaneousCurves, Integrated
 
@@ -49,3 +50,14 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+@hookimpl
+def fsi_lab_default_chain():
+    return ["instantaneous"]
+
+
+@hookimpl
+def fsi_lab_summary_lines(component):
+    """The weighted mean frequency stays in the JSON summary."""
+    return None if component is None else SummaryText(keys=("instantaneous",))

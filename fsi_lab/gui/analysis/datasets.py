@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.chain import DEFAULT_CHAIN
+from fsi_lab.chain import default_chain
 from fsi_lab.errors import FsiLabError
 from fsi_lab.gui.results import PluginResult, RunResults
 from fsi_lab.profile import parse_profile
@@ -112,7 +112,7 @@ def chain_of(results: RunResults, registry: Registry) -> tuple[dict[str, Any], d
         pass
     chain = list(analysis["chain"])
     if not results.profile_text.strip() and not chain:
-        chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
+        chain = default_chain(registry)
     for groups in results.analysis.values():
         for plugin, result in groups.items():
             if plugin not in chain and plugin in registry.descriptors["analysis"]:
