@@ -124,7 +124,7 @@ def check_chain(chain: Sequence[str], registry: Registry, where: str = "analysis
                     f"{', '.join(chain)})")
 
 
-def _stored(plugin: AnalysisPlugin, out: Any) -> tuple[AnalysisResult, Result | None]:
+def stored_result(plugin: AnalysisPlugin, out: Any) -> tuple[AnalysisResult, Result | None]:
     """What the chain keeps of what ``plugin.run`` returned: the stored form and the typed
     result handed to later analyses; TypeError saying what the plugin should return."""
     if isinstance(out, Result):
@@ -247,7 +247,7 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                     provided=dict(provided), unavailable=dict(unavailable), shared=shared,
                     plugin=plugin_name, declared=plugin.requires + plugin.uses,
                 )
-                record, typed = _stored(plugin, plugin.run(context, plugin_params))
+                record, typed = stored_result(plugin, plugin.run(context, plugin_params))
             except Exception as exc:  # noqa: BLE001 - recorded, the chain goes on
                 message = str(exc) if isinstance(exc, FsiLabError) else (
                     f"{type(exc).__name__}: {exc}"
@@ -271,7 +271,8 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                 provided[typed.kind] = typed
                 unavailable.pop(typed.kind, None)
             groups[key] = {"datasets": record.datasets, "units": record.units,
-                           "attrs": {"status": "ok", **record.attrs}, "params": plugin_params}
+                           "axes": record.axes, "attrs": {"status": "ok", **record.attrs},
+                           "params": plugin_params}
             merge_summary(channel_summary, record.summary)
         summary[channel_name] = channel_summary
     bus.emit(Progress("analysis", 1.0, "analysis done"))

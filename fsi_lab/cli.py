@@ -690,7 +690,8 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     p = sub.add_parser("analyze", help="(re)run the analysis chain on a run file")
     p.add_argument("run", type=Path)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override an analysis parameter, e.g. analysis.hvd.components=2")
+                   help="override an analysis parameter: analysis.ANALYSIS.PARAMETER=VALUE "
+                        "(fsi-lab plugins -v lists them)")
     p.add_argument("--strict", action="store_true",
                    help="exit 3 when a result was refused or carries a warning")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",

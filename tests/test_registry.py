@@ -88,8 +88,8 @@ def test_a_command_of_the_old_entry_point_group_is_refused_saying_what_to_write(
 
 def test_every_hook_is_called_through_the_plugin_manager(with_example_plugin, monkeypatch):
     """No implementation is called around pluggy: with the manager's hook calls monitored,
-    loading the plugins, adding their commands, summary text and the default chain are each
-    seen as calls of the hook."""
+    loading the plugins, adding their commands, summary text, the default chain and the views
+    are each seen as calls of the hook."""
     import argparse
 
     registry = load_registry()
@@ -99,8 +99,9 @@ def test_every_hook_is_called_through_the_plugin_manager(with_example_plugin, mo
     registry.add_commands(argparse.ArgumentParser().add_subparsers())
     registry.summary_texts("tip", {"components": []})
     registry.default_chain_names()
-    assert {"fsi_lab_addcommands", "fsi_lab_summary_lines",
-            "fsi_lab_default_chain"} <= set(called)
+    registry.views()
+    assert {"fsi_lab_addcommands", "fsi_lab_summary_lines", "fsi_lab_default_chain",
+            "fsi_lab_addviews"} <= set(called)
     from types import ModuleType
 
     from fsi_lab.hookspecs import hookimpl

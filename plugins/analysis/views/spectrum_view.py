@@ -9,7 +9,7 @@ import pyqtgraph as pg
 from PySide6.QtCore import Qt
 
 from fsi_lab.gui.analysis.datasets import rows
-from fsi_lab.gui.analysis.names import SPECTRUM_AMPLITUDE, SPECTRUM_FREQUENCY, SPECTRUM_PEAKS
+from fsi_lab.plugins.analysis.views.names import SPECTRUM_AMPLITUDE, SPECTRUM_FREQUENCY, SPECTRUM_PEAKS
 from fsi_lab.gui.analysis.plotting import COLOURS, draw_line
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults

@@ -11,7 +11,7 @@ from PySide6.QtWidgets import QWidget
 from fsi_lab.gui.analysis.datasets import (
     channel_t0, finite_pairs, per_component, time_axis,
 )
-from fsi_lab.gui.analysis.names import (
+from fsi_lab.plugins.analysis.views.names import (
     HVD_COMPONENTS, HVD_EDGE, HVD_ENVELOPES, HVD_FREQUENCIES, ZC_FREQUENCY, ZC_TIME,
 )
 from fsi_lab.gui.analysis.plotting import (

@@ -10,7 +10,7 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QWidget
 
 from fsi_lab.gui.analysis.datasets import finite_pairs, per_component, summary_series
-from fsi_lab.gui.analysis.names import (
+from fsi_lab.plugins.analysis.views.names import (
     DISPLACEMENT_AMPLITUDE, FREQUENCY, VELOCITY_AMPLITUDE, VELOCITY_FREQUENCY, ZETA,
 )
 from fsi_lab.gui.analysis.plotting import (
