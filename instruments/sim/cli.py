@@ -23,6 +23,25 @@ from fsi_lab.hookspecs import hookimpl
 from fsi_lab.instruments.sim.faults import FAULTS, ROLES
 
 
+def profile_snippet(bench) -> str:
+    """``[bench.*]`` tables of a profile that uses the running simulated ``bench`` with
+    fsi-lab's lab drivers (the simulator itself knows no driver)."""
+    from fsi_lab.instruments.keysight33500 import PLUGIN as SOURCE
+    from fsi_lab.instruments.polytec import PLUGIN as VIBROMETER
+    from fsi_lab.instruments.scpi_daq import PLUGIN as ACQUISITION
+    from fsi_lab.instruments.shaker_amplifier import PLUGIN as AMPLIFIER
+
+    a = bench.addresses
+    return "\n".join([
+        "[bench.source]", f'plugin = "{SOURCE.name}"', f'address = "{a["source"]}"', "",
+        "[bench.amplifier]", f'plugin = "{AMPLIFIER.name}"', f'address = "{a["amplifier"]}"',
+        "gain = 2.0", "",
+        "[bench.vibrometer]", f'plugin = "{VIBROMETER.name}"',
+        f'address = "{a["vibrometer"]}"', 'range = "125mm/s/V"', "",
+        "[bench.acquisition]", f'plugin = "{ACQUISITION.name}"',
+        f'address = "{a["acquisition"]}"', ""])
+
+
 def configure(parser: argparse.ArgumentParser) -> None:
     """Add the options of ``fsi-lab bench`` to ``parser``."""
     parser.add_argument("profile", type=Path, metavar="PROFILE",
@@ -102,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"fsi-lab: error: cannot start the simulated bench: {exc}", file=sys.stderr)
         return 1
     try:
-        addresses, snippet = bench.addresses, bench.profile_snippet()
+        addresses, snippet = bench.addresses, profile_snippet(bench)
         if args.json:
             print(json.dumps({"addresses": addresses, "profile": snippet}), flush=True)
         else:
