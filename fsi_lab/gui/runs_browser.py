@@ -1,9 +1,9 @@
 """Runs browser: open run files (several at once), compare them side by side, export.
 
 Files are read off the UI thread; a file that is not a readable fsi-lab run file is reported
-(``failed``) and the others stay open. The comparison overlays the curves the plugins register for it
-(:class:`fsi_lab.presentation.ComparisonCurve`, through the ``fsi_lab_addviews`` hook) of the
-ticked runs and lists their identified values (the columns the plugins register, and the plain
+(``failed``) and the others stay open. The comparison overlays the curves the plugins register
+for it (:class:`fsi_lab.presentation.ComparisonCurve`, through the ``fsi_lab_addviews`` hook) of
+the ticked runs and lists their identified values (the columns the plugins register, and the plain
 values of any analysis); figures export as PNG or SVG, the values and the curves as CSV.
 """
 
@@ -16,13 +16,27 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import (
-    QComboBox, QFileDialog, QHBoxLayout, QHeaderView, QLabel, QPushButton, QSplitter,
-    QTableWidget, QTableWidgetItem, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget,
+    QComboBox,
+    QFileDialog,
+    QHBoxLayout,
+    QHeaderView,
+    QLabel,
+    QPushButton,
+    QSplitter,
+    QTableWidget,
+    QTableWidgetItem,
+    QTreeWidget,
+    QTreeWidgetItem,
+    QVBoxLayout,
+    QWidget,
 )
 
 from fsi_lab.errors import FsiLabError
 from fsi_lab.gui.analysis.datasets import (
-    finite_pairs, per_component, summary_series, value_columns,
+    finite_pairs,
+    per_component,
+    summary_series,
+    value_columns,
 )
 from fsi_lab.gui.analysis.plotting import COLOURS, robust_range
 from fsi_lab.gui.export import export_figure, write_csv

@@ -288,10 +288,11 @@ def test_the_burst_holds_its_cycles_after_its_delay():
 '''
 
 INSTRUMENT_USE = '''\
-Name it in a profile (`[bench.amplifier] plugin = "$name"`, `address = "TCPIP0::<host>::<port>::SOCKET"`,
-`gain = 2.0`); `fsi-lab identify PROFILE` asks it who it is and `fsi-lab safe PROFILE` makes it
-safe. As written it speaks the SCPI of fsi-lab's simulated shaker amplifier (`fsi-lab bench`
-starts one on 127.0.0.1 and prints its address).'''
+Name it in a profile (`[bench.amplifier] plugin = "$name"`,
+`address = "TCPIP0::<host>::<port>::SOCKET"`, `gain = 2.0`); `fsi-lab identify PROFILE` asks
+it who it is and `fsi-lab safe PROFILE` makes it safe. As written it speaks the SCPI of
+fsi-lab's simulated shaker amplifier (`fsi-lab bench` starts one on 127.0.0.1 and prints its
+address).'''
 
 INSTRUMENT_CHANGE = '''\
 - `$package/plugin.py` is the driver, written with fsi-lab's instrument kit

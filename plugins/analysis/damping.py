@@ -9,10 +9,10 @@ from __future__ import annotations
 from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import DAMPING_METHODS as METHODS
 from fsi_lab.hookspecs import hookimpl
-from fsi_lab.presentation import SummaryText
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS
 from fsi_lab.plugins.analysis.results import Components, DampingCurves, Integrated
+from fsi_lab.presentation import SummaryText
 
 PLUGIN = AnalysisPlugin(
     name="damping",

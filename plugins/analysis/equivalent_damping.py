@@ -10,7 +10,6 @@ from __future__ import annotations
 from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import WEIGHTINGS
 from fsi_lab.hookspecs import hookimpl
-from fsi_lab.presentation import SummaryText
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.results import (
     Components,
@@ -18,6 +17,7 @@ from fsi_lab.plugins.analysis.results import (
     DampingCurves,
     Integrated,
 )
+from fsi_lab.presentation import SummaryText
 
 METHODS = ("law", "regression", "envelope")
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import OFFSETS
 from fsi_lab.hookspecs import hookimpl
-from fsi_lab.presentation import SummaryText
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.results import Components, InstantaneousCurves, Integrated
+from fsi_lab.presentation import SummaryText
 
 #: Parameters shared by the plugins that measure extrema (backbone, damping).
 INSTANT_PARAMS = (

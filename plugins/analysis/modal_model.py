@@ -11,7 +11,6 @@ from fsi_lab.beam import PROJECTIONS
 from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import DAMPING_METHODS
 from fsi_lab.hookspecs import hookimpl
-from fsi_lab.presentation import SummaryText
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.results import (
     Components,
@@ -19,6 +18,7 @@ from fsi_lab.plugins.analysis.results import (
     Integrated,
     ModalComparison,
 )
+from fsi_lab.presentation import SummaryText
 
 PLUGIN_NAME = "modal-model"
 

@@ -9,9 +9,9 @@ from __future__ import annotations
 from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.dsp.choices import WINDOWS
 from fsi_lab.hookspecs import hookimpl
-from fsi_lab.presentation import SummaryText
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.results import Spectrum
+from fsi_lab.presentation import SummaryText
 
 PLUGIN = AnalysisPlugin(
     name="spectrum",

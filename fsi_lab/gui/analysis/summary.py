@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import pyqtgraph as pg
 from PySide6.QtWidgets import (
-    QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget,
+    QHeaderView,
+    QLabel,
+    QTableWidget,
+    QTableWidgetItem,
+    QVBoxLayout,
+    QWidget,
 )
 
 from fsi_lab.gui.analysis.datasets import format_ci, value_columns

@@ -7,7 +7,14 @@ from typing import Any
 
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
-    QComboBox, QHBoxLayout, QLabel, QScrollArea, QSplitter, QTabWidget, QVBoxLayout, QWidget,
+    QComboBox,
+    QHBoxLayout,
+    QLabel,
+    QScrollArea,
+    QSplitter,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
 )
 
 from fsi_lab.gui.analysis.dataset_browser import DatasetBrowser
@@ -201,7 +208,8 @@ class AnalysisViews(QWidget):
             self.state.setText("not computed: this run file has no analysis results "
                                f"(exit status {status}); set the parameters and re-run")
         else:
-            errors = [f"{r.plugin} on {r.channel}: {r.error}" for groups in results.analysis.values()
+            errors = [f"{r.plugin} on {r.channel}: {r.error}"
+                      for groups in results.analysis.values()
                       for r in groups.values() if not r.ok]
             self.state.setText("failed: " + "; ".join(errors) if errors else "")
         self.state.setVisible(bool(self.state.text()))
