@@ -383,6 +383,8 @@ def cmd_plugins(args) -> int:
         if args.verbose:
             if record["kind"] == "command":
                 print(f"    fsi-lab {record['name']}: {record['help']}")
+            if record.get("hooks") and not record["kind"]:
+                print(f"    hooks {', '.join(record['hooks'])}")
             for key in ("requires", "uses"):
                 if record.get(key):
                     print(f"    {key} {', '.join(record[key])}")

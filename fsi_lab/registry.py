@@ -34,7 +34,8 @@ ALLOW_ENV = "FSI_LAB_PLUGINS"
 
 @dataclass
 class PluginRecord:
-    """What became of one plugin (one descriptor, or one entry point that failed)."""
+    """What became of one plugin (one descriptor, one entry point that failed, or one whose
+    hooks contribute no descriptor: commands, summary text, views)."""
 
     name: str
     kind: str | None
@@ -43,6 +44,8 @@ class PluginRecord:
     entry_point: str
     status: str  # "loaded" | "failed" | "invalid" | "disabled"
     error: str | None = None
+    #: the hooks the entry point's module implements
+    hooks: tuple[str, ...] = ()
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -53,6 +56,7 @@ class PluginRecord:
             "entry_point": self.entry_point,
             "status": self.status,
             "error": self.error,
+            "hooks": list(self.hooks),
         }
 
 
@@ -373,18 +377,24 @@ def add_plugin(registry: Registry, plugin: Any, name: str, distribution: str = "
     its descriptors, each checked against the contract of its kind; what fails is recorded in
     ``registry.records`` with the reason."""
 
+    hooks: tuple[str, ...] = ()
+
     def record(plugin_name, kind, status, error=None):
-        registry.records.append(
-            PluginRecord(plugin_name, kind, version, distribution, name, status, error))
+        registry.records.append(PluginRecord(plugin_name, kind, version, distribution, name,
+                                             status, error, hooks))
 
     try:
         registry.register(plugin, name, distribution, version)
     except Exception as exc:  # noqa: BLE001 - e.g. a hook pluggy cannot match to a spec
         record(name, None, "failed", f"cannot be registered: {_short_error(exc)}")
         return
-    known = [spec for spec in dir(hookspecs) if spec.startswith("fsi_lab_")]
-    if not any(registry.implements(name, hook_name) for hook_name in known):
+    known = sorted(spec for spec in dir(hookspecs) if spec.startswith("fsi_lab_"))
+    hooks = tuple(hook_name for hook_name in known if registry.implements(name, hook_name))
+    if not hooks:
         record(name, None, "invalid", "implements none of the fsi_lab hooks")
+        return
+    if not set(hooks) & set(hookspecs.HOOK_FOR_KIND.values()):  # commands, text, views only
+        record(name, None, "loaded")
         return
     for kind in KINDS:
         hook_name = hookspecs.HOOK_FOR_KIND[kind]

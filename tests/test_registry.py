@@ -160,3 +160,13 @@ def test_built_in_analyses_run_their_work_through_deferred_modules(registry):
         if registry.version_of("analysis", name).startswith("fsi-lab "):
             assert isinstance(run, Deferred), name
             assert callable(run.load()), name
+
+
+def test_a_plugin_of_commands_or_views_only_is_listed_with_its_hooks():
+    data, _ = cli_json("plugins")
+    plugins = _by_name(data["plugins"])
+    assert (plugins["analysis-views"]["kind"], plugins["analysis-views"]["status"],
+            plugins["analysis-views"]["hooks"]) == (None, "loaded", ["fsi_lab_addviews"])
+    assert plugins["scaffold"]["hooks"] == ["fsi_lab_addcommands"]
+    assert plugins["hvd"]["hooks"] == ["fsi_lab_analyses", "fsi_lab_default_chain",
+                                       "fsi_lab_summary_lines"]
