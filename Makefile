@@ -61,7 +61,7 @@ BENCH_VENV := .venv-bench
 $(BENCH_VENV)/.installed: pyproject.toml
 	test -x $(BENCH_VENV)/bin/python || $(PYTHON) -m venv $(BENCH_VENV)
 	$(BENCH_VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(BENCH_VENV)/bin/python -m pip install --quiet -e '.[gui]' pysdkit
+	$(BENCH_VENV)/bin/python -m pip install --quiet -e '.[gui,cluster]' pysdkit
 	touch $@
 
 bench: $(BENCH_VENV)/.installed

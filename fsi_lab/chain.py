@@ -6,11 +6,14 @@ profile is checked, and :func:`run_chain` hands each analysis the typed results 
 ones and the channel's shared record (:class:`fsi_lab.contract.SharedRecord`: its spectrum,
 computed once). A failing analysis is recorded (in the run file and the summary) with its
 reason; the chain goes on with the other channels, and with the analyses that do not need the
-failed one.
+failed one. A record that ends in a long quiet tail is analysed up to a few times its active
+span (:mod:`fsi_lab.tails`).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import traceback
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -26,6 +29,7 @@ from fsi_lab.contract import (
 from fsi_lab.errors import FsiLabError, ParameterError
 from fsi_lab.events import EventBus, Progress
 from fsi_lab.registry import Registry
+from fsi_lab.tails import QuietTail, analysed_end
 
 ANALYSED_QUANTITIES = ("velocity", "displacement")
 
@@ -179,6 +183,22 @@ def channels_to_analyse(channels: Mapping[str, ChannelData], wanted: list[str]) 
     return [n for n, c in channels.items() if c.quantity in ANALYSED_QUANTITIES]
 
 
+def cut_quiet_tail(channels: Mapping[str, ChannelData], used: list[str]
+                   ) -> tuple[dict[str, ChannelData], QuietTail]:
+    """The channels up to where the analysis of the record stops (:func:`fsi_lab.tails.
+    analysed_end`, judged on the ``used`` channels: those analysed and the reference), and
+    that judgement. Channels of one sample rate keep one length."""
+    tail = analysed_end((channels[n].data, channels[n].sample_rate) for n in used
+                        if n in channels)
+    if not tail.cut:
+        return dict(channels), tail
+    cut = {}
+    for name, channel in channels.items():
+        keep = min(channel.data.size, int(math.ceil(tail.analysed_s * channel.sample_rate)))
+        cut[name] = dataclasses.replace(channel, data=channel.data[:keep])
+    return cut, tail
+
+
 def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
               params: Mapping[str, Mapping[str, Any]], registry: Registry,
               specimen: Any = None, mass_per_length: float | None = None,
@@ -212,6 +232,8 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
     groups: dict[str, dict] = {}
     summary: dict[str, Any] = {}
     names = channels_to_analyse(channels, analysis.get("channels", []))
+    reference = analysis.get("reference")
+    channels, tail = cut_quiet_tail(channels, names + ([reference] if reference else []))
     chain = list(analysis.get("chain", []))
     total = max(1, len(names) * len(chain))
     done = 0
@@ -271,9 +293,13 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                 provided[typed.kind] = typed
                 unavailable.pop(typed.kind, None)
             groups[key] = {"datasets": record.datasets, "units": record.units,
-                           "axes": record.axes, "attrs": {"status": "ok", **record.attrs},
+                           "axes": record.axes,
+                           "attrs": {"status": "ok", **record.attrs,
+                                     **({"analysed_s": tail.analysed_s} if tail.cut else {})},
                            "params": plugin_params}
             merge_summary(channel_summary, record.summary)
+        if tail.cut:
+            channel_summary["notes"] = [tail.note(), *channel_summary.get("notes", [])]
         summary[channel_name] = channel_summary
     bus.emit(Progress("analysis", 1.0, "analysis done"))
     return groups, summary

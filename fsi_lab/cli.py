@@ -13,15 +13,16 @@ import math
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 from fsi_lab.errors import FsiLabError, InputFileError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
 EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "aborted": 130}
-#: Most samples per channel ``fsi-lab simulate`` writes (100 s at 204.8 kHz).
-MAX_SIMULATED_SAMPLES = 20_480_000
+#: Most samples per channel ``fsi-lab simulate`` writes (about 2.9 hours at 204.8 kHz; it
+#: simulates and writes a block at a time, so the bound is the disk: see cmd_simulate).
+MAX_SIMULATED_SAMPLES = 2**31
 LEVELS = {"DEBUG": 10, "INFO": 20, "WARNING": 30, "ERROR": 40}
 
 
@@ -217,41 +218,20 @@ def cmd_sequence(args) -> int:
 
 
 def cmd_analyze(args) -> int:
-    from fsi_lab.chain import analyse_and_store, channels_to_analyse, default_chain
-    from fsi_lab.profile import parse_profile
-    from fsi_lab.runfile import read_run, require_analysable
+    """``fsi-lab analyze RUN.h5``; with several files, ``--jobs`` or ``--scheduler``, the
+    batch (:func:`_analyze_batch`)."""
+    from fsi_lab.batch import AnalyseTask, analyse_file
 
+    if len(args.run) > 1 or args.jobs is not None or args.scheduler is not None:
+        return _analyze_batch(args)
     registry = _registry()
-    run = read_run(args.run)
-    require_analysable(run)
-    text = run.profile_text
-    if not text.strip():  # imported data: the default chain, and the reference given on import
-        chain = default_chain(registry)
-        text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
-        if run.reference:
-            text += "reference = " + json.dumps(run.reference) + "\n"
-    # The run's own --set overrides of what analysis reads come first, the new ones after.
-    sections = ("analysis", "specimen")
-    recorded = [item for item in run.attrs.get("overrides", [])
-                if item.partition(".")[0].strip() in sections]
-    profile = parse_profile(text, f"{args.run}:/profile", registry, recorded + list(args.set),
-                            sections=sections)
-    if args.mass_per_length is not None and not (args.mass_per_length > 0):
-        raise InputFileError(f"--mass-per-length {args.mass_per_length}: expected kg/m > 0")
-    if not channels_to_analyse(run.channels, profile.analysis.get("channels", [])):
-        listed = ", ".join(f"{n} ({c.quantity}, {c.unit})" for n, c in run.channels.items())
-        raise InputFileError(
-            f"{args.run}: nothing to analyse: no velocity or displacement channel (channels: "
-            f"{listed or 'none'}); an acceleration or voltage channel is analysed when named, "
-            "e.g. --set analysis.channels=NAME")
     bus = EventBus()
     console = Console(args.quiet or args.json, args.verbose)
     bus.subscribe(console)
     bus.subscribe(args.signal_note.checkpoint)  # a signal whose exception was swallowed
     try:
-        summary = analyse_and_store(Path(args.run), run.channels, profile.analysis,
-                                    profile.analysis_params, registry, profile.specimen,
-                                    args.mass_per_length, bus)
+        summary = analyse_file(AnalyseTask(str(args.run[0]), tuple(args.set),
+                                           args.mass_per_length), registry, bus)["summary"]
     finally:
         console.close()
     args.signal_note.check()
@@ -260,6 +240,167 @@ def cmd_analyze(args) -> int:
     else:
         print(format_summary(summary, registry))
     return _strict_exit(summary, 0) if args.strict else 0
+
+
+def batch_exit_code(files: list[dict[str, Any]], strict: bool) -> int:
+    """The exit code of a batch: 130 interrupted; 1 when a file failed otherwise than on bad
+    input (an analysis error, a dead worker); 2 when every failure is a refused file; with
+    ``--strict``, 3 when every file was analysed but one has a refused result or a warning;
+    else 0."""
+    codes = [entry["exit_code"] for entry in files]
+    if 130 in codes:
+        return 130
+    failed = [code for code in codes if code not in (0, EXIT_STRICT)]
+    if failed:
+        return 2 if all(code == 2 for code in failed) else 1
+    return EXIT_STRICT if strict and EXIT_STRICT in codes else 0
+
+
+def _analyze_batch(args) -> int:
+    """``fsi-lab analyze A.h5 B.h5 ... [--jobs N | --scheduler ADDRESS]``: every file analysed
+    (and its results stored) by the executor's workers, one progress bar, one JSON object
+    with each file's summary or why it failed; a bad file or a dead worker fails only its
+    file."""
+    import time
+
+    from fsi_lab.batch import AnalyseTask, analyse_file, require_mass_per_length
+    from fsi_lab.executor import make_executor
+
+    require_mass_per_length(args.mass_per_length)
+    paths, seen = [], set()
+    for path in args.run:  # a file given twice is analysed once (two writers would clash)
+        key = os.path.realpath(path)
+        if key not in seen:
+            seen.add(key)
+            paths.append(path)
+    tasks = [AnalyseTask(str(path), tuple(args.set), args.mass_per_length) for path in paths]
+    files: list[dict[str, Any]] = [{"run": str(path), "status": "pending", "exit_code": 0}
+                                   for path in paths]
+    started = time.perf_counter()
+    executor = make_executor(args.jobs, args.scheduler)
+    bus = EventBus()
+    console = Console(args.quiet or args.json, args.verbose)
+    bus.subscribe(console)
+    interrupted = ""
+    done = 0
+    try:
+        with executor:
+            bus.log("INFO", f"analysing {len(tasks)} file{'s' * (len(tasks) != 1)} with "
+                            f"{executor.describe()}")
+            bus.emit(Progress("analyze", 0.0, f"0 of {len(tasks)} files"))
+            for result in executor.map_unordered(analyse_file, tasks):
+                entry = files[result.index]
+                if result.ok:
+                    summary = result.value["summary"]
+                    problems = strict_problems(summary)
+                    entry.update(status="analysed", analysis=summary, problems=problems,
+                                 worker=result.value["worker"],
+                                 exit_code=EXIT_STRICT if args.strict and problems else 0)
+                else:
+                    entry.update(status="failed", error=result.error,
+                                 exit_code=result.exit_code, worker_died=result.worker_died)
+                    bus.log("ERROR", result.error if entry["run"] in result.error
+                            else f"{entry['run']}: {result.error}")
+                done += 1
+                bus.emit(Progress("analyze", done / len(tasks),
+                                  f"{done} of {len(tasks)} files"))
+                args.signal_note.check()
+    except (KeyboardInterrupt, RunAborted) as exc:  # the workers are ended by now
+        args.signals.silence()
+        interrupted = str(exc) or INTERRUPTED
+        for entry in files:
+            if entry["status"] == "pending":
+                entry.update(status="not analysed", error=f"interrupted: {interrupted}",
+                             exit_code=130)
+    finally:
+        console.close()
+    code = batch_exit_code(files, args.strict)
+    counts = {"files": len(files), **{status: sum(e["status"] == status for e in files)
+                                      for status in ("analysed", "failed", "not analysed")}}
+    elapsed = time.perf_counter() - started
+    if args.json:
+        _emit_json({"files": files, "counts": counts, "executor": executor.as_json(),
+                    "elapsed_s": elapsed, "interrupted": bool(interrupted),
+                    "exit_code": code})
+    else:
+        for entry in files:
+            print(f"== {entry['run']}: {entry['status']}")
+            if entry["status"] == "analysed":
+                print(format_summary(entry["analysis"]))
+            else:
+                print(f"  {entry['error']}")
+        print(f"analysed {counts['analysed']} of {counts['files']} files"
+              + (f", {counts['failed']} failed" if counts["failed"] else "")
+              + (f", {counts['not analysed']} not analysed" if counts["not analysed"] else "")
+              + f" in {elapsed:.1f} s with {executor.describe()}")
+    if interrupted:
+        print(f"fsi-lab: interrupted: {interrupted}", file=sys.stderr)
+    if args.strict:
+        for entry in files:
+            for line in entry.get("problems", []):
+                print(f"[strict] {entry['run']}: {line}", file=sys.stderr)
+    return code
+
+
+def aggregate_tasks(paths: list[Path], sets: list[str], mass_per_length: float | None):
+    """The run files ``fsi-lab aggregate`` takes: the files given, or of one directory the
+    completed runs of its sequence (labelled by their place in it), or its run files."""
+    from fsi_lab.aggregate_extract import ExtractTask
+    from fsi_lab.seqfile import SEQUENCE_FILE, load_record
+    from fsi_lab.sequence import extract_tasks
+
+    if len(paths) == 1 and paths[0].is_dir():
+        directory = paths[0]
+        if (directory / SEQUENCE_FILE).exists():
+            return extract_tasks(load_record(directory), sets, mass_per_length)
+        files = sorted(p for p in directory.glob("*.h5") if p.name != SEQUENCE_FILE)
+        if not files:
+            raise InputFileError(f"{directory}: holds no run file (*.h5) and no sequence; "
+                                 "expected run files or the --out directory of fsi-lab "
+                                 "sequence")
+        paths = files
+    names = [path.name for path in paths]
+    return [ExtractTask(str(path), tuple(sets), mass_per_length,
+                        path.name if names.count(path.name) == 1 else str(path))
+            for path in dict.fromkeys(paths)]
+
+
+def cmd_aggregate(args) -> int:
+    """``fsi-lab aggregate RUN.h5 ... | DIR``: the runs' modes grouped by frequency, C_i and
+    C_f fitted to the union of their free decays, backbones and damping curves on one
+    amplitude axis, the spread between runs (fsi_lab.aggregate)."""
+    from fsi_lab.aggregate import aggregate_extracts, extract_runs, format_aggregate
+    from fsi_lab.batch import require_mass_per_length
+    from fsi_lab.executor import make_executor
+
+    require_mass_per_length(args.mass_per_length)
+    tasks = aggregate_tasks(args.runs, args.set, args.mass_per_length)
+    executor = make_executor(args.jobs, args.scheduler)
+    bus = EventBus()
+    console = Console(args.quiet or args.json, args.verbose)
+    bus.subscribe(console)
+    try:
+        with executor:
+            bus.log("INFO", f"identifying the modes of {len(tasks)} run"
+                            f"{'s' * (len(tasks) != 1)} with {executor.describe()}")
+
+            def done(count: int) -> None:
+                bus.emit(Progress("aggregate", count / len(tasks),
+                                  f"{count} of {len(tasks)} runs"))
+                args.signal_note.check()
+
+            extracts = extract_runs(tasks, executor, done)
+        agg = aggregate_extracts(extracts)
+    finally:
+        console.close()
+    for run in agg["runs"]:
+        for error in run["errors"]:
+            print(f"[error] {run['label']}: {error}", file=sys.stderr)
+    if args.json:
+        _emit_json({**agg, "executor": executor.as_json()})
+    else:
+        print(format_aggregate(agg))
+    return agg["exit_code"]
 
 
 def cmd_import(args) -> int:
@@ -493,12 +634,27 @@ def cmd_model(args) -> int:
     return 0
 
 
+def _check_room(output: Path, size: float) -> None:
+    """Raise InputFileError when the folder of ``output`` (or its nearest existing parent) has
+    less free space than ``size`` bytes and 5 % to spare."""
+    import shutil
+
+    folder = output.absolute().parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    free = shutil.disk_usage(folder).free
+    if size * 1.05 > free:
+        raise InputFileError(
+            f"{output}: the simulated record would take {size / 1e9:.3g} GB and {folder} has "
+            f"{free / 1e9:.3g} GB free; shorten --duration, lower --rate or write elsewhere")
+
+
 def cmd_simulate(args) -> int:
     from fsi_lab.errors import ProfileError, RunAborted
     from fsi_lab.preflight import prepare_excitation
     from fsi_lab.runfile import new_run_path, software_version
     from fsi_lab.signals import RunSignals
-    from fsi_lab.simulation import simulate_run
+    from fsi_lab.simulation import SIMULATED_CHANNELS, simulate_run
 
     registry, profile = _model_profile(args)
     if profile.excitation_plugin is None:
@@ -510,10 +666,11 @@ def cmd_simulate(args) -> int:
     if not 2 <= samples <= MAX_SIMULATED_SAMPLES:
         raise InputFileError(
             f"--duration {args.duration:g} s at --rate {args.rate:g} Hz makes {samples:,.0f} "
-            f"samples per channel; expected 2 to {MAX_SIMULATED_SAMPLES:,} (the simulation is "
-            "held in memory): change --duration or --rate")
+            f"samples per channel; expected 2 to {MAX_SIMULATED_SAMPLES:,}: change --duration "
+            "or --rate")
     if args.output.exists():
         raise InputFileError(f"{args.output}: already exists; choose another output file")
+    _check_room(args.output, samples * len(SIMULATED_CHANNELS) * 8)
     waveform, rate = prepare_excitation(profile, registry)
     _, run_uuid, started = new_run_path(args.output.parent)
     bus = EventBus()
@@ -593,6 +750,18 @@ def _strict_exit(summary: dict[str, Any], code: int) -> int:
     for line in problems:
         print(f"[strict] {line}", file=sys.stderr)
     return EXIT_STRICT
+
+
+def _jobs(text: str) -> int:
+    """``--jobs N``: a number of worker processes >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a number of worker processes "
+                                         ">= 1")
+    return value
 
 
 def _window_size(text: str) -> tuple[int, int]:
@@ -689,8 +858,16 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     common(p)
     p.set_defaults(func=cmd_sequence)
 
-    p = sub.add_parser("analyze", help="(re)run the analysis chain on a run file")
-    p.add_argument("run", type=Path)
+    p = sub.add_parser("analyze", help="(re)run the analysis chain on run files, in parallel "
+                                       "with --jobs or on a Dask cluster with --scheduler")
+    p.add_argument("run", type=Path, nargs="+", metavar="RUN.h5")
+    p.add_argument("--jobs", type=_jobs, metavar="N",
+                   help="analyse the files in N local worker processes (one BLAS and one numba "
+                        "thread each); several files give one JSON object with each file's "
+                        "results or why it failed")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="send the files to the Dask scheduler at ADDRESS, e.g. "
+                        "tcp://10.0.0.5:8786 (needs the extra fsi-lab[cluster])")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override an analysis parameter: analysis.ANALYSIS.PARAMETER=VALUE "
                         "(fsi-lab plugins -v lists them)")
@@ -700,6 +877,26 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
                    help="mu + M for data without a specimen (kg/m)")
     common(p)
     p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser("aggregate", help="one answer from many runs: modes grouped by "
+                                         "frequency, C_i and C_f fitted to all their decays, "
+                                         "backbones and damping on one amplitude axis, the "
+                                         "spread between runs")
+    p.add_argument("runs", type=Path, nargs="+", metavar="RUN.h5|DIR",
+                   help="run files, or a directory: the completed runs of its sequence, or its "
+                        "run files")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override an analysis parameter of every run: "
+                        "analysis.ANALYSIS.PARAMETER=VALUE (fsi-lab plugins -v lists them)")
+    p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
+                   help="mu + M for runs without a specimen (kg/m)")
+    p.add_argument("--jobs", type=_jobs, metavar="N",
+                   help="identify the runs in N local worker processes")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="identify the runs on the Dask scheduler at ADDRESS "
+                        "(fsi-lab[cluster])")
+    common(p)
+    p.set_defaults(func=cmd_aggregate)
 
     p = sub.add_parser("import", help="turn a CSV file ('name [unit]' header) into a run file")
     p.add_argument("csv", type=Path)
@@ -772,23 +969,33 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, started_with: Sequence[int] = ()) -> int:
     """``fsi-lab``: run a command and return its exit code.
 
     From the first line, Ctrl+C and SIGTERM end the command with exit code 130 and one message
     (a run first puts its bench in the safe state and finalises its file); the signal is also
     noted, so that one whose exception a library swallows is raised at the next checkpoint.
+
+    Parameters
+    ----------
+    argv
+        The command line after ``fsi-lab``; ``sys.argv[1:]`` when None.
+    started_with
+        Signals noted while the command was being imported (:mod:`fsi_lab.launch`, the
+        console script's entry point, notes them): the first ends the command at once.
     """
     global _json_emitted, _plugins
     _plugins = None
     note = SignalNote()
     signals = RunSignals(on_signal=note)
-    signals.install()
-    wants_json = False
+    argv = sys.argv[1:] if argv is None else list(argv)
+    wants_json = "--json" in argv
     try:
+        signals.install()
         _json_emitted = False
-        argv = sys.argv[1:] if argv is None else list(argv)
-        wants_json = "--json" in argv
+        if started_with:  # noted by the launcher before these handlers were in place
+            note(started_with[0])
+            note.check()
         args = build_parser(json_requested=wants_json).parse_args(argv)
         args.signals, args.signal_note = signals, note
         return _run_command(args)

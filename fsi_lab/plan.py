@@ -8,6 +8,12 @@ A plan is a TOML file (see examples/sweep-heights.toml)::
     settle_s = 2.0                   # wait before each run after the first, s
     on_failure = "stop"              # or "continue"
 
+    [plan.stop_when]                 # optional: stop once a number is known well enough
+    quantity = "c_f"                 # c_i or c_f of the aggregated runs
+    relative_half_width = 0.05       # its 95 % interval within +-5 % of its value
+    frequency_hz = 17.0              # of the mode nearest 17 Hz (default: the largest)
+    min_runs = 2                     # not before 2 runs completed
+
     [[step]]
     name = "three heights"
     repeats = 2
@@ -22,7 +28,9 @@ plan's and the step's own ``set``, so a run of a sequence is exactly ``fsi-lab r
 ...`` and its run file records them.
 
 :func:`check_plan` validates and safety-checks every run's profile before anything is driven;
-one bad run refuses the whole plan, naming the step, the run and the key.
+one bad run refuses the whole plan, naming the step, the run and the key; with ``stop_when``,
+also a run whose analysis cannot give the quantity (no specimen for mu + M, no analysed
+channel, not the channel named).
 """
 
 from __future__ import annotations
@@ -67,6 +75,49 @@ STEP_PARAMS: tuple[Param, ...] = (
     Param("settle_s", "float", "s", None, minimum=0.0, maximum=86400.0,
           help="Wait before each run of this step that follows another (default: the plan's)."),
 )
+
+STOP_QUANTITIES = ("c_i", "c_f")
+STOP_PARAMS: tuple[Param, ...] = (
+    Param("quantity", "str", "", choices=STOP_QUANTITIES,
+          help="c_i (kg/(m s)) or c_f (kg/m^2) fitted to the union of the completed runs' "
+               "free decays (fsi-lab aggregate)."),
+    Param("relative_half_width", "float", "", minimum=0.0, exclusive_minimum=True,
+          maximum=1.0,
+          help="Stop once the quantity's 95 % interval reaches no further than this fraction "
+               "of its value on either side (0.05: +-5 %); the runs not carried out are "
+               "recorded as skipped."),
+    Param("frequency_hz", "float", "Hz", None, minimum=0.0, exclusive_minimum=True,
+          help="The mode: the aggregated mode nearest this frequency (unset: the one with the "
+               "most extrema)."),
+    Param("channel", "str", "", None,
+          help="The channel whose mode it is (unset: any analysed channel)."),
+    Param("min_runs", "int", "", 2, minimum=1, maximum=MAX_RUNS,
+          help="Completed runs before the target may stop the sequence."),
+)
+
+
+@dataclass(frozen=True)
+class StopWhen:
+    """The plan's ``[plan.stop_when]``: stop once an aggregated quantity is known well enough
+    (:data:`STOP_PARAMS`)."""
+
+    quantity: str
+    relative_half_width: float
+    frequency_hz: float | None = None
+    channel: str | None = None
+    min_runs: int = 2
+
+    def describe(self) -> str:
+        """``C_f's 95 % interval within +-5 % (the mode nearest 17 Hz)``."""
+        name = {"c_i": "C_i", "c_f": "C_f"}[self.quantity]
+        where = [f"the mode nearest {self.frequency_hz:g} Hz" if self.frequency_hz
+                 else "the largest mode"]
+        if self.channel:
+            where.append(f"channel {self.channel}")
+        return (f"{name}'s 95 % interval within +-{100 * self.relative_half_width:g} % "
+                f"({', '.join(where)}), after {self.min_runs} run"
+                f"{'s' * (self.min_runs != 1)}")
+
 
 RANGE_PARAMS: tuple[Param, ...] = (
     Param("from", "float", help="First value of the range."),
@@ -140,6 +191,7 @@ class Plan:
     profile_text: str
     on_failure: str
     runs: tuple[PlannedRun, ...]
+    stop_when: StopWhen | None = None
 
     @property
     def sha256(self) -> str:
@@ -239,7 +291,14 @@ def parse_plan(text: str, path: Path) -> Plan:
         table = raw.get("plan")
         if not isinstance(table, dict):
             raise ParameterError("plan: missing; expected a [plan] table naming the profile")
+        table = dict(table)
+        stop = table.pop("stop_when", None)
         plan = validate(PLAN_PARAMS, table, "plan")
+        if stop is not None and not isinstance(stop, dict):
+            raise ParameterError(f"plan.stop_when: got {stop!r}; expected a table "
+                                 "[plan.stop_when] with quantity and relative_half_width")
+        stop_when = StopWhen(**validate(STOP_PARAMS, stop, "plan.stop_when")) \
+            if stop is not None else None
         steps = raw.get("step")
         if not isinstance(steps, list) or not steps or not all(isinstance(s, dict)
                                                                for s in steps):
@@ -263,7 +322,8 @@ def parse_plan(text: str, path: Path) -> Plan:
         raise ProfileError(f"{path}: plan.profile: {exc}") from None
     return Plan(path=path, text=text, name=plan["name"], profile_path=profile_path,
                 profile_text=profile_text, on_failure=plan["on_failure"],
-                runs=tuple(PlannedRun(total=total, **run) for run in runs))
+                runs=tuple(PlannedRun(total=total, **run) for run in runs),
+                stop_when=stop_when)
 
 
 def _expand(step: dict[str, Any], number: int, plan: dict[str, Any],
@@ -328,8 +388,31 @@ def check_plan(plan: Plan, registry: Registry,
                 profile.require_runnable()
                 _, _, report = check_safety(profile, registry)
                 require_safe(report, profile.path)
+                if plan.stop_when is not None:
+                    check_stop_when(plan.stop_when, profile)
             except FsiLabError as exc:
                 raise ProfileError(f"{plan.path}: {run.label}: {exc}") from None
             checked[run.overrides] = report
         reports[run.index] = checked[run.overrides]
     return reports
+
+
+def check_stop_when(stop: StopWhen, profile: Profile) -> None:
+    """ProfileError unless a run of ``profile`` gives ``stop``'s quantity: a specimen (for
+    mu + M) and an analysed velocity or displacement channel (the one named, if one is)."""
+    from fsi_lab.chain import ANALYSED_QUANTITIES
+
+    where = "plan.stop_when"
+    if profile.specimen is None:
+        raise ProfileError(f"{profile.path}: {where}: {stop.quantity} needs mu + M, the mass "
+                           "per length of beam and fluid: the profile has no [specimen]; give "
+                           "it one or remove [plan.stop_when]")
+    named = profile.analysis.get("channels") or []
+    analysed = list(named) if named else [name for name, channel in profile.channels.items()
+                                          if channel.quantity in ANALYSED_QUANTITIES]
+    if not analysed:
+        raise ProfileError(f"{profile.path}: {where}: the profile analyses no velocity or "
+                           "displacement channel, so no run gives " + stop.quantity)
+    if stop.channel is not None and stop.channel not in analysed:
+        raise ProfileError(f"{profile.path}: {where}.channel: {stop.channel!r} is not analysed "
+                           f"(analysed: {', '.join(analysed)})")

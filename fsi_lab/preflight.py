@@ -1,8 +1,10 @@
 """What a run will ask of its bench, checked before any instrument is opened.
 
-:func:`check_safety` generates the excitation (:func:`prepare_excitation`), runs every
-instrument's own check on the run (:func:`check_instruments`) and assesses the waveform against
-the profile's ``[safety]`` limits. ``fsi-lab profile check``, ``fsi-lab run`` and the GUI call
+:func:`check_safety` runs every instrument's own check on the run (:func:`check_instruments`),
+with the waveform's length foreseen from the excitation's duration before it is generated (a
+60 s waveform at 1 MSa/s is refused by a source that holds 1e6 points without being built),
+generates the excitation (:func:`prepare_excitation`) and assesses it against the profile's
+``[safety]`` limits. ``fsi-lab profile check``, ``fsi-lab run`` and the GUI call
 it, so a profile the bench would refuse is refused before a run file exists.
 
 Each instrument plugin may declare a ``check`` (see
@@ -50,6 +52,18 @@ def _too_long(profile: Profile, points: float, rate: float) -> ProfileError:
         "the excitation or lower bench.source.sample_rate (or run.sample_rate when it is unset)")
 
 
+def planned_waveform(profile: Profile, registry: Registry) -> tuple[int | None, float]:
+    """The number of samples the profile's excitation will have (None when its plugin does not
+    declare its duration) and their rate (Sa/s), known before the waveform is generated."""
+    descriptor = registry.get("excitation", profile.excitation_plugin)
+    rate = float(run_setting(profile, "source", "sample_rate") or profile.run["sample_rate"])
+    if descriptor.duration is None:
+        return None, rate
+    # As the excitation plugins' time axis: round(duration x rate) samples.
+    points = float(descriptor.duration(dict(profile.excitation))) * rate
+    return (int(round(points)) if np.isfinite(points) else None), rate
+
+
 def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray, float]:
     """Generate the profile's drive waveform (V) and its sample rate (Hz).
 
@@ -83,7 +97,7 @@ def prepare_excitation(profile: Profile, registry: Registry) -> tuple[np.ndarray
     return waveform, rate
 
 
-def run_plan(profile: Profile, waveform: np.ndarray, waveform_rate: float) -> RunPlan:
+def run_plan(profile: Profile, waveform: np.ndarray | int, waveform_rate: float) -> RunPlan:
     """The :class:`~fsi_lab.contract.RunPlan` an instrument's check receives.
 
     Parameters
@@ -91,7 +105,7 @@ def run_plan(profile: Profile, waveform: np.ndarray, waveform_rate: float) -> Ru
     profile
         A validated, runnable profile.
     waveform
-        The excitation the source will play, V.
+        The excitation the source will play, V, or its number of samples.
     waveform_rate
         Its sample rate, Sa/s.
     """
@@ -101,12 +115,18 @@ def run_plan(profile: Profile, waveform: np.ndarray, waveform_rate: float) -> Ru
                    inputs={name: channel.input for name, channel in profile.channels.items()},
                    sample_rate=float(profile.run["sample_rate"]),
                    duration=float(profile.run["duration"]),
-                   waveform_points=int(np.size(waveform)), waveform_rate=float(waveform_rate))
+                   waveform_points=_points(waveform), waveform_rate=float(waveform_rate))
 
 
-def check_instruments(profile: Profile, registry: Registry, waveform: np.ndarray,
+def _points(waveform: np.ndarray | int) -> int:
+    """The number of samples of a waveform, or the number given."""
+    return int(waveform) if isinstance(waveform, (int, np.integer)) else int(np.size(waveform))
+
+
+def check_instruments(profile: Profile, registry: Registry, waveform: np.ndarray | int,
                       waveform_rate: float) -> None:
-    """Run every instrument's own check on the run ``profile`` describes.
+    """Run every instrument's own check on the run ``profile`` describes (``waveform``: the
+    excitation, V, or its number of samples).
 
     Raises
     ------
@@ -131,11 +151,18 @@ def check_instruments(profile: Profile, registry: Registry, waveform: np.ndarray
 
 
 def check_safety(profile: Profile, registry: Registry) -> tuple[np.ndarray, float, SafetyReport]:
-    """Generate the waveform, check what the run asks of each instrument
-    (:func:`~fsi_lab.preflight.check_instruments`, which raises) and assess the waveform
-    against ``[safety]`` (the verdict is in the report, not raised)."""
+    """Check what the run asks of each instrument (:func:`~fsi_lab.preflight.check_instruments`,
+    which raises; before the waveform is generated when its length can be foreseen), generate
+    the waveform and assess it against ``[safety]`` (the verdict is in the report, not
+    raised)."""
+    points, rate = planned_waveform(profile, registry)
+    if points is not None:
+        if points > MAX_WAVEFORM_POINTS:
+            raise _too_long(profile, points, rate)
+        check_instruments(profile, registry, points, rate)
     waveform, rate = prepare_excitation(profile, registry)
-    check_instruments(profile, registry, waveform, rate)
+    if waveform.size != points:
+        check_instruments(profile, registry, waveform, rate)
     gain = run_setting(profile, "amplifier", "gain")
     if gain is None:  # a descriptor that bypassed the registry's contract check
         raise ProfileError(

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 import h5py
+import numpy as np
 
 from fsi_lab.errors import InputFileError
 from fsi_lab.inputfiles import require_regular_file
@@ -33,8 +34,9 @@ EXPECTED = "a sequence file written by fsi-lab sequence (layout in docs/sequence
 #: ``running`` while the sequence goes (or if its process was killed), then how it ended.
 STATUSES = ("running", "completed", "failed", "interrupted")
 #: A run is ``pending`` until started; ``running`` while it goes (or if the process was
-#: killed during it); then its run file's exit status.
-RUN_STATUSES = ("pending", "running", "completed", "failed", "aborted")
+#: killed during it); then its run file's exit status; ``skipped`` when the plan's stop_when
+#: target was reached before it.
+RUN_STATUSES = ("pending", "running", "completed", "failed", "aborted", "skipped")
 
 
 def compact_results(summary: dict[str, Any] | None) -> dict[str, list[dict[str, Any]]]:
@@ -69,6 +71,9 @@ class SequenceRecord:
     directory: Path
     attrs: dict[str, Any]
     runs: list[dict[str, Any]] = field(default_factory=list)
+    #: the aggregation of the completed runs (:func:`fsi_lab.aggregate.aggregate_extracts`)
+    #: with ``sequence_runs``, the indices of the runs it holds; None before any
+    aggregate: dict[str, Any] | None = None
 
     @property
     def path(self) -> Path:
@@ -97,6 +102,8 @@ class SequenceRecord:
             group = handle.create_group("runs")
             for entry in self.runs:
                 write_attrs(group.create_group(f"{entry['index']:05d}"), entry)
+            if self.aggregate is not None:
+                _write_aggregate(handle.create_group("aggregate"), self.aggregate)
         _fsync(temporary)
         os.replace(temporary, self.path)
         _fsync(self.directory)
@@ -112,7 +119,43 @@ class SequenceRecord:
         """The record as one JSON object (``fsi-lab show DIR --json``)."""
         attrs = {k: v for k, v in self.attrs.items() if k not in ("plan", "profile")}
         return {"sequence": str(self.path), "directory": str(self.directory), **attrs,
-                "counts": self.counts(), "runs": self.runs, "plan": self.attrs["plan"]}
+                "counts": self.counts(), "runs": self.runs, "plan": self.attrs["plan"],
+                "aggregate": self.aggregate}
+
+
+def _write_aggregate(group: h5py.Group, agg: dict[str, Any]) -> None:
+    """The aggregation: its summary as JSON text, each mode's curves as datasets."""
+    from fsi_lab.aggregate import CURVES, without_curves
+
+    write_attrs(group, {"summary": without_curves(agg)})
+    for k, mode in enumerate(agg["modes"]):
+        node = group.create_group(f"mode_{k:02d}")
+        for curve, keys in CURVES.items():
+            for key in keys:
+                data = np.asarray(mode["curves"][curve][key],
+                                  dtype=np.int32 if key == "run" else np.float64)
+                node.create_dataset(f"{curve}_{key}", data=data)
+
+
+def _read_aggregate(reader: RunFileReader, group: h5py.Group) -> dict[str, Any]:
+    from fsi_lab.aggregate import CURVES
+
+    summary = reader.attrs(group).get("summary")
+    if not (isinstance(summary, dict) and isinstance(summary.get("modes"), list)):
+        raise reader.refuse(f"{group.name} attribute 'summary'", "is not an aggregation",
+                            "JSON with runs and modes (docs/sequence-format.md)")
+    for k, mode in enumerate(summary["modes"]):
+        node = reader.child(group, f"mode_{k:02d}", h5py.Group, required=True)
+        curves: dict[str, dict[str, Any]] = {}
+        for curve, keys in CURVES.items():
+            curves[curve] = {}
+            for key in keys:
+                data = reader.child(node, f"{curve}_{key}", h5py.Dataset, required=True)
+                if data.ndim != 1:
+                    raise reader.refuse(data.name, f"has shape {data.shape}", "a 1-D dataset")
+                curves[curve][key] = data[()]
+        mode["curves"] = curves
+    return summary
 
 
 def _fsync(path: Path) -> None:
@@ -182,8 +225,10 @@ def _read(path: Path) -> SequenceRecord:
                     raise reader.refuse(f"{where} attribute {key!r}", "is not a list",
                                         "a JSON list")
             runs.append(entry)
+        node = reader.child(handle, "aggregate", h5py.Group, required=False)
+        aggregate = _read_aggregate(reader, node) if node is not None else None
     attrs.pop("runs", None)
-    return SequenceRecord(path.parent, attrs, runs)
+    return SequenceRecord(path.parent, attrs, runs, aggregate)
 
 
 @contextlib.contextmanager

@@ -9,12 +9,21 @@ when an interlock tripped, when the bench was not confirmed safe, or on Ctrl+C o
 run in progress ends as ``fsi-lab run`` ends it). The record (:mod:`fsi_lab.seqfile`) is
 rewritten before and after every run, so :func:`resume` continues with the first run that did
 not complete, also after ``kill -9``.
+
+After every completed run the completed runs are aggregated (:mod:`fsi_lab.aggregate`: modes
+grouped by frequency, C_i and C_f fitted to the union of their free decays, the curves on one
+amplitude axis, the spread between runs) and the aggregation is stored in the record; each run
+is identified once per process (through the sequence's executor), a resumed sequence
+identifies the runs completed before first. With ``[plan.stop_when]`` the sequence stops, its
+remaining runs skipped, once the aggregated quantity's interval is narrow enough.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -86,6 +95,12 @@ class SequenceRunner:
     note: SignalNote
     #: a run's file could not be finalised (a full disk): HDF5 may crash at exit
     file_abandoned: bool = False
+    #: identifies the completed runs for the aggregation (None: in this process)
+    executor: Any = None
+    #: each completed run's identification, by run index (kept for the next aggregations)
+    extracts: dict[int, Any] = field(default_factory=dict)
+    _identified: dict[str, Any] = field(default_factory=dict)
+    _runs_registry: Registry | None = None
 
     def run(self) -> str:
         """Run every run not completed yet, in order; returns the final status
@@ -112,8 +127,13 @@ class SequenceRunner:
 
     def _loop(self) -> tuple[str, str]:
         ran = 0
+        if self._stale():  # resumed: the runs completed before, as the record does not hold
+            stop = self._aggregate_safely()
+            self._save()
+            if stop is not None:
+                return stop
         for entry, planned in zip(self.record.runs, self.plan.runs):
-            if entry["status"] == "completed":
+            if entry["status"] in ("completed", "skipped"):
                 continue
             if ran and planned.settle_s > 0:
                 self._settle(planned)
@@ -122,7 +142,8 @@ class SequenceRunner:
             stop = self._run_one(entry, planned)
             if stop is not None:
                 return stop
-        failed = [e["index"] for e in self.record.runs if e["status"] != "completed"]
+        failed = [e["index"] for e in self.record.runs
+                  if e["status"] not in ("completed", "skipped")]
         if failed:
             return "failed", (f"{len(failed)} of {len(self.record.runs)} runs did not complete "
                               f"(run {', '.join(map(str, failed))}); fsi-lab sequence --resume "
@@ -153,7 +174,9 @@ class SequenceRunner:
             entry["attempts"].append({key: entry[key] for key in (
                 "run_file", "status", "start_time", "stop_time", "error")})
         profile = self.plan.profile_for(planned, self.registry)
-        runner = Runner(profile, self.registry, self.record.directory, bus=self.bus)
+        self._identified = {}
+        runner = Runner(profile, self._capturing_registry(), self.record.directory,
+                        bus=self.bus)
         path = runner.reserve_file()
         entry.update(status="running", run_file=path.name, start_time=utc_now(), stop_time="",
                      error="", interrupted=False, results={})
@@ -170,6 +193,13 @@ class SequenceRunner:
                      run_file=outcome.path.name if outcome.path else "",
                      results=compact_results(outcome.summary))
         self.file_abandoned = self.file_abandoned or outcome.file_abandoned
+        stop = None
+        if outcome.exit_status == "completed" and not (outcome.interrupted
+                                                       or outcome.file_abandoned):
+            # aggregated before the record is written: one write records the run and it
+            # (killed meanwhile, the run is settled from its file and aggregated on resume)
+            self._keep_identification(entry, profile)
+            stop = self._aggregate_safely()
         with self.signals.held():
             self.record.save()
         label = planned.label
@@ -192,7 +222,118 @@ class SequenceRunner:
             self.bus.log("WARNING", f"[sequence] {label} failed ({outcome.error}); continuing "
                                     "(on_failure = \"continue\")")
         self.signals.raise_pending()
-        return None
+        return stop
+
+    def _aggregate_safely(self) -> tuple[str, str] | None:
+        """:meth:`_aggregate`; an aggregation that fails is logged (the runs go on, the record
+        keeps the previous aggregation), as a failing analysis is."""
+        try:
+            return self._aggregate()
+        except Exception as exc:  # noqa: BLE001 - logged, the sequence goes on
+            self.bus.log("ERROR", f"[sequence] the aggregation failed ({type(exc).__name__}: "
+                                  f"{exc}); fsi-lab aggregate {self.record.directory} tries "
+                                  "again")
+            return None
+
+    # ------------------------------------------------------------------ aggregation
+    def _capturing_registry(self) -> Registry:
+        """The registry the runs use: the same plugins, but the modes ``hvd`` (method
+        ``bands``) identifies in a run's analysis are kept for its aggregation, so that a run
+        is not identified twice."""
+        if self._runs_registry is not None:
+            return self._runs_registry
+        hvd = self.registry.descriptors.get("analysis", {}).get("hvd")
+        if hvd is None:
+            self._runs_registry = self.registry
+            return self.registry
+        original = hvd.run
+
+        def run(context, params):
+            result = original(context, params)
+            ident = getattr(result.values, "identification", None)
+            if ident is not None:
+                self._identified[context.channel.name] = (ident, context)
+            return result
+
+        descriptors = {kind: dict(table) for kind, table in self.registry.descriptors.items()}
+        descriptors["analysis"]["hvd"] = dataclasses.replace(hvd, run=run)
+        self._runs_registry = Registry(descriptors, self.registry.records)
+        return self._runs_registry
+
+    def _keep_identification(self, entry: dict[str, Any], profile) -> None:
+        """The extract of a run just completed, from the identification its analysis made
+        (nothing when it made none: the aggregation identifies the run itself)."""
+        from fsi_lab.aggregate_extract import ExtractTask, extract_identified
+
+        if not self._identified or not entry["run_file"]:
+            return
+        task = ExtractTask(str(self.record.directory / entry["run_file"]), label=run_label(entry))
+        try:
+            self.extracts[entry["index"]] = extract_identified(task, self._identified, profile,
+                                                               self.registry)
+        except FsiLabError:
+            pass  # (no specimen: the aggregation names it when it identifies the run)
+        self._identified = {}
+
+    def _completed(self) -> list[dict[str, Any]]:
+        return [e for e in self.record.runs if e["status"] == "completed" and e["run_file"]]
+
+    def _stale(self) -> bool:
+        """Whether the record's aggregation misses completed runs (or holds others)."""
+        held = (self.record.aggregate or {}).get("sequence_runs")
+        return [e["index"] for e in self._completed()] != (held or [])
+
+    def _aggregate(self) -> tuple[str, str] | None:
+        """Identify the completed runs not identified yet, aggregate every completed run into
+        the record, and check ``[plan.stop_when]``: the final status and why when it says
+        stop, else None."""
+        from fsi_lab.aggregate import aggregate_extracts, extract_runs
+        from fsi_lab.executor import InProcess
+
+        completed = self._completed()
+        if not completed:
+            return None
+        tasks = [task for task, entry in zip(extract_tasks(self.record), completed)
+                 if entry["index"] not in self.extracts]
+        if tasks:
+            by_file = {e["run_file"]: e["index"] for e in completed}
+            for extract in extract_runs(tasks, self.executor or InProcess()):
+                self.extracts[by_file[Path(extract.path).name]] = extract
+                for error in extract.errors:
+                    self.bus.log("WARNING", f"[sequence] not aggregated: {extract.label}: "
+                                            f"{error}")
+        agg = aggregate_extracts([self.extracts[e["index"]] for e in completed])
+        agg["sequence_runs"] = [e["index"] for e in completed]
+        self.record.aggregate = agg
+        for mode in agg["modes"]:
+            if "c_i" in mode:
+                self.bus.log("INFO", f"[sequence] aggregate of {mode['runs']} run(s), mode at "
+                                     f"{mode['frequency_hz']:.4g} Hz: C_i = {mode['c_i']:.4g} "
+                                     f"kg/(m s), C_f = {mode['c_f']:.4g} kg/m^2")
+        return self._stop_reached(agg, len(completed))
+
+    def _stop_reached(self, agg: dict[str, Any], completed: int) -> tuple[str, str] | None:
+        stop = self.plan.stop_when
+        if stop is None or completed < stop.min_runs:
+            return None
+        mode = stop_mode(agg, stop)
+        if mode is None or stop.quantity not in mode:
+            return None
+        value, (low, high) = mode[stop.quantity], mode[f"{stop.quantity}_ci95"]
+        half = max(value - low, high - value) / abs(value) if value else float("inf")
+        if half >= stop.relative_half_width:
+            return None
+        name = {"c_i": "C_i", "c_f": "C_f"}[stop.quantity]
+        reason = (f"stopped after {completed} completed runs: {name} = {value:.4g} "
+                  f"(95 %: {low:.4g} to {high:.4g}, +-{100 * half:.3g} %) at "
+                  f"{mode['frequency_hz']:.4g} Hz is within the plan's "
+                  f"+-{100 * stop.relative_half_width:g} %")
+        for entry in self.record.runs:
+            if entry["status"] in ("pending", "failed", "aborted"):
+                entry.update(status="skipped", error=f"not carried out: {reason}")
+        self.record.attrs["stopped_early"] = reason
+        self.bus.log("INFO", f"[sequence] {reason}")
+        return "completed", ""
 
 
 def prepare(plan_path: Path, registry: Registry) -> tuple[Plan, dict[int, dict[str, Any]]]:
@@ -264,9 +405,10 @@ def resume(directory: Path, registry: Registry) -> tuple[Plan, SequenceRecord]:
     for entry in record.runs:
         if entry["status"] == "running":
             settle_unfinished(record, entry)
-    if all(entry["status"] == "completed" for entry in record.runs):
+    if all(entry["status"] in ("completed", "skipped") for entry in record.runs):
         return plan, record  # nothing to resume: the record stays as it is
-    remaining = tuple(r for r, e in zip(plan.runs, record.runs) if e["status"] != "completed")
+    remaining = tuple(r for r, e in zip(plan.runs, record.runs)
+                      if e["status"] not in ("completed", "skipped"))
     reports = check_plan(plan, registry, remaining)
     for entry in record.runs:
         if entry["index"] in reports:
@@ -314,6 +456,37 @@ def running_note(record: SequenceRecord) -> str:
             f"{record.directory} continues it")
 
 
+def run_label(entry: dict[str, Any]) -> str:
+    """``run 3 (excitation.height=0.01, repeat 1 of 2)``: a run of the record, for the
+    aggregation."""
+    details = [f"{path}={value}" for path, value in (entry.get("point") or {}).items()]
+    if entry.get("repeats", 1) > 1:
+        details.append(f"repeat {entry['repeat']} of {entry['repeats']}")
+    return f"run {entry['index']}" + (f" ({', '.join(details)})" if details else "")
+
+
+def extract_tasks(record: SequenceRecord, sets=(), mass_per_length: float | None = None):
+    """An :class:`~fsi_lab.aggregate_extract.ExtractTask` per completed run of ``record``
+    that has its run file."""
+    from fsi_lab.aggregate_extract import ExtractTask
+
+    return [ExtractTask(str(record.directory / entry["run_file"]), tuple(sets),
+                        mass_per_length, run_label(entry))
+            for entry in record.runs if entry["status"] == "completed" and entry["run_file"]]
+
+
+def stop_mode(agg: dict[str, Any], stop) -> dict[str, Any] | None:
+    """The aggregated mode ``[plan.stop_when]`` watches: on its channel (if named), nearest
+    its frequency, or the one with the most extrema; None without one."""
+    modes = [m for m in agg.get("modes", [])
+             if stop.channel is None or m["channel"] == stop.channel]
+    if not modes:
+        return None
+    if stop.frequency_hz:
+        return min(modes, key=lambda m: abs(math.log(m["frequency_hz"] / stop.frequency_hz)))
+    return max(modes, key=lambda m: m.get("extrema", 0))
+
+
 def _describe_run(entry: dict[str, Any], total: int) -> str:
     details = [f"{path}={value}" for path, value in (entry.get("point") or {}).items()]
     if entry.get("repeats", 1) > 1:
@@ -339,6 +512,8 @@ def format_record(record: SequenceRecord) -> str:
     lines.append(f"{'status:':<13}{status}")
     if attrs.get("error"):
         lines.append(f"{'why:':<13}{attrs['error']}")
+    if attrs.get("stopped_early"):
+        lines.append(f"{'stopped:':<13}{attrs['stopped_early']}")
     times = f"started {attrs['start_time']}"
     if attrs.get("resumed"):
         times += f", resumed {', '.join(attrs['resumed'])}"
@@ -359,6 +534,10 @@ def format_record(record: SequenceRecord) -> str:
                 lines.append(f"      {channel} component {c['index']} at "
                              f"{c['frequency_hz']:.3f} Hz: C_i = {c['c_i']:.4g} kg/(m s), "
                              f"C_f = {c['c_f']:.4g} kg/m^2")
-        if entry["error"] and entry["status"] != "pending":
+        if entry["error"] and entry["status"] not in ("pending", "skipped"):
             lines.append(f"      {entry['error']}")
+    if record.aggregate is not None:
+        from fsi_lab.aggregate import format_aggregate
+
+        lines.append(format_aggregate(record.aggregate))
     return "\n".join(lines)

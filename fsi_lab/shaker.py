@@ -10,9 +10,10 @@ bench and of ``fsi-lab simulate``. A step makes the base overshoot and ring at `
 paper observed (about 30 Hz loaded, 47 Hz unloaded).
 
 Both use the same discrete filters (:func:`discrete_filters`, the bilinear transform). The
-bench's :class:`ShakerModel` runs them through ``scipy.signal.lfilter``, fastest on its many
-short blocks; the stroke prediction, which every ``fsi-lab profile check`` makes, runs them
-through :func:`fsi_lab.lti.lfilter` and so does not wait for scipy to load.
+bench's :class:`ShakerModel` runs them through :class:`fsi_lab.biquad.Biquads` (compiled with
+numba, as the beam's integrator it feeds; the same numbers as ``scipy.signal.lfilter``, without
+loading scipy.signal); the stroke prediction, which every ``fsi-lab profile check`` makes, runs
+them through :func:`fsi_lab.lti.lfilter` and so loads neither.
 """
 
 from __future__ import annotations
@@ -51,11 +52,10 @@ class ShakerModel:
 
     def __init__(self, sample_rate: float, suspension_hz: float, damping_ratio: float,
                  mm_per_volt: float) -> None:
-        from scipy.signal import lfilter  # the bench's physics; the stroke prediction does without
+        from fsi_lab.biquad import Biquads  # compiled: the stroke prediction does without
 
-        self._lfilter = lfilter
-        self._filters = [[b, a, np.zeros(2)] for b, a in discrete_filters(
-            sample_rate, suspension_hz, damping_ratio, mm_per_volt)]
+        self._filters = Biquads(discrete_filters(sample_rate, suspension_hz, damping_ratio,
+                                                 mm_per_volt))
 
     @classmethod
     def from_profile(cls, sample_rate: float, shaker: dict) -> "ShakerModel":
@@ -66,11 +66,7 @@ class ShakerModel:
     def advance(self, amplifier_volts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Base displacement (m) and acceleration (m/s^2) for the next block of amplifier
         output voltage (V)."""
-        u = np.asarray(amplifier_volts, dtype=float)
-        out = []
-        for entry in self._filters:
-            y, entry[2] = self._lfilter(entry[0], entry[1], u, zi=entry[2])
-            out.append(y)
+        out = self._filters.advance(np.asarray(amplifier_volts, dtype=float))
         return out[0], out[1]
 
 

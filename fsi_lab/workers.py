@@ -37,6 +37,27 @@ PINNED_ENV = {
 
 
 @contextlib.contextmanager
+def pinned_environment() -> Iterator[None]:
+    """Set :data:`PINNED_ENV` in this process's environment for the block, for the fresh
+    interpreters started inside it to inherit; the previous values are put back on leaving."""
+    saved = {name: os.environ.get(name) for name in PINNED_ENV}
+    os.environ.update(PINNED_ENV)  # what a spawned worker starts with
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+def spawn_context() -> multiprocessing.context.SpawnContext:
+    """The ``spawn`` start method: every worker a fresh interpreter (see the module notes)."""
+    return multiprocessing.get_context("spawn")
+
+
+@contextlib.contextmanager
 def worker_pool(workers: int) -> Iterator[Pool]:
     """A :class:`multiprocessing.pool.Pool` of ``workers`` processes with one BLAS and one
     numba thread each (:data:`PINNED_ENV`), closed and joined on leaving the block.
@@ -54,10 +75,8 @@ def worker_pool(workers: int) -> Iterator[Pool]:
     """
     if workers < 1:
         raise ValueError(f"workers = {workers}: expected at least 1")
-    saved = {name: os.environ.get(name) for name in PINNED_ENV}
-    os.environ.update(PINNED_ENV)  # what a spawned worker starts with
-    try:
-        pool = multiprocessing.get_context("spawn").Pool(workers)
+    with pinned_environment():
+        pool = spawn_context().Pool(workers)
         try:
             yield pool
         except BaseException:
@@ -67,9 +86,3 @@ def worker_pool(workers: int) -> Iterator[Pool]:
             pool.close()
         finally:
             pool.join()
-    finally:
-        for name, value in saved.items():
-            if value is None:
-                os.environ.pop(name, None)
-            else:
-                os.environ[name] = value

@@ -70,3 +70,23 @@ def sim_profile(tmp_path):
 
     return make
 
+
+
+@pytest.fixture(scope="module")
+def dask_cluster():
+    """A Dask scheduler and two worker processes (one thread each) on 127.0.0.1 for the
+    module's tests, stopped afterwards; a worker that dies fails its task at once (the
+    scheduler does not retry it on another worker)."""
+    import dask
+    from distributed import LocalCluster
+
+    from fsi_lab.workers import PINNED_ENV
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                               host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                               env=PINNED_ENV, silence_logs=50)
+        try:
+            yield cluster
+        finally:
+            cluster.close(timeout=30)

@@ -1,5 +1,5 @@
-"""Ctrl+C and SIGTERM are honoured from the first line of ``main`` to the last write (exit 130,
-one message), also when a library swallows the exception the handler raises; and a run killed
+"""Ctrl+C and SIGTERM are honoured from the first line of the ``fsi-lab`` script to the last
+write (exit 130, one message), also when a library swallows the exception the handler raises; and a run killed
 with ``kill -9`` loses at most the span the README promises, whenever the kill comes."""
 
 import dataclasses
@@ -8,6 +8,7 @@ import os
 import signal
 import subprocess
 import sys
+from pathlib import Path
 
 import h5py
 import pytest
@@ -50,6 +51,49 @@ def test_a_signal_at_the_start_of_main_exits_130(monkeypatch, signum, reason, js
     else:
         assert out == ""
     assert signal.getsignal(signal.SIGTERM) is before  # handlers put back for the caller
+
+
+# The installed console script in a fresh interpreter, signalled while it is still importing the
+# command (at the moment numpy, which every command needs, starts to be imported): no handler of
+# main's is in place yet. The point is an import, not a time: nothing depends on the machine's
+# speed. ``python -c STARTING SCRIPT SIGNUM ARGS...``
+STARTING = r"""
+import os, runpy, sys
+
+SIGNUM = int(sys.argv[2])
+
+class SignalledWhileImporting:
+    def find_spec(self, name, path=None, target=None):
+        if name == "numpy":
+            sys.meta_path.remove(self)
+            os.kill(os.getpid(), SIGNUM)
+        return None
+
+sys.meta_path.insert(0, SignalledWhileImporting())
+sys.argv = [sys.argv[1], *sys.argv[3:]]
+runpy.run_path(sys.argv[0], run_name="__main__")
+"""
+
+
+@pytest.mark.parametrize("signum, reason", [(signal.SIGTERM, "received SIGTERM"),
+                                            (signal.SIGINT, "interrupted (Ctrl+C)")])
+@pytest.mark.parametrize("json_flag", [[], ["--json"]])
+def test_a_signal_while_the_command_is_still_importing_exits_130(tmp_path, signum, reason,
+                                                                 json_flag):
+    script = Path(sys.executable).with_name("fsi-lab")
+    assert script.is_file(), f"{script}: the fsi-lab console script is not installed beside " \
+                             "the interpreter running the tests"
+    out = tmp_path / "runs"
+    proc = subprocess.run([sys.executable, "-c", STARTING, str(script), str(int(signum)), "run",
+                           str(_profile(tmp_path)), "--out", str(out), *json_flag],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 130, (proc.returncode, proc.stderr)  # not killed (143), no trace
+    assert proc.stderr == f"fsi-lab: interrupted: {reason}\n"
+    if json_flag:
+        assert json.loads(proc.stdout) == {"error": f"interrupted: {reason}", "exit_code": 130}
+    else:
+        assert proc.stdout == ""
+    assert not out.exists()  # nothing was started
 
 
 def _registry_whose_spectrum_swallows(signum):

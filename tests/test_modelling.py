@@ -46,6 +46,24 @@ def test_simulate_writes_a_run_like_a_measured_one(tmp_path):
     assert run.excitation["plugin"] == "ramp-derivative"
 
 
+def test_simulate_refuses_a_record_the_disk_cannot_hold(tmp_path, monkeypatch):
+    """Checked before anything is written (the record streams to the file: the disk is the
+    bound, not memory)."""
+    import shutil
+    from collections import namedtuple
+
+    from support import run_main
+
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(10**10, 10**10 - 10**8, 10**8))
+    out = tmp_path / "sim.h5"
+    code, _, err = run_main("simulate", str(WET), "--duration", "600", "--rate", "10000",
+                            "-o", str(out))
+    assert code == 2
+    assert "the simulated record would take 0.144 GB" in err and "has 0.1 GB free" in err
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("args, fragment", [
     (["--modes", "0"], "beam.modes"),
     (["--rate", "100"], "sample_rate: 100 Hz cannot resolve mode"),
@@ -80,10 +98,13 @@ def test_simulate_records_its_overrides_and_analyze_uses_them(tmp_path):
     assert [c["index"] for c in data["channels"]["tip_velocity"]["components"]] == [0]
 
 
-def test_a_failed_simulation_says_so_in_its_file(tmp_path, registry):
+def test_a_failed_simulation_says_so_in_its_file(tmp_path, registry, monkeypatch):
+    from fsi_lab import simulation
     from fsi_lab.preflight import prepare_excitation
     from fsi_lab.profile import load_profile
     from fsi_lab.simulation import simulate_run
+
+    monkeypatch.setattr(simulation, "BLOCK_SAMPLES", 2000)  # one second a block
 
     profile = load_profile(WET, registry)
     waveform, rate = prepare_excitation(profile, registry)
@@ -102,10 +123,13 @@ def test_a_failed_simulation_says_so_in_its_file(tmp_path, registry):
     assert run.channels["tip_velocity"].data.size == 4000  # the seconds written before it failed
 
 
-def test_an_interrupted_simulation_is_aborted_without_a_traceback(tmp_path, registry):
+def test_an_interrupted_simulation_is_aborted_without_a_traceback(tmp_path, registry, monkeypatch):
+    from fsi_lab import simulation
     from fsi_lab.preflight import prepare_excitation
     from fsi_lab.profile import load_profile
     from fsi_lab.simulation import simulate_run
+
+    monkeypatch.setattr(simulation, "BLOCK_SAMPLES", 2000)  # one second a block
 
     profile = load_profile(WET, registry)
     waveform, rate = prepare_excitation(profile, registry)
@@ -127,9 +151,8 @@ def test_an_interrupted_simulation_is_aborted_without_a_traceback(tmp_path, regi
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_ends_simulate_as_an_aborted_run(tmp_path, signum):
     out = tmp_path / "long.h5"
-    # hours of simulated time (20 million samples, the most simulate holds): far longer than
-    # the test waits
-    proc = start_cli("simulate", str(WET), "--duration", "20000", "--rate", "1000",
+    # days of simulated time (200 million samples): far longer than the test waits
+    proc = start_cli("simulate", str(WET), "--duration", "200000", "--rate", "1000",
                      "--modes", "1", "-o", str(out), "--json")
     try:
         deadline = time.monotonic() + 60
@@ -147,3 +170,52 @@ def test_a_signal_ends_simulate_as_an_aborted_run(tmp_path, signum):
     assert run.attrs["exit_status"] == "aborted" and run.attrs["traceback"] == ""
     expected = "received SIGTERM" if signum == signal.SIGTERM else "interrupted (Ctrl+C)"
     assert run.attrs["error"] == expected
+
+
+def test_the_compiled_shaker_filters_give_scipy_lfilter_to_the_bit():
+    """:class:`fsi_lab.biquad.Biquads` (simulate and the simulated bench) against
+    ``scipy.signal.lfilter`` with its state carried over blocks of uneven length."""
+    from scipy.signal import lfilter
+
+    from fsi_lab.biquad import Biquads
+    from fsi_lab.shaker import discrete_filters
+
+    sections = discrete_filters(10000.0, 30.0, 0.08, 0.5)
+    x = np.random.default_rng(5).normal(size=30001)
+    filters = Biquads(sections)
+    ours = np.concatenate([filters.advance(x[a:b]) for a, b in
+                           ((0, 1), (1, 9000), (9000, 9000), (9000, 30001))], axis=1)
+    for k, (b, a) in enumerate(sections):
+        first, state = lfilter(b, a, x[:9000], zi=np.zeros(2))
+        rest, _ = lfilter(b, a, x[9000:], zi=state)
+        expected = np.concatenate([first, rest])
+        np.testing.assert_array_equal(ours[k], expected)
+    with pytest.raises(ValueError, match="a\\[0\\] != 0"):
+        Biquads([([1.0], [0.0, 1.0])])
+
+
+def test_a_long_simulation_streams_its_drive_and_writes_large_blocks(tmp_path, registry,
+                                                                      monkeypatch):
+    """The record is simulated a block at a time with the drive interpolated per block: the
+    same samples as one interpolation of the whole record (numpy.interp), whatever the blocks."""
+    from fsi_lab import simulation
+    from fsi_lab.preflight import prepare_excitation
+    from fsi_lab.profile import load_profile
+
+    profile = load_profile(WET, registry)
+    waveform, rate = prepare_excitation(profile, registry)
+    written = []
+    for block in (simulation.BLOCK_SAMPLES, 777):
+        monkeypatch.setattr(simulation, "BLOCK_SAMPLES", block)
+        out = tmp_path / f"s{block}.h5"
+        simulation.simulate_run(profile, waveform, rate, 3.0, 2000.0, out, 2,
+                                {"uuid": "0" * 32,
+                                 "start_time": "2026-11-24T00:00:00.000000+00:00"})
+        written.append(read_run(out))
+    t = np.arange(6000) / 2000.0
+    expected = np.interp(t, np.arange(waveform.size) / rate, waveform, right=0.0)
+    for run in written:
+        np.testing.assert_array_equal(run.channels["drive"].data, expected)
+    for name in ("base_acceleration", "tip_velocity"):
+        np.testing.assert_array_equal(written[0].channels[name].data,
+                                      written[1].channels[name].data)

@@ -130,5 +130,22 @@ def test_simulate_refuses_a_record_it_cannot_hold(tmp_path, duration, rate):
                             rate, "-o", str(out))
     assert code == 2 and err.count("fsi-lab: error:") == 1 and "Traceback" not in err, err
     assert f"--duration {float(duration):g} s at --rate {float(rate):g} Hz makes" in err
-    assert "expected 2 to 20,480,000 (the simulation is held in memory)" in err
+    assert "expected 2 to 2,147,483,648: change --duration or --rate" in err
     assert not out.exists()
+
+
+def test_a_waveform_the_source_cannot_hold_is_refused_before_it_is_generated(monkeypatch):
+    """15 s at 1 MSa/s (15 million samples, within what any source holds, 1.6 GB to make) for
+    a generator that holds 1e6 points: refused from the excitation's duration, the waveform
+    never built."""
+    from fsi_lab.plugins.excitation import ramp_derivative
+
+    def never(*args):
+        raise AssertionError("the waveform was generated")
+
+    monkeypatch.setattr(ramp_derivative, "ramp_derivative", never)
+    code, _, err = run_main("profile", "check", str(GOOD_PROFILE), "--set",
+                            "excitation.duration=15", "--set", "bench.source.sample_rate=1e6")
+    assert code == 2, err
+    assert ("bench.source: the excitation has 15,000,000 samples at 1e+06 Sa/s; the arb memory "
+            "holds 8 to 1,000,000 points") in err

@@ -123,6 +123,46 @@ def test_a_bad_plan_table_is_refused(tmp_path, base, plan_extra, problem):
     assert code == 2 and data["error"] == f"{tmp_path / 'plan.toml'}: {problem}"
 
 
+STOP = '[plan.stop_when]\nquantity = "c_f"\nrelative_half_width = 0.05\n'
+
+
+@pytest.mark.parametrize("stop, problem", [
+    (STOP.replace('"c_f"', '"zeta"'), "plan.toml: plan.stop_when.quantity: got 'zeta'; "
+                                      "expected one of 'c_i', 'c_f'"),
+    (STOP.replace("relative_half_width = 0.05\n", ""),
+     "plan.toml: plan.stop_when.relative_half_width: missing"),
+    (STOP.replace("0.05", "0"), "plan.toml: plan.stop_when.relative_half_width: 0.0 is out of "
+                                "bounds"),
+    (STOP + 'channel = "base_acceleration"\n',
+     "plan.toml: step 1, run 1 of 1: {base}: plan.stop_when.channel: 'base_acceleration' is "
+     "not analysed (analysed: tip_velocity)"),
+    ('stop_when = 3\n', "plan.toml: plan.stop_when: got 3; expected a table [plan.stop_when]"),
+])
+def test_a_stop_condition_is_checked_before_anything_is_driven(tmp_path, base, stop, problem):
+    out = tmp_path / "out"
+    code, data, _ = sequence(str(write_plan(tmp_path, "[[step]]\n", plan_extra=stop)),
+                             "--out", str(out))
+    assert code == 2
+    assert data["error"].startswith(str(tmp_path / problem.format(base=base))), data["error"]
+    assert not out.exists()
+
+
+def test_a_stop_condition_needs_a_specimen(base):
+    # (the simulated benches need one too: a lab bench's profile may have none)
+    import dataclasses
+
+    from fsi_lab.errors import ProfileError
+    from fsi_lab.plan import StopWhen, check_stop_when
+    from fsi_lab.profile import load_profile
+
+    profile = dataclasses.replace(load_profile(base, load_registry()), specimen=None)
+    with pytest.raises(ProfileError) as info:
+        check_stop_when(StopWhen("c_f", 0.05), profile)
+    assert str(info.value) == (f"{base}: plan.stop_when: c_f needs mu + M, the mass per length "
+                               "of beam and fluid: the profile has no [specimen]; give it one "
+                               "or remove [plan.stop_when]")
+
+
 def test_a_missing_base_profile_is_named_as_the_plans(tmp_path):
     code, data, _ = sequence(str(write_plan(tmp_path, "[[step]]\n", profile="gone.toml")),
                              "--out", str(tmp_path / "out"))

@@ -84,3 +84,25 @@ def test_the_probe_sees_what_a_command_loads(tmp_path, run_file):
     nothing."""
     _, loaded = loaded_by(tmp_path, "analyze", str(run_file), "--mass-per-length", "0.02")
     assert {"scipy", "h5py"} <= loaded
+
+
+def test_simulate_loads_the_integrator_and_h5py_but_no_signal_processing(tmp_path):
+    """``simulate`` needs numba (the integrator and the shaker's filters), h5py (the run file)
+    and numpy; not scipy.signal (a second or more to import), the analysis or the instruments
+    (scipy.linalg comes with numba)."""
+    probe = ("import json, sys\n"
+             "from fsi_lab.cli import main\n"
+             "code = main(sys.argv[2:])\n"
+             "json.dump({'code': code, 'modules': sorted(sys.modules)}, open(sys.argv[1], 'w'))\n")
+    out = tmp_path / "modules.json"
+    proc = subprocess.run([sys.executable, "-c", probe, str(out), "simulate", str(GOOD_PROFILE),
+                           "--duration", "2", "--rate", "5000", "-o", str(tmp_path / "s.h5"),
+                           "--quiet"], capture_output=True, text=True, timeout=240, cwd=ROOT)
+    assert out.exists(), proc.stderr
+    found = json.loads(out.read_text())
+    assert found["code"] == 0
+    modules = set(found["modules"])
+    assert {"numba", "h5py", "fsi_lab.modal_integrator", "fsi_lab.biquad"} <= modules
+    unwanted = ("scipy.signal", "scipy.stats", "scipy.integrate", "scipy.interpolate",
+                "fsi_lab.dsp.identify", "pyvisa", "serial", "PySide6")
+    assert not [m for m in modules if m.startswith(unwanted)]

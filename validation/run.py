@@ -140,18 +140,22 @@ class Row:
                 "coverage": float(np.nanmean((lows <= truth) & (truth <= highs)))}
 
 
-def evaluate(cases: list[Case], trials: int, workers: int = 2) -> list[Row]:
-    """Run ``trials`` realisations of every case (in ``workers`` processes)."""
-    jobs = [(case, seed) for case in cases for seed in range(trials)]
-    if workers > 1:
-        # One BLAS and one numba thread per worker: processes that each start a thread per
-        # core fight over the cores and end up slower than one (fsi_lab.workers says more).
-        from fsi_lab.workers import worker_pool
+def evaluate(cases: list[Case], trials: int, workers: int = 2,
+             scheduler: str | None = None) -> list[Row]:
+    """Run ``trials`` realisations of every case, through fsi-lab's executor: in ``workers``
+    local processes of one BLAS and one numba thread each (1: in this process), or on the Dask
+    scheduler at ``scheduler``."""
+    from fsi_lab.executor import make_executor
 
-        with worker_pool(workers) as pool:
-            results = pool.map(run_trial, jobs, chunksize=1)
-    else:
-        results = [run_trial(job) for job in jobs]
+    jobs = [(case, seed) for case in cases for seed in range(trials)]
+    with make_executor(None if scheduler else workers, scheduler) as executor:
+        done = executor.map(run_trial, jobs)
+    failed = [r for r in done if not r.ok]
+    if failed:
+        case, seed = jobs[failed[0].index]
+        raise RuntimeError(f"{len(failed)} trial(s) failed, the first {case.name} seed {seed}: "
+                           f"{failed[0].error}")
+    results = [r.value for r in done]
     rows = []
     for k, case in enumerate(cases):
         part = results[k * trials:(k + 1) * trials]

@@ -187,6 +187,11 @@ def rfft(x: np.ndarray, n: int | None = None) -> np.ndarray:
 
 # ----------------------------------------------------------------------------- AR extension
 
+#: Eigenvalues of the prediction's normal matrix below this share of the largest are rounding
+#: (float64 sums of the stretch's products), not directions the data spans.
+EIGEN_FLOOR = 1e-13
+
+
 def _lstsq_normal(basis: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Least squares by the normal equations (columns of ``basis`` normalised), tiny ridge."""
     gram = basis.conj().T @ basis
@@ -233,10 +238,13 @@ def ar_extend(x: np.ndarray, n_ext: int, order: int, stride: int, fit_length: in
     rhs = design.T @ target
     if rank is not None and rank < order + 1:
         # Kumaresan-Tufts: least squares restricted to the `rank` principal directions of the
-        # data, which keeps measurement noise out of the predictor.
+        # data, which keeps measurement noise out of the predictor. Directions the data does
+        # not span (eigenvalues at rounding level of the largest: a stretch that holds fewer
+        # poles than the rank, or none) carry no information and are left out.
         evals, evecs = np.linalg.eigh(gram)
-        top = evecs[:, -rank:]
-        sol = top @ ((top.T @ rhs) / evals[-rank:])
+        kept = min(rank, int(np.sum(evals > EIGEN_FLOOR * evals[-1])))
+        top = evecs[:, evals.size - kept:]
+        sol = top @ ((top.T @ rhs) / evals[evals.size - kept:])
     else:
         # Normal equations with a tiny ridge: fast, and well defined when the order exceeds
         # the number of poles the record needs (the extra poles then stay small).
@@ -250,6 +258,7 @@ def ar_extend(x: np.ndarray, n_ext: int, order: int, stride: int, fit_length: in
     if abs(denom) > 1e-6:
         level += c / denom                  # the model's own mean level
     poles = np.roots(np.concatenate(([1.0], -coef)))
+    poles = poles[poles != 0]               # (a mode gone within one stride: none to continue)
     # Modal continuation (Prony): per-sample exponents of the poles, amplitudes by least
     # squares over the whole fitted stretch (so noise in the last samples does not seed the
     # extension). A decay continued backwards in time grows: let it, up to max_growth over the

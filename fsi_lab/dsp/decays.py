@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from fsi_lab.dsp._signal import fail, moving_average
+from fsi_lab.dsp.envelope import ABOVE, envelope_floor
 
 #: Factor by which the amplitude must fall below a decay's peak and then rise above its lowest
 #: value for a new decay to start: far above the ripple of HVD envelopes (a few %) and the
@@ -313,9 +314,12 @@ def decay_segments(x: Any, fs: float, period: float) -> list[tuple[int, int]]:
     block = max(period, n / fs / MAX_BLOCKS)
     tb, ib, mb = block_maxima(x, fs, block)
     whole = [(0, n)]
+    # Blocks at the record's floor (a quiet tail of noise, or rounding in a simulation:
+    # :func:`.envelope.envelope_floor`) start no decay: a decay ends where it reaches them.
+    above = mb > ABOVE * envelope_floor(mb)
+    tb, ib, mb = tb[above], ib[above], mb[above]
     if tb.size < 4:
         return whole
-    mb = np.maximum(mb, 1e-300 * max(float(mb.max()), 1e-300))
     decays = split_decays(tb, mb)
     if decays.count < 2:
         return whole

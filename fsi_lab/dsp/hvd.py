@@ -23,7 +23,9 @@ Numerical choices (see the module constants):
   length. ``padding="mirror"`` uses even reflection instead. Samples closer to an end than
   ``EDGE_PERIODS / cutoff`` are marked in :attr:`HVDResult.edge_mask`.
 - Speed: the decomposition runs on the band that holds the record's spectral peaks (up to
-  ``BAND_FACTOR`` times the highest significant peak, at least 10 samples per cycle of the band
+  ``BAND_FACTOR`` times the highest significant peak - or, when more components are asked for
+  than there are significant peaks, the highest frequency where the spectrum stands above the
+  noise and ``WEAK_CONTENT`` of its largest value - at least 10 samples per cycle of the band
   edge), obtained exactly by truncating the spectrum; the components are brought back to the
   full sample rate by interpolating their (smooth) envelopes and phases. Content above that band
   (noise, weak harmonics) does not influence the components and stays in the residual.
@@ -89,6 +91,11 @@ PEAK_THRESHOLD = 0.01
 PEAK_SMOOTHING = 0.05
 #: The decomposition band is flat up to BAND_FACTOR x the highest significant peak.
 BAND_FACTOR = 3.0
+#: With more components asked for than significant peaks, the band also holds the spectrum
+#: up to where it stands above this share of its largest value ...
+WEAK_CONTENT = 1e-6
+#: ... and above this many times its median (the noise floor of a record with a few modes).
+NOISE_CONTENT = 10.0
 #: A band (``band_hz``) must hold a spectral peak of the record at least this fraction of its
 #: largest.
 BAND_PEAK_THRESHOLD = 1e-3
@@ -266,6 +273,17 @@ def _significant_peaks(x: np.ndarray, fs: float, func: str) -> np.ndarray:
         raise fail(func, "found no spectral peak to decompose (no oscillation above the lowest "
                          f"resolvable frequency {fmin:.3g} Hz in a record of {x.size / fs:.4g} s)")
     return peaks.frequencies
+
+
+def _content_top(spec: np.ndarray, freqs: np.ndarray) -> float:
+    """The highest frequency (Hz) at which the amplitude spectrum ``spec`` (of the padded
+    record, at ``freqs``) stands above both :data:`WEAK_CONTENT` of its largest value and
+    :data:`NOISE_CONTENT` times its median (the noise): where components beyond the
+    significant peaks can be."""
+    amp = np.abs(spec)
+    level = max(WEAK_CONTENT * float(amp.max()), NOISE_CONTENT * float(np.median(amp)))
+    above = np.flatnonzero(amp > level)
+    return float(freqs[above[-1]]) if above.size else 0.0
 
 
 def _check_band_peaks(x: np.ndarray, fs: float, band: tuple[float, float], func: str) -> None:
@@ -462,13 +480,14 @@ def hvd(x: Any, fs: float, n_components: int = 2, cutoff: float | Sequence[float
         predict_pad(x, fs, peaks, left, right, PAD_GROWTH, modes=k_total)
     spec = sfft.rfft(xp, workers=FFT_WORKERS)
     del xp
-    f_pass = max(BAND_FACTOR * float(peaks.max()), 2.0 * fc_max)
+    freqs_full = np.arange(spec.size) * (fs / m)
+    top = float(peaks.max())
+    if k_total > peaks.size:        # components below the peak threshold: wherever content is
+        top = max(top, _content_top(spec, freqs_full))
+    f_pass = max(BAND_FACTOR * top, 2.0 * fc_max)
     f_stop = 1.25 * f_pass
     m_b = sfft.next_fast_len(int(math.ceil(2.0 * 1.1 * f_stop * m / fs)) + 8)
-    freqs_full = np.arange(spec.size) * (fs / m)
-    # Decimate only when every requested component can be one of the detected peaks (a
-    # component below the peak threshold could lie above the band).
-    if m_b < m and f_stop < 0.45 * fs and k_total <= peaks.size:
+    if m_b < m and f_stop < 0.45 * fs:
         band_gain = 1.0 - smooth_step((freqs_full - f_pass) / (f_stop - f_pass))
     else:
         m_b = m

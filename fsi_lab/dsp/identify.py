@@ -144,6 +144,10 @@ class DecayExtrema:
         ``|values|`` corrected for the filters' smear (step 6), used by the fits.
     crossings
         Zero-crossing times of the band signal over the kept extrema, s.
+    scale
+        Error standard deviation of each extremum relative to the decay's others (1 for
+        most; more near a window's edge and for an extremum the correction could not
+        describe), as the fits weighted them; None: all 1.
     """
 
     window: tuple[int, int]
@@ -151,6 +155,7 @@ class DecayExtrema:
     values: np.ndarray
     amplitude: np.ndarray
     crossings: np.ndarray
+    scale: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -1165,7 +1170,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         decays = [DecayExtrema(window=(windows[d["w"]][0], windows[d["w"]][2]),
                                times=d["times"], values=d["values"], amplitude=d["amplitude"],
                                crossings=d["crossings"][(d["crossings"] >= d["times"][0])
-                                                        & (d["crossings"] <= d["times"][-1])])
+                                                        & (d["crossings"] <= d["times"][-1])],
+                               scale=d.get("scale"))
                   for d in mode.decays]
         flat = bands.flat(mode.band)
         results.append(ModeIdentification(

@@ -1,8 +1,9 @@
 """The main window of ``fsi-lab gui`` and its entry point.
 
 Layout: the bench panel (with the safe-state button) docked on the left, the log docked at the
-bottom, and three tabs: Experiment (excitation designer, run control, live plots), Analysis (the
-views of the current run and its parameters) and Runs (open run files, compare, export).
+bottom, and four tabs: Experiment (excitation designer, run control, live plots), Analysis (the
+views of the current run and its parameters), Runs (open run files, compare, export) and
+Sequence (a plan's runs, stop and resume, their aggregation as they complete).
 Messages (a file that cannot be read, an instrument lost, a refused run) appear in a bar above
 the tabs and in the log; the application keeps running.
 """
@@ -34,6 +35,7 @@ from fsi_lab.gui.live_plots import LivePlots
 from fsi_lab.gui.results import RunResults
 from fsi_lab.gui.run_control import LogPanel, RunControl
 from fsi_lab.gui.runs_browser import RunsBrowser
+from fsi_lab.gui.sequence_tab import SequenceTab
 from fsi_lab.gui.session import ProfileSession
 from fsi_lab.gui.worker import EventForwarder, TaskPool
 from fsi_lab.registry import Registry, load_registry
@@ -105,6 +107,7 @@ class MainWindow(QMainWindow):
         self.live = LivePlots()
         self.analysis = AnalysisViews(self.registry, self.pool)
         self.runs = RunsBrowser(self.registry, self.pool)
+        self.sequence = SequenceTab()
         self._build_layout()
         self._build_menu()
         self._connect()
@@ -138,6 +141,7 @@ class MainWindow(QMainWindow):
         self.tabs.addTab(experiment, "Experiment")
         self.tabs.addTab(self.analysis, "Analysis")
         self.tabs.addTab(self.runs, "Runs")
+        self.tabs.addTab(self.sequence, "Sequence")
         central = QWidget()
         layout = QVBoxLayout(central)
         layout.setContentsMargins(4, 4, 4, 4)
@@ -196,6 +200,7 @@ class MainWindow(QMainWindow):
         self.runs.selected.connect(self._show_run)
         self.runs.failed.connect(self._run_failed)
         self.analysis.message.connect(self.notify)
+        self.sequence.message.connect(self.notify)
         self.analysis.reanalysed.connect(self._reanalysed)
         self.analysis.analysis_failed.connect(lambda path: self.open_runs([path], show=True))
 
@@ -340,6 +345,7 @@ class MainWindow(QMainWindow):
             self.notify("WARNING", "closing: aborting the run first (safe state) ...")
             event.ignore()
             return
+        self.sequence.wait()  # a sequence still going ends its run safely first
         self.live.timer.stop()
         self.analysis.stop_drawing()
         self.analysis.wait()

@@ -223,7 +223,11 @@ class SimBench:
         return self._loop is not None
 
     def _warm_up(self) -> None:
-        """Load the compiled integrator now rather than in the middle of a record."""
+        """Load the world's physics now rather than in the middle of a record: the front
+        ends' filters (scipy.signal, a second or more to import) and the compiled shaker and
+        integrator (numba)."""
+        from fsi_lab.instruments.sim.world import World  # noqa: F401 - loaded for its filters
+
         rate = 10000.0 * oversampling(self.beam, 10000.0)
         BenchPhysics(self.beam, self.shaker, rate,
                      self.specimen.measurement_point).advance(np.zeros(8))

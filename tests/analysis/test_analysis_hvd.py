@@ -92,6 +92,30 @@ def test_more_than_seven_components_and_order_by_amplitude():
         assert abs(res.mean_frequency(k) / freqs[k] - 1) < 0.005, k
 
 
+def test_more_components_than_peaks_still_decimate_to_the_band(monkeypatch):
+    """Three components asked of two decaying tones (8 and 27 Hz) sampled at 10 kHz: the
+    decomposition still runs on the band of the peaks (once at full rate: 0.76 s per 1e6
+    samples), and the two tones come out as with two components asked."""
+    from fsi_lab.dsp import hvd as module
+
+    lengths = []
+    analytic = module._analytic
+
+    def spy(spec, m, out_len, band_gain):
+        lengths.append((m, out_len))
+        return analytic(spec, m, out_len, band_gain)
+
+    monkeypatch.setattr(module, "_analytic", spy)
+    t, one, two = two_tones(fs=10000.0)
+    res = hvd(one[0] + two[0], 10000.0, 3)
+    m, out_len = lengths[0]
+    assert out_len < m / 5                         # 1/10: the spectrum to 150 Hz
+    assert all(length == (out_len, out_len) for length in lengths[1:])
+    mid = middle(t.size)
+    assert rel_rms(res.components[0][mid], one[0][mid]) < 1e-3
+    assert rel_rms(res.components[1][mid], two[0][mid]) < 5e-3
+
+
 def test_edge_mask_marks_the_record_ends():
     t, one, two = two_tones()
     res = hvd(one[0] + two[0], 2000.0, 2)

@@ -24,12 +24,14 @@ FUZZ = settings(derandomize=True, deadline=None, database=None, print_blob=False
                 suppress_health_check=list(HealthCheck))
 
 _MESSAGE = "fsi-lab: error: "
-#: Cases generated in this session, by test (reported at the end of the session).
+#: Cases run to the end of their checks in this session, by test (reported at the end of the
+#: session); cases Hypothesis abandoned while drawing them are not counted.
 TALLY: dict[str, int] = {}
 
 
 def tally(name: str, count: int, wanted: int) -> None:
-    """Record that test ``name`` ran ``count`` cases, and require the ``wanted`` number."""
+    """Record that test ``name`` ran ``count`` cases to the end of their checks, and require
+    the ``wanted`` number."""
     TALLY[name] = count
     assert count >= wanted, f"{name}: {count} cases generated; {wanted} wanted"
 

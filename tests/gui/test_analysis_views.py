@@ -98,6 +98,17 @@ def test_cli_paths_open_profiles_and_runs(qtbot, make_window, registry, tmp_path
     assert window.tabs.currentIndex() == 0
 
 
+def test_run_files_alone_open_on_the_analysis_tab(qtbot, make_window, registry, tmp_path):
+    """Issue 14: ``fsi-lab gui RUN.h5`` opened on an empty Experiment tab."""
+    window = make_window(registry)
+    window.open_paths([write_run(tmp_path / "x.h5", name="run X")])
+    qtbot.waitUntil(lambda: window.analysis.results is not None and not window.busy(),
+                    timeout=LOAD_TIMEOUT_MS)
+    assert window.tabs.currentWidget() is window.analysis
+    assert "x.h5" in window.analysis.title.text()
+    assert window.analysis.filled()["Overview"]
+
+
 def test_a_bad_profile_is_reported(qtbot, make_window, registry, tmp_path):
     window = make_window(registry)
     bad = tmp_path / "bad.toml"

@@ -97,3 +97,36 @@ def test_a_figure_resized_while_its_plots_are_hidden_fills_out_when_they_show(qt
                     timeout=UI_TIMEOUT_MS)
     box = plot.getViewBox().sceneBoundingRect()
     assert box.width() > 400 and box.height() > 250, box
+
+
+class _Screen:
+    """A screen whose free area (the desktop less its panels) is ``width`` x ``height``."""
+
+    def __init__(self, width, height):
+        from PySide6.QtCore import QRect
+
+        self.free = QRect(0, 0, width, height)
+
+    def availableGeometry(self):
+        return self.free
+
+
+class _App:
+    def __init__(self, screen):
+        self.screen = screen
+
+    def primaryScreen(self):
+        return self.screen
+
+
+@pytest.mark.parametrize("free, size", [((1600, 1000), (1600, 1000)),
+                                        ((1366, 740), (1366, 740)),
+                                        ((2560, 1400), (1680, 1050)),
+                                        (None, (1680, 1050))])
+def test_the_window_opens_within_a_smaller_screen(free, size):
+    """Issue 14: the window opened at 1680x1050 and was cut off on a 1600x1000 screen; it
+    opens at that size only where the screen's free area holds it."""
+    from fsi_lab.gui.app import PREFERRED_SIZE, fitting_size
+
+    assert PREFERRED_SIZE == (1680, 1050)
+    assert fitting_size(_App(_Screen(*free) if free else None)) == size

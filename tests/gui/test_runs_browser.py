@@ -83,3 +83,35 @@ def test_every_compared_curve_has_its_own_colour_and_legend_entry(qtbot, make_wi
     # the legend is outside the plots: a widget above them, not an item in a plot
     assert window.runs.legend.isVisible()
     assert backbone.legend is None
+
+
+def test_the_runs_legend_shows_every_entry_whole_at_1366x768(qtbot, make_window, registry,
+                                                             tmp_path):
+    """Issue 14: in the Runs tab the legend was clipped. Three runs with long names, two
+    components each, wrap to several lines at 1366x768: every entry is shown whole, inside the
+    legend, and the legend inside the tab."""
+    from PySide6.QtCore import QPoint, QRect
+
+    from fsi_lab.gui.app import settle
+
+    window = make_window(registry)  # at 1366x768
+    name = "wet beam, ramp derivative of {} V*s on the embedded simulated bench"
+    runs = [write_run(tmp_path / f"{k}.h5", name=name.format(h), hvd_components=2)
+            for k, h in enumerate(("0.01", "0.014", "0.02"))]
+    window.runs.open(runs)
+    qtbot.waitUntil(lambda: len(window.runs.runs) == 3 and not window.runs.pending,
+                    timeout=LOAD_TIMEOUT_MS)
+    window.tabs.setCurrentWidget(window.runs)
+    window.runs.set_checked(runs)
+    assert settle(window), "the layout did not settle"
+    legend = window.runs.legend
+    labels = legend._labels
+    assert len(labels) == len(legend.entries) == 6
+    assert len({label.geometry().y() for label in labels}) >= 2  # it wraps at this width
+    for label in labels:
+        assert label.isVisible(), label.text()
+        assert legend.rect().contains(label.geometry()), (label.geometry(), legend.rect())
+        assert label.width() >= label.sizeHint().width(), label.text()  # not cut short
+    assert legend.height() >= legend.heightForWidth(legend.width())
+    tab = window.runs
+    assert tab.rect().contains(QRect(legend.mapTo(tab, QPoint(0, 0)), legend.size()))

@@ -1,0 +1,76 @@
+"""The Sequence tab: a plan built in the tab, started on the embedded simulated bench, stopped
+during its settle wait and resumed, with each run's status, the progress and the aggregated
+backbone, damping and C_q plots following the record as the runs complete.
+
+Every wait is for a condition (the record's status, the process's end), with a timeout that
+only keeps a broken run from hanging; the stop comes during a settle wait of 600 s, so it
+cannot miss the sequence, however fast the machine."""
+
+from pathlib import Path
+
+from conftest import ROOT, UI_TIMEOUT_MS
+
+from fsi_lab.gui.sequence_tab import plan_text
+
+#: a run of the embedded bench (2 s records) with its analysis
+RUN_TIMEOUT_MS = 300000
+
+
+def status_of(tab, row):
+    item = tab.table.item(row, 3)
+    return item.text() if item is not None else ""
+
+
+def test_a_plan_text_the_tab_builds():
+    text = plan_text("profiles/base.toml", "excitation.height", ["0.005", " 0.01"], 2, 1.5,
+                     "two heights")
+    assert text == ('[plan]\nprofile = "profiles/base.toml"\nname = "two heights"\n'
+                    'settle_s = 1.5\n\n[[step]]\nname = "excitation.height"\nrepeats = 2\n'
+                    '[step.sweep]\n"excitation.height" = [0.005, 0.01]\n')
+    assert 'specimen.fluid" = ["air", "water"]' in plan_text("p.toml", "specimen.fluid",
+                                                             ["air", "water"])
+
+
+def test_build_start_stop_resume_and_watch_the_aggregation(qtbot, make_window, tmp_path):
+    window = make_window()
+    tab = window.sequence
+    window.tabs.setCurrentWidget(tab)
+    profile = tmp_path / "base.toml"
+    profile.write_text((ROOT / "profiles" / "wet-beam-sim.toml").read_text()
+                       .replace("duration = 10.0 ", "duration = 2.0 ")
+                       .replace('"equivalent-damping", "modal-model"]', '"equivalent-damping"]'))
+    text = plan_text(profile, "excitation.height", ["0.005", "0.01"], 1, 600.0)
+    assert tab.build_plan(text, tmp_path / "plan.toml")
+    out = tmp_path / "runs"
+    tab.out_dir.setText(str(out))
+    assert tab.status.text() == "plan plan.toml: 2 runs"
+    assert tab.start_button.isEnabled() and not tab.stop_button.isEnabled()
+
+    assert tab.start()
+    assert tab.stop_button.isEnabled() and not tab.start_button.isEnabled()
+    # run 1 completes, and the sequence waits 600 s before run 2: stop it there
+    qtbot.waitUntil(lambda: status_of(tab, 0) == "completed", timeout=RUN_TIMEOUT_MS)
+    assert status_of(tab, 1) == "pending" and tab.progress.value() == 1
+    assert tab.points("backbone") > 10 and tab.points("c_q") > 10
+    assert tab.summary.text().startswith("aggregate: 17.06 Hz (1 runs): C_i = ")
+    with qtbot.waitSignal(tab.finished, timeout=UI_TIMEOUT_MS * 4) as ended:
+        tab.stop()
+    assert ended.args == [130]
+    assert tab.record.attrs["status"] == "interrupted"
+    assert tab.status.text().startswith("interrupted: 1 of 2 runs completed")
+    assert any("the sequence ended interrupted (exit code 130)" in text
+               for _, text in window.messages.messages)
+    assert tab.resume_button.isEnabled()
+
+    with qtbot.waitSignal(tab.finished, timeout=RUN_TIMEOUT_MS) as ended:
+        assert tab.resume()
+    assert ended.args == [0]
+    assert [status_of(tab, row) for row in range(2)] == ["completed", "completed"]
+    assert tab.progress.value() == 2 and tab.progress.maximum() == 2
+    assert tab.record.aggregate["sequence_runs"] == [1, 2]
+    assert tab.summary.text().startswith("aggregate: 17.06 Hz (2 runs): C_i = ")
+    # each run's own C_i and C_f in the table, from the aggregation
+    assert all(tab.table.item(row, 5).text() for row in range(2))
+    # the runs' points and the medians and fitted line on the common amplitude axis
+    assert len(tab.plots["c_q"].listDataItems()) == 2 + 2  # two runs, median, fit
+    assert len(list(Path(out).glob("2*.h5"))) == 2

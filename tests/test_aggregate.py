@@ -1,0 +1,181 @@
+"""Aggregation across runs (fsi_lab.aggregate, fsi-lab aggregate): modes grouped by frequency,
+C_i and C_f fitted to the union of the runs' free decays with intervals that hold the truth,
+widened when the runs disagree, the runs' curves on one amplitude axis, the spread between runs
+next to the within-run intervals, the amplitude range covered.
+
+The runs are free decays with known damping (support.write_decay_run): with mu + M = 0.05 kg/m
+and no beam model (amplitudes as measured), C_i = 2 m a = 0.05 kg/(m s) and C_f = m beta =
+0.1 kg/m^2."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from support import run_main, write_decay_run
+
+from fsi_lab.aggregate import aggregate_extracts, format_aggregate, group_modes
+from fsi_lab.aggregate_extract import ExtractTask, extract_run
+
+MASS = 0.05
+C_I, C_F = 2 * MASS * 0.5, MASS * 2.0
+STARTS = (0.1, 0.2, 0.3)  # m/s: three excitation levels
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("runs")
+    out = {f"level{k}": write_decay_run(folder / f"level{k}.h5", start=start, seed=k)
+           for k, start in enumerate(STARTS)}
+    # the same mode with twice the fluid damping (another fluid), and another beam (30 Hz)
+    out["thicker"] = write_decay_run(folder / "thicker.h5", beta=4.0, start=0.2, seed=7)
+    out["stiffer"] = write_decay_run(folder / "stiffer.h5", frequency=30.0, start=0.2, seed=8)
+    return out
+
+
+@pytest.fixture(scope="module")
+def extracts(files):
+    return {name: extract_run(ExtractTask(str(path), (), MASS, name))
+            for name, path in files.items()}
+
+
+def covers(bounds, value):
+    return bounds[0] <= value <= bounds[1]
+
+
+def test_c_i_and_c_f_fitted_to_the_union_of_the_runs_hold_the_truth(extracts):
+    runs = [extracts[f"level{k}"] for k in range(3)]
+    agg = aggregate_extracts(runs)
+    assert agg["exit_code"] == 0 and agg["runs_with_modes"] == 3
+    (mode,) = agg["modes"]
+    assert mode["runs"] == 3 and mode["decays"] == 3
+    assert mode["extrema"] == sum(sum(d.amplitude.size for d in r.modes[0].decays) for r in runs)
+    assert mode["c_i"] == pytest.approx(C_I, rel=0.01) and covers(mode["c_i_ci95"], C_I)
+    assert mode["c_f"] == pytest.approx(C_F, rel=0.03) and covers(mode["c_f_ci95"], C_F)
+    assert mode["preferred_law"] == "quadratic" and mode["delta_aicc"]["viscous"] > 10
+    assert mode["frequency_hz"] == pytest.approx(20.0, rel=1e-4)
+    # pooling: the union's interval is narrower than the median run's own
+    width = mode["c_f_ci95"][1] - mode["c_f_ci95"][0]
+    own = sorted(r["c_f_ci95"][1] - r["c_f_ci95"][0] for r in mode["per_run"])
+    assert width < own[1]
+    # the spread between runs next to the median within-run interval
+    spread = mode["between_runs"]["c_f"]
+    values = [r["c_f"] for r in mode["per_run"]]
+    assert spread["sd"] == pytest.approx(np.std(values, ddof=1))
+    assert spread["mean"] == pytest.approx(np.mean(values))
+    assert spread["median_half_width"] == pytest.approx(own[1] / 2)
+    assert spread["runs"] == 3
+    # each run's own numbers are its analysis's (fsi-lab analyze gives the same)
+    for entry, run in zip(mode["per_run"], runs):
+        assert entry["label"] == run.label and entry["component"] == 0
+        assert entry["c_f"] == pytest.approx(run.modes[0].coefficients()["c_f"])
+    # the amplitude range covered: from the smallest run's smallest extremum to the largest's
+    # largest (velocity / omega; the largest run starts at 0.3 m/s)
+    low, high = mode["amplitude_range_m"]
+    assert high == pytest.approx(0.3 / (2 * math.pi * 20), rel=0.05)
+    assert low == min(r["amplitude_range_m"][0] for r in mode["per_run"])
+    assert agg["amplitude_range_m"] == [low, high]
+
+
+def test_the_runs_curves_on_one_amplitude_axis(extracts):
+    agg = aggregate_extracts([extracts[f"level{k}"] for k in range(3)])
+    (mode,) = agg["modes"]
+    curves, axis = mode["curves"], mode["axis"]
+    assert set(np.unique(curves["backbone"]["run"])) == {0, 1, 2}
+    assert set(np.unique(curves["damping"]["run"])) == {0, 1, 2}
+    # the backbone of a linear oscillator: the damped frequency, flat in amplitude
+    assert np.nanmedian(curves["backbone"]["frequency_hz"]) == pytest.approx(20.0, rel=0.01)
+    amplitudes = np.asarray(axis["amplitude_m"])
+    assert len(amplitudes) == 16 and np.all(np.diff(amplitudes) > 0)
+    assert mode["amplitude_range_m"][0] < amplitudes[0] < amplitudes[-1] \
+        < mode["amplitude_range_m"][1]
+    # where several runs give C_q points, their median follows the fitted line
+    # C_q = C_i + 8 C_f omega W / (3 pi): a one-period decrement at the smallest amplitudes
+    # is as uncertain as the damping is small (0.1 % noise, zeta ~ 0.005), so each bin's
+    # median is within 25 %, their middle within 3 %
+    ratios = [c_q / fit for c_q, fit, runs in zip(axis["c_q"], axis["c_q_fit"],
+                                                   axis["c_q_runs"])
+              if runs >= 2 and c_q is not None]
+    assert len(ratios) >= 8
+    assert all(0.75 < r < 1.25 for r in ratios), ratios
+    assert np.median(ratios) == pytest.approx(1.0, abs=0.03)
+
+
+def test_runs_that_disagree_widen_the_interval(extracts):
+    agg = aggregate_extracts([extracts["level0"], extracts["level1"], extracts["level2"],
+                              extracts["thicker"]])
+    (mode,) = agg["modes"]
+    assert mode["runs"] == 4
+    # twice the fluid damping in one run: far beyond the runs' own intervals
+    assert mode["widened"]["spread"]["c_f"] > 5
+    assert mode["between_runs"]["c_f"]["sd_pct"] > 30
+    # the interval says the runs do not give one C_f: it holds both runs' values
+    assert covers(mode["c_f_ci95"], C_F) and covers(mode["c_f_ci95"], 2 * C_F)
+    assert "by the spread between runs" in format_aggregate(agg)
+
+
+def test_modes_are_grouped_across_runs_by_frequency(extracts):
+    runs = [extracts["level0"], extracts["stiffer"], extracts["level1"]]
+    groups = group_modes(runs)
+    assert [[position for position, _ in group] for group in groups] == [[0, 2], [1]]
+    agg = aggregate_extracts(runs)
+    assert [m["runs"] for m in agg["modes"]] == [2, 1]
+    assert [round(m["frequency_hz"]) for m in agg["modes"]] == [20, 30]
+    assert covers(agg["modes"][1]["c_f_ci95"], C_F)
+    assert "spread" not in agg["modes"][1]["widened"] or \
+        agg["modes"][1]["widened"]["spread"] == {"c_i": 1.0, "c_f": 1.0}
+
+
+def test_fsi_lab_aggregate_files_and_directories(files, tmp_path):
+    paths = [str(files[f"level{k}"]) for k in range(3)]
+    bad = tmp_path / "bad.h5"
+    bad.write_text("not a run")
+    code, out, err = run_main("aggregate", *paths, str(bad), "--mass-per-length", str(MASS),
+                              "--json")
+    assert code == 2, err  # the bad file is refused; the others are aggregated
+    data = json.loads(out)
+    assert data["executor"] == {"kind": "in-process", "workers": 1}
+    assert [r["label"] for r in data["runs"]] == ["level0.h5", "level1.h5", "level2.h5",
+                                                  "bad.h5"]
+    assert data["runs"][3]["errors"][0].startswith(f"{bad}: not a readable HDF5 file")
+    assert f"[error] bad.h5: {bad}: not a readable HDF5 file" in err
+    (mode,) = data["modes"]
+    assert mode["runs"] == 3 and covers(mode["c_f_ci95"], C_F)
+    assert len(mode["curves"]["damping"]["c_q"]) == len(mode["curves"]["damping"]["run"])
+    # a directory of run files: each of them; the text form
+    folder = files["level0"].parent
+    code, text, _ = run_main("aggregate", str(folder), "--mass-per-length", str(MASS))
+    assert code == 0
+    assert text.startswith("aggregate of 5 runs: 5 with modes; amplitude ")
+    assert "mode at 20 Hz, channel tip: 4 runs, 4 decays" in text
+    assert "mode at 30 Hz, channel tip: 1 run, 1 decays" in text
+    assert "    thicker.h5: 19.99" in text
+
+
+def test_runs_without_a_mass_per_length_are_refused_naming_them(files):
+    code, out, err = run_main("aggregate", str(files["level0"]), "--json")
+    assert code == 2
+    (run,) = json.loads(out)["runs"]
+    assert run["errors"] == [f"{files['level0']}: C_i and C_f need mu + M, the mass per length "
+                             "of beam plus added fluid mass: the run has no [specimen]; pass "
+                             "--mass-per-length KG_PER_M"]
+    code, _, err = run_main("aggregate", str(files["level0"]), "--mass-per-length", "-1")
+    assert code == 2 and "--mass-per-length -1.0: expected kg/m > 0" in err
+
+
+def test_a_runs_decays_as_identify_exposes_them_give_back_its_own_fit(extracts):
+    """The union fit rests on this: each decay's extrema, their relative errors (scale) and the
+    band's noise correlation, refitted with fsi_lab.dsp.laws.fit_law, are the run's own fit."""
+    from fsi_lab.aggregate_fit import _whiteners
+    from fsi_lab.dsp.laws import fit_law
+
+    for name in ("level0", "stiffer"):
+        mode = extracts[name].modes[0]
+        assert all(d.scale is not None and d.scale.shape == d.amplitude.shape
+                   for d in mode.decays)
+        run = mode.run_decays()
+        refit = fit_law("quadratic", [d.amplitude for d in mode.decays], run.w0,
+                        alpha=run.alpha, whiteners=_whiteners(run, 1.0))
+        np.testing.assert_allclose(refit.params, mode.params, rtol=1e-5)
+        assert mode.widening >= 1.0

@@ -1,0 +1,137 @@
+"""A campaign on the embedded simulated bench (bench.fast), end to end: a plan sweeping
+excitation.height over 3 levels x 2 repeats is killed with SIGKILL after its second run and
+resumed; it ends with six runs' results, none repeated, and the aggregated C_i and C_f within
+10 % of the bench's 0.65 kg/(m s) and 33.0 kg/m^2 with intervals that hold them. A plan with
+an unsafe step is refused before anything is driven; [plan.stop_when] stops a sequence once
+the aggregated number is known well enough.
+
+The kill comes at a point of the sequence (when run 2's results are being kept), never after a
+delay."""
+
+import json
+import signal
+import subprocess
+import sys
+
+import pytest
+
+from support import GOOD_PROFILE, run_main
+
+from fsi_lab.seqfile import SEQUENCE_FILE
+
+C_I, C_F = 0.65, 33.0  # the bench's beam ([model] of wet-beam-sim.toml)
+# 2 s records are enough for the 17 Hz mode's decays; the chain is what C_i and C_f need
+BASE_SET = '["run.duration=2", "analysis.chain=spectrum,hvd,equivalent-damping"]'
+
+
+def write_plan(tmp_path, steps, extra=""):
+    path = tmp_path / "plan.toml"
+    path.write_text(f'[plan]\nprofile = "{GOOD_PROFILE}"\nname = "heights"\nset = {BASE_SET}\n'
+                    f"{extra}\n{steps}")
+    return path
+
+
+HEIGHTS = ('[[step]]\nname = "heights"\nrepeats = 2\n[step.sweep]\n'
+           '"excitation.height" = [0.005, 0.01, 0.015]\n')
+
+KILLER = r"""
+import os, signal, sys
+import fsi_lab.cli as cli
+import fsi_lab.sequence as sequence
+
+keep = sequence.SequenceRunner._keep_identification
+def keeping(self, entry, profile):
+    if entry["index"] == 2:  # run 2 completed, neither recorded nor aggregated yet
+        os.kill(os.getpid(), signal.SIGKILL)
+    return keep(self, entry, profile)
+sequence.SequenceRunner._keep_identification = keeping
+sys.exit(cli.main(["sequence", sys.argv[1], "--out", sys.argv[2], "-q"]))
+"""
+
+
+def show(out):
+    code, text, err = run_main("show", str(out), "--json")
+    assert code == 0, err
+    return json.loads(text)
+
+
+def covers(bounds, value):
+    return bounds[0] <= value <= bounds[1]
+
+
+def test_a_campaign_killed_after_its_second_run_resumes_and_aggregates(tmp_path):
+    plan = write_plan(tmp_path, HEIGHTS)
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-c", KILLER, str(plan), str(out)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr
+    killed = show(out)
+    assert killed["status"] == "running"
+    # the record still says run 2 is running: resuming settles it from its (complete) file
+    assert [r["status"] for r in killed["runs"]] == ["completed", "running"] + ["pending"] * 4
+    assert killed["aggregate"]["sequence_runs"] == [1]
+    first_two = [r["run_file"] for r in killed["runs"][:2]]
+
+    code, text, err = run_main("sequence", "--resume", str(out), "--json")
+    assert code == 0, err
+    data = json.loads(text)
+    assert data["status"] == "completed" and len(data["resumed"]) == 1
+    runs = data["runs"]
+    assert [r["status"] for r in runs] == ["completed"] * 6
+    # none repeated: runs 1 and 2 kept their files, no run has an earlier attempt, and the
+    # directory holds exactly the six run files
+    assert [r["run_file"] for r in runs[:2]] == first_two
+    assert all(r["attempts"] == [] for r in runs)
+    assert sorted(p.name for p in out.glob("2*.h5")) == sorted(r["run_file"] for r in runs)
+    assert [r["point"]["excitation.height"] for r in runs] == [
+        "0.005", "0.005", "0.01", "0.01", "0.015", "0.015"]
+
+    agg = data["aggregate"]
+    assert agg["sequence_runs"] == [1, 2, 3, 4, 5, 6] and agg["exit_code"] == 0
+    mode = agg["modes"][0]  # the 17 Hz mode: in every run, the most extrema
+    assert mode["frequency_hz"] == pytest.approx(17.06, abs=0.05)
+    assert mode["runs"] == 6 and len(mode["per_run"]) == 6
+    assert mode["c_i"] == pytest.approx(C_I, rel=0.10) and covers(mode["c_i_ci95"], C_I)
+    assert mode["c_f"] == pytest.approx(C_F, rel=0.10) and covers(mode["c_f_ci95"], C_F)
+    # the amplitude range covered: every run's
+    assert mode["amplitude_range_m"] == [min(r["amplitude_range_m"][0] for r in mode["per_run"]),
+                                         max(r["amplitude_range_m"][1] for r in mode["per_run"])]
+    # the record holds it (sequence.h5), show prints it
+    assert show(out)["aggregate"]["modes"][0]["c_f"] == mode["c_f"]
+    code, shown, _ = run_main("show", str(out))
+    assert code == 0 and "aggregate of 6 runs: 6 with modes" in shown
+    assert f"C_f = {mode['c_f']:.4g} kg/m^2" in shown
+
+
+def test_a_plan_with_an_unsafe_step_is_refused_naming_it(tmp_path):
+    steps = HEIGHTS + '[[step]]\nname = "too high"\nset = ["excitation.height=0.2"]\n'
+    out = tmp_path / "out"
+    code, text, err = run_main("sequence", str(write_plan(tmp_path, steps)), "--out", str(out),
+                               "--json")
+    assert code == 2
+    message = json.loads(text)["error"]
+    assert message.startswith(f"{tmp_path / 'plan.toml'}: step 2 ('too high'), run 7 of 7: ")
+    assert "refused before anything was sent: peak drive" in message
+    assert not out.exists()  # nothing driven, nothing written
+
+
+def test_stop_when_ends_the_sequence_once_the_interval_is_narrow_enough(tmp_path):
+    stop = ('[plan.stop_when]\nquantity = "c_i"\nrelative_half_width = 0.05\n'
+            'frequency_hz = 17.0\nmin_runs = 2\n')
+    plan = write_plan(tmp_path, HEIGHTS, stop)
+    out = tmp_path / "out"
+    code, text, err = run_main("sequence", str(plan), "--out", str(out), "--json")
+    assert code == 0, err
+    data = json.loads(text)
+    assert data["status"] == "completed"
+    assert [r["status"] for r in data["runs"]] == ["completed"] * 2 + ["skipped"] * 4
+    assert data["stopped_early"].startswith("stopped after 2 completed runs: C_i = ")
+    assert "is within the plan's +-5 %" in data["stopped_early"]
+    mode = data["aggregate"]["modes"][0]
+    low, high = mode["c_i_ci95"]
+    assert max(high - mode["c_i"], mode["c_i"] - low) < 0.05 * mode["c_i"]
+    assert len(list(out.glob("2*.h5"))) == 2
+    # nothing left to resume
+    code, again, _ = run_main("sequence", "--resume", str(out), "--json")
+    assert code == 0 and json.loads(again)["runs"] == data["runs"]
+    assert (out / SEQUENCE_FILE).exists()
