@@ -2,9 +2,10 @@
 
 Each module exposes ``rows()`` returning a list of :class:`bench.Row`; our figure and the
 reference it is compared with are measured in the same run, the same number of times
-(:data:`bench.table.REPEAT`), and given as median (min-max): warm (in-process, after one
-untimed call) and cold (the first call in a fresh process with an empty numba cache, imports
-apart), with the floor of the work where one applies (one FFT of the length, reading the bytes).
+(:data:`bench.table.REPEAT`), and given as median (min-max, n=N): warm (in-process after one
+untimed call, or a whole process with the numba cache filled) and cold (the first call in a
+fresh process with an empty numba cache, imports apart), with the floor of the work measured in
+the same run (one FFT of the length, reading the bytes, an idle window's heartbeat).
 Rows without a target show a figure for what it is ("-" under met).
 """
 

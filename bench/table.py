@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -98,6 +99,24 @@ def process_times(argv: list[str], repeat: int = REPEAT, env: dict | None = None
             raise RuntimeError(f"{' '.join(argv)} exited {proc.returncode}: "
                                f"{proc.stderr[-300:]}")
     return out
+
+
+def cache_times(argv: list[str], folder: Path, repeat: int = REPEAT,
+                env: dict | None = None) -> tuple[list[float], list[float]]:
+    """Cold and warm wall times of the command ``argv`` (:func:`process_times`), s: cold,
+    ``repeat`` runs each with an empty numba cache (``NUMBA_CACHE_DIR`` in ``folder``, emptied
+    before each run); warm, ``repeat`` runs with a cache filled by one untimed run. Every run
+    is a fresh process."""
+    cold_cache, warm_cache = folder / "cold-numba-cache", folder / "warm-numba-cache"
+
+    def empty_cache() -> None:
+        shutil.rmtree(cold_cache, ignore_errors=True)
+
+    cold = process_times(argv, repeat, {**(env or {}), "NUMBA_CACHE_DIR": str(cold_cache)},
+                         before=empty_cache)
+    warm_env = {**(env or {}), "NUMBA_CACHE_DIR": str(warm_cache)}
+    process_times(argv, 1, warm_env)  # fills the cache
+    return cold, process_times(argv, repeat, warm_env)
 
 
 def render(rows: list[Row]) -> str:

@@ -20,6 +20,13 @@ import numpy as np
 from fsi_lab.errors import AnalysisError, FsiLabError, InputFileError
 
 
+def identification_of(result: Any) -> Any:
+    """The :class:`~fsi_lab.dsp.identify.Identification` an ``hvd`` result carries (its typed
+    ``components`` result, method ``bands``), or None (method ``hvd``, or none made)."""
+    decomposition = getattr(result, "decomposition", None)
+    return getattr(decomposition, "identification", None)
+
+
 @dataclass(frozen=True)
 class ExtractTask:
     """One run file to extract: its path, ``--set`` overrides of its analysis settings,
@@ -252,7 +259,7 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
                                   reference=profile.analysis.get("reference"))
         try:
             result = hvd.run(context, hvd_params)
-            _modes(out, name, result.values.identification, context, eq_params, mass)
+            _modes(out, name, identification_of(result), context, eq_params, mass)
         except (FsiLabError, AnalysisError) as exc:
             out.errors.append(f"channel {name}: {exc}")
             out.exit_code = 1

@@ -726,16 +726,28 @@ def cmd_gui(args) -> int:
 EXIT_STRICT = 3
 
 
+def _warnings(entry: dict[str, Any]) -> list[tuple[str, str]]:
+    """Every warning of a channel's or a component's summary as (key, sentence)
+    (:func:`fsi_lab.summary.warnings_of`)."""
+    from fsi_lab.summary import warnings_of
+
+    return warnings_of(entry)
+
+
 def strict_problems(summary: dict[str, Any]) -> list[str]:
     """What makes ``--strict`` fail: every refused result (an analysis or a component that
-    failed) and every warning, one line each, naming the channel and component."""
+    failed) and every warning, channel-level or a component's, one line each, naming the
+    channel, and the analysis or component."""
     problems = []
     for channel, info in summary.get("channels", {}).items():
         for error in info.get("errors", []):
             problems.append(f"channel {channel}: {error['message']}")
+        problems.extend(f"channel {channel}{' ' + key if key else ''}: {w}"
+                        for key, w in _warnings(info))
         for component in info.get("components", []):
             where = f"channel {channel} component {component['index']}"
-            problems.extend(f"{where}: {w}" for w in component.get("warnings", []))
+            problems.extend(f"{where}{' ' + key if key else ''}: {w}"
+                            for key, w in _warnings(component))
             for value in component.values():
                 if isinstance(value, dict) and value.get("error"):
                     problems.append(f"{where}: {value['error']}")

@@ -312,7 +312,6 @@ def parse_plan(text: str, path: Path) -> Plan:
             runs.extend(_expand(step, number, plan, len(runs)))
         except ParameterError as exc:
             raise ProfileError(f"{path}: {step_label(number, name)}: {exc}") from None
-    total = len(runs)
     profile_path = (path.parent / plan["profile"]) if not Path(plan["profile"]).is_absolute() \
         else Path(plan["profile"])
     try:
@@ -320,6 +319,8 @@ def parse_plan(text: str, path: Path) -> Plan:
                                  MAX_PROFILE_BYTES, error=ProfileError)
     except ProfileError as exc:
         raise ProfileError(f"{path}: plan.profile: {exc}") from None
+    _seed_repeats(runs, profile_text, str(profile_path))
+    total = len(runs)
     return Plan(path=path, text=text, name=plan["name"], profile_path=profile_path,
                 profile_text=profile_text, on_failure=plan["on_failure"],
                 runs=tuple(PlannedRun(total=total, **run) for run in runs),
@@ -352,6 +353,27 @@ def _expand(step: dict[str, Any], number: int, plan: dict[str, Any],
                               *(f"{p}={text}" for p, text in point)),
                 "settle_s": float(settle)})
     return runs
+
+
+def _seed_repeats(runs: list[dict[str, Any]], profile_text: str, where: str) -> None:
+    """Give the repeats of a point new noise on a simulated bench.
+
+    A simulated bench with one seed makes the same record every time, so repeats would agree
+    exactly and an aggregation would count one record several times. Repeat ``k`` of a point
+    whose overrides leave ``bench.seed`` alone runs with the base profile's seed + ``k - 1``,
+    written as one more ``--set`` so its run file says so. A real bench has no seed: nothing
+    is added when the base profile's bench is not embedded.
+    """
+    bench = parse_toml(profile_text, where).get("bench")
+    bench = bench if isinstance(bench, dict) else {}
+    base = bench.get("seed", 0)
+    if bench.get("embedded") is not True or not isinstance(base, int) or isinstance(base, bool):
+        return
+    for run in runs:
+        if run["repeat"] > 1 and not any(o.split("=", 1)[0].strip() == "bench.seed"
+                                         for o in run["overrides"]):
+            seed = (base + run["repeat"] - 1) % 2**32
+            run["overrides"] = (*run["overrides"], f"bench.seed={seed}")
 
 
 def load_plan(path: str | Path) -> Plan:

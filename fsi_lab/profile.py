@@ -86,6 +86,9 @@ BENCH_PARAMS: tuple[Param, ...] = (
           choices=("source", "amplifier", "vibrometer", "acquisition"),
           help="Simulated bench only: the instrument whose link a timeout, drop or garble "
                "fault hits."),
+    Param("seed", "int", "", 0, minimum=0, maximum=2**32 - 1,
+          help="Simulated bench only: seed of its noise generators (runs with the same seed "
+               "see the same noise; a sequence's repeats take the next seeds)."),
 )
 
 ROLE_KEYS = ("plugin", "address")

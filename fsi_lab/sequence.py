@@ -246,11 +246,13 @@ class SequenceRunner:
         if hvd is None:
             self._runs_registry = self.registry
             return self.registry
+        from fsi_lab.aggregate_extract import identification_of
+
         original = hvd.run
 
         def run(context, params):
             result = original(context, params)
-            ident = getattr(result.values, "identification", None)
+            ident = identification_of(result)
             if ident is not None:
                 self._identified[context.channel.name] = (ident, context)
             return result

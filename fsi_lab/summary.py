@@ -1,8 +1,9 @@
 """The analysis summary as text (``fsi-lab run``, ``analyze``, ``show``) and its plain values.
 
 The core shows what the summary's layout defines (docs/json-output.md): each channel, its
-``notes`` and ``errors``, its components with their ``index``, ``frequency_hz`` (and its
-``frequency_ci95_hz``), ``warnings`` and the per-component errors of any analysis. Everything
+``notes``, ``warnings`` and ``errors``, its components with their ``index``, ``frequency_hz``
+(and its ``frequency_ci95_hz``), ``warnings`` and the per-component errors of any analysis, and
+the ``warnings`` an analysis keeps under its own key (``frf``'s at channel level). Everything
 else is the plugins': each says what it shows of its keys through the
 ``fsi_lab_summary_lines`` hook (:class:`fsi_lab.presentation.SummaryText`), and the values of
 the keys no plugin claims are shown as ``key: value`` lines when they are numbers, strings or
@@ -18,7 +19,7 @@ from typing import Any
 from fsi_lab.presentation import SummaryText
 
 #: Keys of a channel's summary the core shows itself.
-CHANNEL_KEYS = ("components", "notes", "errors")
+CHANNEL_KEYS = ("components", "notes", "errors", "warnings")
 #: Keys of a component entry the core shows itself.
 COMPONENT_KEYS = ("index", "frequency_hz", "frequency_ci95_hz", "warnings")
 
@@ -29,6 +30,17 @@ def _registry(registry):
 
         registry = load_registry()
     return registry
+
+
+def warnings_of(entry: dict[str, Any]) -> list[tuple[str, str]]:
+    """Every warning of a channel's or a component's summary as (key, sentence): its own
+    ``warnings`` (key "") and those of each analysis that keeps them under its key (``frf``'s
+    at channel level, for one); a channel's components are not looked into."""
+    found = [("", w) for w in entry.get("warnings", [])]
+    for key, value in entry.items():
+        if isinstance(value, dict):
+            found.extend((key, w) for w in value.get("warnings", []))
+    return found
 
 
 def format_value(value: Any) -> str:
@@ -48,7 +60,7 @@ def _plain(value: Any) -> bool:
 def plain_values(entry: dict[str, Any], skip: set[str] | tuple[str, ...]) -> list[tuple[str, Any]]:
     """The plain values of a summary entry outside ``skip``: ``(key, value)`` for a number,
     string or boolean, and ``(key.sub, value)`` for those of a table one level down (its
-    ``error`` left out: the core shows it as a component that was not analysed)."""
+    ``error`` and ``warnings`` left out: the core shows them)."""
     out = []
     for key, value in entry.items():
         if key in skip:
@@ -57,7 +69,7 @@ def plain_values(entry: dict[str, Any], skip: set[str] | tuple[str, ...]) -> lis
             out.append((key, value))
         elif isinstance(value, dict):
             out.extend((f"{key}.{sub}", item) for sub, item in value.items()
-                       if sub != "error" and _plain(item))
+                       if sub not in ("error", "warnings") and _plain(item))
     return out
 
 
@@ -94,6 +106,7 @@ def format_summary(summary: dict[str, Any], registry=None) -> str:
         lines.append(f"channel {channel}" + "".join(t.inline for t in texts))
         for note in info.get("notes", []):
             lines.append(f"  note: {note}")
+        lines.extend(f"  {key + ' ' if key else ''}warning: {w}" for key, w in warnings_of(info))
         lines.extend(f"  {line}" for text in texts for line in text.lines)
         lines.extend(f"  {key}: {format_value(value)}"
                      for key, value in plain_values(info, claimed | set(CHANNEL_KEYS)))
@@ -114,7 +127,8 @@ def _component_lines(registry, channel: str, info: dict[str, Any],
         if bounds and None not in bounds:
             text += f" (+-{0.5 * (bounds[1] - bounds[0]):.2g})"
     lines = [text + "".join(t.inline for t in texts)]
-    lines.extend(f"    warning: {w}" for w in component.get("warnings", []))
+    lines.extend(f"    {key + ' ' if key else ''}warning: {w}"
+                 for key, w in warnings_of(component))
     # Per-component errors (hvd's on a component that switches modes is carried by every
     # later analysis): each distinct message once.
     seen: list[str] = []

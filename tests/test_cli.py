@@ -145,6 +145,37 @@ def test_summary_text_says_whose_coefficients_the_modal_model_ran_with():
     assert "0.6895" not in lines[1]
 
 
+def test_strict_and_the_text_summary_see_the_frf_warnings(tmp_path):
+    """The FRF keeps its warnings at channel level (``frf``'s ``warnings``), not under a
+    component: ``--strict`` fails on them and the text summary prints them. A lightly damped
+    resonance (20 Hz, zeta 0.002: a half-power band of 0.08 Hz) seen at a 1.95 Hz resolution
+    (256-sample segments at 500 Hz), where its damping ratio is not resolved."""
+    import scipy.signal as ssig
+
+    fs, n, w = 500.0, 2 ** 14, 2 * np.pi * 20.0
+    sdof = ssig.StateSpace([[0.0, 1.0], [-w * w, -2 * 0.002 * w]], [[0.0], [-1.0]],
+                           [[0.0, 1.0]], [[0.0]]).to_discrete(1 / fs, method="zoh")
+    base = np.random.default_rng(4).standard_normal(n)
+    tip = ssig.dlsim(sdof, base)[1][:, 0]
+    csv_path = tmp_path / "rec.csv"
+    csv_path.write_text("base [m/s^2],tip [m/s]\n"
+                        + "\n".join(f"{a!r},{b!r}" for a, b in zip(base.tolist(), tip.tolist())))
+    run = tmp_path / "rec.h5"
+    proc = cli("import", str(csv_path), "--rate", "500", "--reference", "base", "-o", str(run))
+    assert proc.returncode == 0, proc.stderr
+    chain = ("--set", "analysis.chain=frf", "--set", "analysis.frf.segment=256")
+    data, proc = cli_json("analyze", str(run), *chain)
+    assert proc.returncode == 0, proc.stderr
+    warnings = data["channels"]["tip"]["frf"]["warnings"]
+    assert warnings and not data["channels"]["tip"].get("components")
+    proc = cli("analyze", str(run), *chain, "--strict")
+    assert proc.returncode == 3, proc.stderr
+    strict = [line for line in proc.stderr.splitlines() if line.startswith("[strict]")]
+    assert strict == [f"[strict] channel tip frf: {w}" for w in warnings]
+    assert [line for line in proc.stdout.splitlines() if "warning:" in line] == [
+        f"  frf warning: {w}" for w in warnings]
+
+
 def test_analyze_keeps_the_runs_own_overrides(sim_profile, tmp_path):
     analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
     data, proc = cli_json("run", str(sim_profile(analysis=analysis)), "--out", str(tmp_path),

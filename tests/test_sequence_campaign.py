@@ -135,3 +135,33 @@ def test_stop_when_ends_the_sequence_once_the_interval_is_narrow_enough(tmp_path
     code, again, _ = run_main("sequence", "--resume", str(out), "--json")
     assert code == 0 and json.loads(again)["runs"] == data["runs"]
     assert (out / SEQUENCE_FILE).exists()
+
+
+def test_repeats_on_the_simulated_bench_draw_new_noise(tmp_path):
+    from fsi_lab.plan import load_plan
+
+    plan = load_plan(write_plan(tmp_path, HEIGHTS))
+    seeds = [[o for o in r.overrides if o.startswith("bench.seed=")] for r in plan.runs]
+    # repeat 1 keeps the profile's seed (0); repeat 2 of each height takes the next one
+    assert seeds == [[], ["bench.seed=1"]] * 3
+    swept = load_plan(write_plan(tmp_path, '[[step]]\nrepeats = 2\n[step.sweep]\n'
+                                           '"bench.seed" = [7, 9]\n'))
+    assert [r.overrides[-1] for r in swept.runs] == ["bench.seed=7"] * 2 + ["bench.seed=9"] * 2
+
+
+def test_the_bench_seed_sets_the_simulated_noise(tmp_path):
+    import h5py
+    import numpy as np
+
+    records = []
+    for seed in (0, 0, 1):
+        out = tmp_path / f"seed{seed}-{len(records)}"
+        code, _, err = run_main("run", str(GOOD_PROFILE), "--out", str(out), "-q",
+                                "--set", "run.duration=0.3", "--set", "analysis.chain=spectrum",
+                                "--set", f"bench.seed={seed}")
+        assert code == 0, err
+        (path,) = out.glob("*.h5")
+        with h5py.File(path, "r") as f:
+            records.append(f["channels/tip_velocity"][()])
+    assert np.array_equal(records[0], records[1])      # the same seed, the same record
+    assert not np.array_equal(records[0], records[2])  # another seed, other noise

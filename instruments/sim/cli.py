@@ -60,7 +60,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
                             help=f"TCP port of the {role} on 127.0.0.1 (default: any free port)")
     parser.add_argument("--source-channel", type=int, choices=(1, 2), default=1,
                         help="the generator's channel wired to the amplifier (default 1)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the noise generators")
+    parser.add_argument("--seed", type=int, default=None,
+                        help="seed of the noise generators (default: the profile's [bench] seed)")
     parser.add_argument("--json", action="store_true",
                         help="print the addresses and the profile snippet as one JSON line")
     parser.add_argument("-q", "--quiet", action="store_true", help="no event log on stderr")
@@ -104,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
         fast=bench_keys["fast"] if args.fast is None else True,
         fault=args.fault or bench_keys["fault"],
         fault_after_s=bench_keys["fault_after_s"] if args.fault_after is None else args.fault_after,
-        fault_target=args.fault_target or bench_keys.get("fault_target"), seed=args.seed,
+        fault_target=args.fault_target or bench_keys.get("fault_target"),
+        seed=bench_keys["seed"] if args.seed is None else args.seed,
         source_channel=args.source_channel,
         ports={"source": args.source_port, "amplifier": args.amplifier_port,
                "acquisition": args.acquisition_port},

@@ -33,6 +33,7 @@ def get_embedded_bench(context: dict[str, Any]):
                            fault=str(section.get("fault", "none")),
                            fault_after_s=float(section.get("fault_after_s", 1.0)),
                            fault_target=section.get("fault_target") or None,
+                           seed=int(section.get("seed", 0)),
                            warm_up=context.get("purpose", "run") == "run")
     bench = SimBench(context["specimen"], context.get("model"), context.get("shaker"),
                      options).start()

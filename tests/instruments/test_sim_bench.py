@@ -267,8 +267,8 @@ def test_real_time_pacing_follows_the_sample_clock(drivers, sim_bench):
     lab = drivers(sim_bench(fast=False))
     started = time.monotonic()
     lab.record(np.zeros(1000), 2000.0, {"drive": 1}, 0.5)
-    elapsed = time.monotonic() - started
-    assert 0.45 < elapsed < 5.0
+    # paced by the sample clock: never faster than the record (a loaded machine may be slower)
+    assert time.monotonic() - started > 0.45
 
 
 def test_over_travel_trips_when_the_base_exceeds_the_stroke(drivers):
