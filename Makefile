@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 export QT_QPA_PLATFORM ?= offscreen
 
-.PHONY: demo gui qt-libs screenshots test bench validate clean h5dump-tool
+.PHONY: demo gui qt-libs screenshots test lint bench validate clean h5dump-tool
 
 # A venv with the package (editable) and the given extras; rebuilt when pyproject.toml changes.
 $(VENV)/.installed-%: pyproject.toml
@@ -47,6 +47,13 @@ screenshots: $(VENV)/.installed-gui
 
 test: $(VENV)/.installed-dev,gui h5dump-tool
 	$(BIN)/python -m pytest
+
+# ruff with the rule set stated in pyproject.toml ([tool.ruff.lint]); LINT narrows it to some
+# paths (make lint LINT="fsi_lab/testing tests/test_hooks.py"). It joins `test` once the whole
+# code base passes.
+LINT ?= .
+lint: $(VENV)/.installed-dev,gui
+	$(BIN)/ruff check $(LINT)
 
 # The benchmark environment has the references we compare with (pysdkit's HVD); they are
 # not dependencies of fsi-lab, so they live in a venv of their own.

@@ -58,14 +58,13 @@ def _fmt(errors: list[float]) -> str:
 def _registry():
     import importlib
 
-    from fsi_lab.registry import Registry
+    from fsi_lab.registry import Registry, add_plugin
 
     registry = Registry()
     for module in ("spectrum", "hvd", "integrate", "instantaneous", "backbone", "damping",
                    "equivalent_damping"):
-        mod = importlib.import_module(f"fsi_lab.plugins.analysis.{module}")
-        for descriptor in mod.fsi_lab_analyses():
-            registry.descriptors["analysis"][descriptor.name] = descriptor
+        add_plugin(registry, importlib.import_module(f"fsi_lab.plugins.analysis.{module}"),
+                   module)
     return registry
 
 
@@ -85,15 +84,16 @@ def chain_record(fs: float = CHAIN_FS, seconds: float = CHAIN_SECONDS) -> np.nda
 def chain_inputs(fs: float = CHAIN_FS, seconds: float = CHAIN_SECONDS) -> dict:
     """The keyword arguments of :func:`fsi_lab.chain.run_chain` for the whole default chain
     on :func:`chain_record`."""
-    from fsi_lab.chain import DEFAULT_CHAIN
+    from fsi_lab.chain import default_chain
     from fsi_lab.contract import ChannelData
     from fsi_lab.params import validate
 
     channels = {"tip": ChannelData("tip", chain_record(fs, seconds), fs, "velocity", "m/s")}
     registry = _registry()
+    chain = default_chain(registry)
     params = {name: validate(registry.get("analysis", name).params, {}, name)
-              for name in DEFAULT_CHAIN}
-    return {"channels": channels, "analysis": {"chain": list(DEFAULT_CHAIN)}, "params": params,
+              for name in chain}
+    return {"channels": channels, "analysis": {"chain": chain}, "params": params,
             "registry": registry, "mass_per_length": 0.13}
 
 
@@ -105,7 +105,7 @@ def _chain_rows() -> list[Row]:
     call) and cold (the first call in a fresh process with an empty numba cache, the plugins'
     work modules imported by it as a user's first analysis does; the chain's imports apart),
     next to its floor, one numpy rfft of the record (warm, and the first in a fresh process)."""
-    from fsi_lab.chain import DEFAULT_CHAIN, run_chain
+    from fsi_lab.chain import run_chain
 
     inputs = chain_inputs()
     run_chain(**inputs)
@@ -118,7 +118,8 @@ def _chain_rows() -> list[Row]:
     floor_imports, floor_cold = cold_times(
         "import numpy", "numpy.fft.rfft(x)",
         prepare="from bench.bench_analysis import chain_record\nx = chain_record()")
-    name = (f"analysis: whole chain ({' > '.join(DEFAULT_CHAIN)}), {CHAIN_SECONDS:g} s at "
+    name = (f"analysis: whole chain ({' > '.join(inputs['analysis']['chain'])}), "
+            f"{CHAIN_SECONDS:g} s at "
             f"{CHAIN_FS / 1000:g} kHz, in-process")
     return [
         Row(f"{name}, warm", figure(elapsed) + (" (with errors)" if errors else ""),

@@ -34,12 +34,12 @@ def analysis_profile(run, registry, sets: list[str] | tuple[str, ...] = ()):
     ProfileError
         The profile, or an override, is refused (naming the run file and the key).
     """
-    from fsi_lab.chain import DEFAULT_CHAIN
+    from fsi_lab.chain import default_chain
     from fsi_lab.profile import parse_profile
 
     text = run.profile_text
     if not text.strip():  # imported data: the default chain, and the reference given on import
-        chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
+        chain = default_chain(registry)
         text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
         if run.reference:
             text += "reference = " + json.dumps(run.reference) + "\n"

@@ -132,7 +132,7 @@ def _output_unconfirmed(role: str, state: Mapping[str, Any], plugin: str = "") -
         got = "no output_enabled" if "output_enabled" not in state \
             else f"output_enabled = {enabled!r}, not a bool"
         return (f"{driver}its state read back does not say that the output is off "
-                f"(read_state() gives {got}; a {role} driver returns "
+                f"(read_state() gives {got}; a driver of the {role} role returns "
                 "fsi_lab.contract.OutputState(output_enabled=<bool read from the instrument>))")
     return ""
 

@@ -31,10 +31,50 @@ from fsi_lab.events import EventBus, Progress
 from fsi_lab.registry import Registry
 from fsi_lab.tails import QuietTail, analysed_end
 
-#: Chain used for data that comes without a profile (``fsi-lab import``), where installed.
-DEFAULT_CHAIN = ("spectrum", "hvd", "integrate", "instantaneous", "backbone", "damping",
-                 "equivalent-damping")
 ANALYSED_QUANTITIES = ("velocity", "displacement")
+
+
+def default_chain(registry: Registry) -> list[str]:
+    """The chain of data that comes without a profile (``fsi-lab import``, then ``analyze``):
+    the analyses the plugins put in it (the ``fsi_lab_default_chain`` hook), each after the
+    analyses providing what it requires or uses.
+
+    An analysis comes after every analysis of the chain it depends on, at the first place that
+    allows (by the longest path of dependencies to it), analyses at the same place in the order
+    of their names; one whose required kinds no analysis of the chain provides is left out.
+
+    Parameters
+    ----------
+    registry
+        Loaded plugins.
+
+    Returns
+    -------
+    list of str
+        Analysis names, in the order to run them (:func:`check_chain` accepts it).
+    """
+    plugins = {name: registry.get("analysis", name) for name in registry.default_chain_names()}
+    while True:  # leave out what cannot run, until every requirement is met
+        kinds = {p.provides for p in plugins.values() if p.provides} | set(plugins)
+        unmet = [name for name, p in plugins.items() if not set(p.requires) <= kinds]
+        if not unmet:
+            break
+        for name in unmet:
+            del plugins[name]
+    after = {name: {other for other, q in plugins.items() if other != name and (
+                 q.provides in p.requires + p.uses or other in p.requires)}
+             for name, p in plugins.items()}
+    level: dict[str, int] = {}
+
+    def place(name: str, seen: tuple[str, ...] = ()) -> int:
+        if name not in level:
+            if name in seen:  # a cycle of declarations: cannot be ordered
+                raise ParameterError(f"default chain: {' -> '.join(seen + (name,))} depend on "
+                                     "each other")
+            level[name] = 1 + max((place(n, seen + (name,)) for n in after[name]), default=-1)
+        return level[name]
+
+    return sorted(plugins, key=lambda name: (place(name), name))
 
 
 def check_chain(chain: Sequence[str], registry: Registry, where: str = "analysis.chain") -> None:
@@ -88,7 +128,7 @@ def check_chain(chain: Sequence[str], registry: Registry, where: str = "analysis
                     f"{', '.join(chain)})")
 
 
-def _stored(plugin: AnalysisPlugin, out: Any) -> tuple[AnalysisResult, Result | None]:
+def stored_result(plugin: AnalysisPlugin, out: Any) -> tuple[AnalysisResult, Result | None]:
     """What the chain keeps of what ``plugin.run`` returned: the stored form and the typed
     result handed to later analyses; TypeError saying what the plugin should return."""
     if isinstance(out, Result):
@@ -229,7 +269,7 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                     provided=dict(provided), unavailable=dict(unavailable), shared=shared,
                     plugin=plugin_name, declared=plugin.requires + plugin.uses,
                 )
-                record, typed = _stored(plugin, plugin.run(context, plugin_params))
+                record, typed = stored_result(plugin, plugin.run(context, plugin_params))
             except Exception as exc:  # noqa: BLE001 - recorded, the chain goes on
                 message = str(exc) if isinstance(exc, FsiLabError) else (
                     f"{type(exc).__name__}: {exc}"
@@ -253,6 +293,7 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                 provided[typed.kind] = typed
                 unavailable.pop(typed.kind, None)
             groups[key] = {"datasets": record.datasets, "units": record.units,
+                           "axes": record.axes,
                            "attrs": {"status": "ok", **record.attrs,
                                      **({"analysed_s": tail.analysed_s} if tail.cut else {})},
                            "params": plugin_params}

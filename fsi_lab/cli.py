@@ -101,10 +101,21 @@ def _clean(obj):
     return obj
 
 
-def _registry():
-    from fsi_lab.registry import load_registry
+_plugins = None  # the plugins this command loaded (load_registry), once per command
 
-    registry = load_registry()
+
+def _loaded_plugins():
+    """The plugins, loaded once per command (the parser needs their commands)."""
+    global _plugins
+    if _plugins is None:
+        from fsi_lab.registry import load_registry
+
+        _plugins = load_registry()
+    return _plugins
+
+
+def _registry():
+    registry = _loaded_plugins()
     for record in registry.records:
         if record.status in ("failed", "invalid"):
             print(f"[warning] plugin {record.name} ({record.distribution}) skipped: "
@@ -133,7 +144,7 @@ def cmd_run(args) -> int:
         print(f"run file:    {outcome.path}")
         print(f"exit status: {outcome.exit_status}" + (f" ({outcome.error})" if outcome.error else ""))
         if outcome.summary:
-            print(format_summary(outcome.summary))
+            print(format_summary(outcome.summary, registry))
     code = EXIT_FOR_STATUS[outcome.exit_status]
     if outcome.interrupted and code == 0:  # the record is complete, the command was not
         code = EXIT_FOR_STATUS["aborted"]
@@ -227,7 +238,7 @@ def cmd_analyze(args) -> int:
     if args.json:
         _emit_json(summary)
     else:
-        print(format_summary(summary))
+        print(format_summary(summary, registry))
     return _strict_exit(summary, 0) if args.strict else 0
 
 
@@ -500,12 +511,9 @@ def cmd_plugins(args) -> int:
             record.update(requires=list(descriptor.requires), uses=list(descriptor.uses),
                           provides=descriptor.provides)
     records.sort(key=lambda r: (r["kind"] or "", r["name"]))
-    commands = [{"name": command.name if command else ep.name,
-                 "distribution": ep.dist.name if ep.dist else "",
-                 "version": ep.dist.version if ep.dist else "", "entry_point": ep.value,
-                 "status": "loaded" if command else "failed", "error": error,
-                 "help": command.help if command else ""}
-                for ep, command, error in plugin_commands()]
+    if not registry.commands:  # called without the parser (in-process)
+        registry.add_commands(argparse.ArgumentParser().add_subparsers())
+    commands = [record.as_dict() for record in registry.commands]
     if args.json:
         _emit_json({"plugins": records, "commands": commands})
         return 0
@@ -516,6 +524,8 @@ def cmd_plugins(args) -> int:
         if args.verbose:
             if record["kind"] == "command":
                 print(f"    fsi-lab {record['name']}: {record['help']}")
+            if record.get("hooks") and not record["kind"]:
+                print(f"    hooks {', '.join(record['hooks'])}")
             for key in ("requires", "uses"):
                 if record.get(key):
                     print(f"    {key} {', '.join(record[key])}")
@@ -717,14 +727,11 @@ EXIT_STRICT = 3
 
 
 def _warnings(entry: dict[str, Any]) -> list[tuple[str, str]]:
-    """Every warning of a channel's or a component's summary as (key, sentence): its own
-    ``warnings`` (key "") and those of each analysis that keeps them under its key (``frf``'s
-    at channel level, for one); a channel's components are not looked into."""
-    found = [("", w) for w in entry.get("warnings", [])]
-    for key, value in entry.items():
-        if isinstance(value, dict):
-            found.extend((key, w) for w in value.get("warnings", []))
-    return found
+    """Every warning of a channel's or a component's summary as (key, sentence)
+    (:func:`fsi_lab.summary.warnings_of`)."""
+    from fsi_lab.summary import warnings_of
+
+    return warnings_of(entry)
 
 
 def strict_problems(summary: dict[str, Any]) -> list[str]:
@@ -782,100 +789,35 @@ def _window_size(text: str) -> tuple[int, int]:
     return width, height
 
 
-def _interval(bounds) -> str:
-    """``[lo, hi]`` with four significant digits (95 % interval), or nothing."""
-    if not bounds or any(b is None for b in bounds):
-        return ""
-    return f"(95 %: {bounds[0]:.4g} to {bounds[1]:.4g})"
+def format_summary(summary: dict[str, Any], registry=None) -> str:
+    """The analysis summary as a few readable lines (:func:`fsi_lab.summary.format_summary`,
+    with the plugins of this command)."""
+    from fsi_lab.summary import format_summary as text
 
-
-def format_summary(summary: dict[str, Any]) -> str:
-    """The analysis summary as a few readable lines."""
-    lines = []
-    for channel, info in summary.get("channels", {}).items():
-        peaks = info.get("spectrum_peaks_hz")
-        lines.append(f"channel {channel}" + (
-            f": spectrum peaks {', '.join(f'{p:.2f}' for p in peaks[:6])} Hz" if peaks else ""))
-        for note in info.get("notes", []):
-            lines.append(f"  note: {note}")
-        lines.extend(f"  {key + ' ' if key else ''}warning: {w}" for key, w in _warnings(info))
-        for component in info.get("components", []):
-            text = f"  component {component['index']}"
-            if component.get("frequency_hz") is not None:
-                text += f" at {component['frequency_hz']:.3f} Hz"
-                bounds = component.get("frequency_ci95_hz")
-                if bounds and None not in bounds:
-                    text += f" (+-{0.5 * (bounds[1] - bounds[0]):.2g})"
-            eq = component.get("equivalent_damping")
-            if eq and eq.get("c_i") is not None:
-                text += (f": C_i = {eq['c_i']:.4g} kg/(m s) {_interval(eq.get('c_i_ci95'))}, "
-                         f"C_f = {eq['c_f']:.4g} kg/m^2 {_interval(eq.get('c_f_ci95'))}, "
-                         f"R^2 = {eq['r2']:.3f}")
-                if eq.get("preferred_law"):
-                    text += f", preferred law: {eq['preferred_law']}"
-                for name in ("c_i", "c_f"):
-                    bounds = eq.get(f"{name}_ci95")
-                    if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
-                        label = f"{name[0].upper()}{name[1:]}"
-                        text += f"; {label} is not resolved (its interval contains 0)"
-            lines.append(text)
-            lines.extend(f"    {key + ' ' if key else ''}warning: {w}"
-                         for key, w in _warnings(component))
-            # Per-component errors (hvd's on a component that switches modes is carried by
-            # every later analysis): each distinct message once.
-            seen: list[str] = []
-            for value in component.values():
-                if isinstance(value, dict) and value.get("error") and value["error"] not in seen:
-                    seen.append(value["error"])
-            lines.extend(f"    not analysed: {message}" for message in seen)
-            model = component.get("modal_model")
-            if model and model.get("envelope_rms_error") is not None:
-                # one beam model for every component, its C_i and C_f from where c_source says
-                # (a component's own fit only for that component)
-                source = (info.get("modal_model") or {}).get("c_source")
-                origin = f" from {source}" if isinstance(source, str) and source else ""
-                lines.append(
-                    f"    modal model (C_i = {model['c_i']:.4g}, C_f = {model['c_f']:.4g}"
-                    f"{origin}) vs measurement: envelope RMS error "
-                    f"{100 * model['envelope_rms_error']:.1f} %, "
-                    f"frequency error {model['frequency_error_pct']:+.2f} %")
-        for error in info.get("errors", []):
-            lines.append(f"  failed {error['plugin']}: {error['message']}")
-    return "\n".join(lines)
+    return text(summary, registry if registry is not None else _loaded_plugins())
 
 
 # --------------------------------------------------------------------------- parser
-COMMANDS_GROUP = "fsi_lab.commands"
+def _add_plugin_commands(sub, registry) -> None:
+    """Subcommands the plugins add through the ``fsi_lab_addcommands(subparsers)`` hook; a
+    command of the old ``fsi_lab.commands`` entry-point group is refused when asked for."""
+    for record in registry.add_commands(sub):
+        if record.status == "failed":
+            print(f"[warning] commands of plugin {record.name} ({record.distribution}) "
+                  f"skipped: {record.error}", file=sys.stderr)
+        elif record.status == "refused" and record.name not in sub.choices:
+            parser = sub.add_parser(record.name)
+            parser.add_argument("ignored", nargs=argparse.REMAINDER)
+            parser.set_defaults(func=_refused(record))
 
 
-def plugin_commands() -> list[tuple[Any, Any, str | None]]:
-    """The ``fsi_lab.commands`` entry points as (entry point, CliCommand or None, error)."""
-    from importlib import metadata
+def _refused(record):
+    def run(args) -> int:
+        from fsi_lab.errors import PluginError
 
-    from fsi_lab.contract import CliCommand
-
-    found = []
-    for ep in sorted(metadata.entry_points(group=COMMANDS_GROUP), key=lambda e: e.name):
-        try:
-            command = ep.load()
-            if not isinstance(command, CliCommand):
-                raise TypeError(f"{ep.value} is a {type(command).__name__}, not a CliCommand")
-        except Exception as exc:  # noqa: BLE001 - a broken command must not break the others
-            found.append((ep, None, f"{type(exc).__name__}: {exc}"))
-        else:
-            found.append((ep, command, None))
-    return found
-
-
-def _add_plugin_commands(sub) -> None:
-    """Subcommands provided by plugins through the ``fsi_lab.commands`` entry-point group."""
-    for ep, command, error in plugin_commands():
-        if command is None:
-            print(f"[warning] command {ep.name} skipped: {error}", file=sys.stderr)
-            continue
-        parser = sub.add_parser(command.name, help=command.help)
-        command.configure(parser)
-        parser.set_defaults(func=command.run)
+        raise PluginError(f"fsi-lab {record.name}: {record.distribution} {record.version} "
+                          f"{record.error}")
+    return run
 
 
 class _Parser(argparse.ArgumentParser):
@@ -891,7 +833,9 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"fsi-lab: error: {text}\n")
 
 
-def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
+def build_parser(json_requested: bool = False, registry=None) -> argparse.ArgumentParser:
+    """The ``fsi-lab`` parser, with the subcommands of the plugins of ``registry`` (loaded
+    when not given)."""
     _Parser.json_requested = json_requested
     parser = _Parser(
         prog="fsi-lab", description="Run and analyse vibration experiments on beams in fluid.")
@@ -937,7 +881,8 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
                    help="send the files to the Dask scheduler at ADDRESS, e.g. "
                         "tcp://10.0.0.5:8786 (needs the extra fsi-lab[cluster])")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override an analysis parameter, e.g. analysis.hvd.components=2")
+                   help="override an analysis parameter: analysis.ANALYSIS.PARAMETER=VALUE "
+                        "(fsi-lab plugins -v lists them)")
     p.add_argument("--strict", action="store_true",
                    help="exit 3 when a result was refused or carries a warning")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
@@ -953,8 +898,8 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
                    help="run files, or a directory: the completed runs of its sequence, or its "
                         "run files")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override an analysis parameter of every run, e.g. "
-                        "analysis.hvd.components=1")
+                   help="override an analysis parameter of every run: "
+                        "analysis.ANALYSIS.PARAMETER=VALUE (fsi-lab plugins -v lists them)")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
                    help="mu + M for runs without a specimen (kg/m)")
     p.add_argument("--jobs", type=_jobs, metavar="N",
@@ -1024,8 +969,6 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
                         "1680x1050; 1366x768 for --screenshot)")
     p.set_defaults(func=cmd_gui)
 
-    _add_plugin_commands(sub)
-
     p = sub.add_parser("profile", help="profile tools")
     psub = p.add_subparsers(dest="profile_command", required=True, metavar="ACTION")
     c = psub.add_parser("check", help="validate a profile and its safety limits")
@@ -1033,6 +976,8 @@ def build_parser(json_requested: bool = False) -> argparse.ArgumentParser:
     c.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     common(c)
     c.set_defaults(func=cmd_profile_check)
+
+    _add_plugin_commands(sub, registry if registry is not None else _loaded_plugins())
     return parser
 
 
@@ -1051,7 +996,8 @@ def main(argv: list[str] | None = None, started_with: Sequence[int] = ()) -> int
         Signals noted while the command was being imported (:mod:`fsi_lab.launch`, the
         console script's entry point, notes them): the first ends the command at once.
     """
-    global _json_emitted
+    global _json_emitted, _plugins
+    _plugins = None
     note = SignalNote()
     signals = RunSignals(on_signal=note)
     argv = sys.argv[1:] if argv is None else list(argv)

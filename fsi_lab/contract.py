@@ -514,6 +514,11 @@ class AnalysisResult:
         Any Python object, found by later analyses in ``context.results[plugin].values`` (how
         results passed between analyses before typed results; kept for the plugins written
         so).
+    axes
+        For a dataset drawn against another one of the same length (an amplitude against
+        ``frequency``), that dataset's name, by the name of the dataset drawn (stored as the
+        dataset's ``axis`` attribute): the GUI's generic view plots it so, with both units;
+        a dataset without one is drawn against its sample index.
     """
 
     datasets: dict[str, np.ndarray] = field(default_factory=dict)
@@ -521,6 +526,7 @@ class AnalysisResult:
     attrs: dict[str, Any] = field(default_factory=dict)
     summary: dict[str, Any] = field(default_factory=dict)
     values: Any = None
+    axes: dict[str, str] = field(default_factory=dict)
 
 
 class Result(abc.ABC):
@@ -794,8 +800,8 @@ class AnalysisPlugin:
 
 @dataclass(frozen=True)
 class CliCommand:
-    """An extra ``fsi-lab`` subcommand, named by an entry point in the ``fsi_lab.commands``
-    group (e.g. ``fsi-lab bench``, which starts the simulated instruments).
+    """An extra ``fsi-lab`` subcommand, added by a plugin's ``fsi_lab_addcommands(subparsers)``
+    hook with :meth:`add_to` (e.g. ``fsi-lab bench``, which starts the simulated instruments).
 
     ``configure(parser)`` adds the arguments to an argparse parser; ``run(args)`` does the work
     and returns the exit code.
@@ -805,6 +811,14 @@ class CliCommand:
     help: str
     configure: Callable[[Any], None]
     run: Callable[[Any], int]
+
+    def add_to(self, subparsers: Any) -> Any:
+        """Add the command to ``subparsers`` (the ``fsi_lab_addcommands`` hook's argument);
+        returns its parser."""
+        parser = subparsers.add_parser(self.name, help=self.help)
+        self.configure(parser)
+        parser.set_defaults(func=self.run)
+        return parser
 
 
 DESCRIPTORS = {

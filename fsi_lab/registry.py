@@ -1,7 +1,9 @@
 """Discovery and loading of plugins through the ``fsi_lab`` entry-point group.
 
 Built-in plugins are declared in fsi-lab's own pyproject.toml and loaded exactly like third-party
-ones. A plugin that fails to import, fails to register or returns descriptors that break the
+ones. Each entry point's module is registered with a pluggy plugin manager, and every hook of
+:mod:`fsi_lab.hookspecs` is called through it (``manager.hook``), a plugin at a time: a plugin
+that fails to import, fails to register, fails in a hook or returns descriptors that break the
 contract is recorded with the reason and skipped; the others keep working.
 
 Set ``FSI_LAB_DISABLE_PLUGIN_AUTOLOAD=1`` to load only the entry points named in
@@ -21,15 +23,19 @@ import pluggy
 from fsi_lab import hookspecs
 from fsi_lab.contract import KINDS, check_descriptor
 from fsi_lab.errors import PluginError
+from fsi_lab.presentation import SummaryText, ViewSet
 
 ENTRY_POINT_GROUP = "fsi_lab"
+#: The entry-point group of subcommands before the ``fsi_lab_addcommands`` hook: no longer read.
+LEGACY_COMMANDS_GROUP = "fsi_lab.commands"
 DISABLE_ENV = "FSI_LAB_DISABLE_PLUGIN_AUTOLOAD"
 ALLOW_ENV = "FSI_LAB_PLUGINS"
 
 
 @dataclass
 class PluginRecord:
-    """What became of one plugin (one descriptor, or one entry point that failed)."""
+    """What became of one plugin (one descriptor, one entry point that failed, or one whose
+    hooks contribute no descriptor: commands, summary text, views)."""
 
     name: str
     kind: str | None
@@ -38,6 +44,8 @@ class PluginRecord:
     entry_point: str
     status: str  # "loaded" | "failed" | "invalid" | "disabled"
     error: str | None = None
+    #: the hooks the entry point's module implements
+    hooks: tuple[str, ...] = ()
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -48,17 +56,147 @@ class PluginRecord:
             "entry_point": self.entry_point,
             "status": self.status,
             "error": self.error,
+            "hooks": list(self.hooks),
         }
+
+
+def _manager() -> pluggy.PluginManager:
+    manager = pluggy.PluginManager(hookspecs.PROJECT)
+    manager.add_hookspecs(hookspecs)
+    return manager
+
+
+@dataclass
+class HookAnswer:
+    """What one plugin's implementation of a hook gave: its ``value``, or the ``error`` (a
+    sentence naming the hook and the exception) it raised."""
+
+    plugin: str
+    value: Any = None
+    error: str | None = None
+
+
+@dataclass
+class CommandRecord:
+    """A subcommand a plugin added (or failed to add, or added through the old entry-point
+    group, which is refused)."""
+
+    name: str
+    distribution: str
+    version: str
+    entry_point: str
+    status: str  # "loaded" | "failed" | "refused"
+    error: str | None = None
+    help: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "distribution": self.distribution, "version": self.version,
+                "entry_point": self.entry_point, "status": self.status, "error": self.error,
+                "help": self.help}
+
+
+class _RecordingSubparsers:
+    """The argparse sub-parser action handed to one plugin's ``fsi_lab_addcommands``: it adds
+    the plugin's parsers and notes their names and help."""
+
+    def __init__(self, subparsers: Any) -> None:
+        self._subparsers = subparsers
+        self.added: list[tuple[str, str]] = []
+
+    def add_parser(self, name: str, **kwargs: Any) -> Any:
+        taken = getattr(self._subparsers, "choices", {})
+        if name in taken:
+            raise ValueError(f"the command {name!r} exists already")
+        parser = self._subparsers.add_parser(name, **kwargs)
+        self.added.append((name, str(kwargs.get("help", "") or "")))
+        return parser
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._subparsers, name)
 
 
 @dataclass
 class Registry:
-    """Loaded plugin descriptors by kind and name, plus a record of every plugin seen."""
+    """Loaded plugin descriptors by kind and name, a record of every plugin seen, and the plugin
+    manager every hook is called through.
+
+    Attributes
+    ----------
+    descriptors
+        Usable descriptors by kind and name.
+    records
+        What became of each plugin (:class:`PluginRecord`).
+    manager
+        The pluggy plugin manager the plugins are registered with.
+    plugins
+        Registered plugin names (entry-point names), in the order they were registered.
+    sources
+        ``(distribution, version)`` of each registered plugin.
+    commands
+        What :meth:`add_commands` added (:class:`CommandRecord`).
+    """
 
     descriptors: dict[str, dict[str, Any]] = field(
         default_factory=lambda: {kind: {} for kind in KINDS}
     )
     records: list[PluginRecord] = field(default_factory=list)
+    manager: pluggy.PluginManager = field(default_factory=_manager)
+    plugins: list[str] = field(default_factory=list)
+    sources: dict[str, tuple[str, str]] = field(default_factory=dict)
+    commands: list[CommandRecord] = field(default_factory=list)
+    _callers: dict[tuple[str, str], Any] = field(default_factory=dict, repr=False)
+    _views: ViewSet | None = field(default=None, repr=False)
+
+    # ------------------------------------------------------------------ calling hooks
+    def register(self, plugin: Any, name: str, distribution: str = "unknown",
+                 version: str = "unknown") -> None:
+        """Register ``plugin`` (a module or object with hook implementations) as ``name``."""
+        self.manager.register(plugin, name=name)
+        self.plugins.append(name)
+        self.sources[name] = (distribution, version)
+        self._callers.clear()
+        self._views = None
+
+    def implements(self, plugin: str, hook_name: str) -> bool:
+        """Whether the registered plugin ``plugin`` implements ``hook_name``."""
+        module = self.manager.get_plugin(plugin)
+        return any(impl.plugin is module
+                   for impl in getattr(self.manager.hook, hook_name).get_hookimpls())
+
+    def call_each(self, hook_name: str, only: tuple[str, ...] | None = None,
+                  **kwargs: Any) -> list[HookAnswer]:
+        """Call ``hook_name`` with ``kwargs`` through the plugin manager, one plugin at a time
+        (each through its own subset of the hook), in registration order; ``only`` the named
+        plugins when given.
+
+        Returns
+        -------
+        list of HookAnswer
+            One per plugin implementing the hook: its value (an implementation returning None
+            included), or the error it raised, as a sentence; one plugin's error does not stop
+            the others.
+        """
+        answers = []
+        for name in self.plugins:
+            if only is not None and name not in only:
+                continue
+            if not self.implements(name, hook_name):
+                continue
+            caller = self._callers.get((hook_name, name))
+            if caller is None:
+                others = [self.manager.get_plugin(n) for n in self.plugins if n != name]
+                caller = self.manager.subset_hook_caller(hook_name, remove_plugins=others)
+                self._callers[(hook_name, name)] = caller
+            try:
+                values = caller(**kwargs)
+            except Exception as exc:  # noqa: BLE001 - reported with the plugin's name
+                answers.append(HookAnswer(name, error=f"{hook_name}() failed: "
+                                                       f"{_short_error(exc)}"))
+                continue
+            answers.append(HookAnswer(name, values[0] if values else None))
+        return answers
+
+    # ------------------------------------------------------------------ descriptors
 
     def get(self, kind: str, name: str) -> Any:
         """The descriptor of plugin ``name`` of ``kind``; PluginError listing the choices."""
@@ -85,6 +223,103 @@ class Registry:
         return "unknown"
 
 
+
+    # ------------------------------------------------------------------ the other hooks
+    def add_commands(self, subparsers: Any) -> list[CommandRecord]:
+        """Let every plugin add its subcommands to ``subparsers`` (``fsi_lab_addcommands``).
+
+        Returns
+        -------
+        list of CommandRecord
+            The commands added, the plugins whose hook failed (``failed``, with the reason),
+            and the entry points of the old ``fsi_lab.commands`` group (``refused``, saying
+            what to write instead); also kept in :attr:`commands`.
+        """
+        records = []
+        for name in self.plugins:
+            if not self.implements(name, "fsi_lab_addcommands"):
+                continue
+            dist, version = self.sources.get(name, ("unknown", "unknown"))
+            recorder = _RecordingSubparsers(subparsers)
+            (answer,) = self._call_one("fsi_lab_addcommands", name, subparsers=recorder)
+            for command, text in recorder.added:
+                records.append(CommandRecord(command, dist, version, name, "loaded", None, text))
+            if answer.error:
+                records.append(CommandRecord(name, dist, version, name, "failed", answer.error))
+        records.extend(legacy_commands())
+        self.commands = records
+        return records
+
+    def _call_one(self, hook_name: str, plugin: str, **kwargs: Any) -> list[HookAnswer]:
+        return self.call_each(hook_name, only=(plugin,), **kwargs)
+
+    def summary_texts(self, channel: str, summary: dict[str, Any],
+                      component: dict[str, Any] | None = None) -> list[SummaryText]:
+        """What the plugins show of a channel's summary (``component`` None) or of one of its
+        components (``fsi_lab_summary_lines``); a plugin whose hook fails or returns something
+        else is left out, its reason in the text."""
+        texts = []
+        for answer in self.call_each("fsi_lab_summary_lines", channel=channel, summary=summary,
+                                     component=component):
+            if answer.error:
+                texts.append(SummaryText(lines=(f"(plugin {answer.plugin}: {answer.error})",)))
+            elif isinstance(answer.value, SummaryText):
+                texts.append(answer.value)
+            elif answer.value is not None:
+                texts.append(SummaryText(lines=(
+                    f"(plugin {answer.plugin}: fsi_lab_summary_lines() returned "
+                    f"{type(answer.value).__name__}, expected fsi_lab.presentation.SummaryText "
+                    "or None)",)))
+        return texts
+
+    def default_chain_names(self) -> list[str]:
+        """The analyses the plugins put in the default chain (``fsi_lab_default_chain``), kept
+        when installed, each once, in the order given; see :func:`fsi_lab.chain.default_chain`
+        for the chain's order."""
+        installed = tuple(self.names("analysis"))
+        names: list[str] = []
+        for answer in self.call_each("fsi_lab_default_chain", analyses=installed):
+            if answer.error or not isinstance(answer.value, (list, tuple)):
+                continue
+            names.extend(n for n in answer.value if n in installed and n not in names)
+        return names
+
+    def views(self) -> ViewSet:
+        """The GUI views, compared curves and table columns the plugins register
+        (``fsi_lab_addviews``), gathered once; a plugin whose hook fails is recorded as
+        ``invalid`` with the reason and its registrations kept up to the failure."""
+        if self._views is None:
+            views = ViewSet()
+            for name in self.plugins:
+                if not self.implements(name, "fsi_lab_addviews"):
+                    continue
+                views.current = name
+                for answer in self._call_one("fsi_lab_addviews", name, views=views):
+                    if answer.error:
+                        dist, version = self.sources.get(name, ("unknown", "unknown"))
+                        self.records.append(PluginRecord(name, None, version, dist, name,
+                                                         "invalid", answer.error))
+            views.current = ""
+            self._views = views
+        return self._views
+
+
+def legacy_commands() -> list[CommandRecord]:
+    """The entry points of the old ``fsi_lab.commands`` group, refused (not imported): fsi-lab
+    adds subcommands through the ``fsi_lab_addcommands(subparsers)`` hook only."""
+    out = []
+    for ep in sorted(metadata.entry_points(group=LEGACY_COMMANDS_GROUP), key=lambda e: e.name):
+        dist = ep.dist.name if ep.dist else "unknown"
+        version = ep.dist.version if ep.dist else "unknown"
+        out.append(CommandRecord(
+            ep.name, dist, version, ep.value, "refused",
+            f"declared in the {LEGACY_COMMANDS_GROUP!r} entry-point group, which fsi-lab no "
+            f"longer reads; {dist} should implement the fsi_lab_addcommands(subparsers) hook in "
+            "a module of its 'fsi_lab' entry points instead (with a CliCommand: "
+            "COMMAND.add_to(subparsers); see docs/writing-plugins.md)"))
+    return out
+
+
 def _entry_points() -> Iterable[metadata.EntryPoint]:
     return metadata.entry_points(group=ENTRY_POINT_GROUP)
 
@@ -97,7 +332,10 @@ def _allowed(name: str) -> bool:
 
 
 def _short_error(exc: BaseException) -> str:
-    last = traceback.extract_tb(exc.__traceback__)[-1:] if exc.__traceback__ else []
+    """The exception in one line, with the place it was raised outside this module (a plugin's
+    line, rather than the recorder that refused what it did)."""
+    frames = traceback.extract_tb(exc.__traceback__) if exc.__traceback__ else []
+    last = [f for f in frames if f.filename != __file__][-1:] or frames[-1:]
     where = f" (at {last[0].filename}:{last[0].lineno})" if last else ""
     return f"{type(exc).__name__}: {exc}{where}"
 
@@ -111,8 +349,6 @@ def load_registry() -> Registry:
         Usable descriptors and a record (loaded / failed / invalid / disabled) per plugin.
     """
     registry = Registry()
-    manager = pluggy.PluginManager(hookspecs.PROJECT)
-    manager.add_hookspecs(hookspecs)
     seen: set[str] = set()
     for ep in sorted(_entry_points(), key=lambda e: e.name):
         if ep.name in seen:  # the same distribution seen twice on sys.path
@@ -120,54 +356,67 @@ def load_registry() -> Registry:
         seen.add(ep.name)
         dist = ep.dist.name if ep.dist else "unknown"
         version = ep.dist.version if ep.dist else "unknown"
-
-        def record(name, kind, status, error=None):
-            registry.records.append(
-                PluginRecord(name, kind, version, dist, ep.name, status, error)
-            )
-
         if not _allowed(ep.name):
-            record(ep.name, None, "disabled", f"not in {ALLOW_ENV} while {DISABLE_ENV}=1")
+            registry.records.append(PluginRecord(
+                ep.name, None, version, dist, ep.name, "disabled",
+                f"not in {ALLOW_ENV} while {DISABLE_ENV}=1"))
             continue
         try:
             module = ep.load()
-            manager.register(module, name=ep.name)
         except Exception as exc:  # noqa: BLE001 - any import error is reported, not raised
-            record(ep.name, None, "failed", _short_error(exc))
+            registry.records.append(PluginRecord(ep.name, None, version, dist, ep.name,
+                                                 "failed", _short_error(exc)))
             continue
-        _collect(manager, module, ep.name, registry, record)
+        add_plugin(registry, module, ep.name, dist, version)
     return registry
 
 
-def _collect(manager, module, ep_name, registry, record) -> None:
-    """Call each hook of one plugin separately so that one bad answer cannot hide the others."""
-    provided = False
+def add_plugin(registry: Registry, plugin: Any, name: str, distribution: str = "unknown",
+               version: str = "unknown") -> None:
+    """Register ``plugin`` (a module or object with hook implementations) as ``name`` and take
+    its descriptors, each checked against the contract of its kind; what fails is recorded in
+    ``registry.records`` with the reason."""
+
+    hooks: tuple[str, ...] = ()
+
+    def record(plugin_name, kind, status, error=None):
+        registry.records.append(PluginRecord(plugin_name, kind, version, distribution, name,
+                                             status, error, hooks))
+
+    try:
+        registry.register(plugin, name, distribution, version)
+    except Exception as exc:  # noqa: BLE001 - e.g. a hook pluggy cannot match to a spec
+        record(name, None, "failed", f"cannot be registered: {_short_error(exc)}")
+        return
+    known = sorted(spec for spec in dir(hookspecs) if spec.startswith("fsi_lab_"))
+    hooks = tuple(hook_name for hook_name in known if registry.implements(name, hook_name))
+    if not hooks:
+        record(name, None, "invalid", "implements none of the fsi_lab hooks")
+        return
+    if not set(hooks) & set(hookspecs.HOOK_FOR_KIND.values()):  # commands, text, views only
+        record(name, None, "loaded")
+        return
     for kind in KINDS:
         hook_name = hookspecs.HOOK_FOR_KIND[kind]
-        for impl in getattr(manager.hook, hook_name).get_hookimpls():
-            if impl.plugin is not module:
+        for answer in registry._call_one(hook_name, name):
+            if answer.error:
+                record(name, kind, "invalid", answer.error)
                 continue
-            provided = True
-            try:
-                descriptors = impl.function()
-                if not isinstance(descriptors, (list, tuple)):
-                    raise TypeError(
-                        f"{hook_name}() returned {type(descriptors).__name__}, expected a list"
-                    )
-            except Exception as exc:  # noqa: BLE001
-                record(ep_name, kind, "invalid", f"{hook_name}() failed: {_short_error(exc)}")
+            descriptors = answer.value
+            if not isinstance(descriptors, (list, tuple)):
+                record(name, kind, "invalid", f"{hook_name}() returned "
+                                              f"{type(descriptors).__name__}, expected a list")
                 continue
             for descriptor in descriptors:
-                name = getattr(descriptor, "name", None) or ep_name
+                descriptor_name = getattr(descriptor, "name", None) or name
                 try:
                     check_descriptor(kind, descriptor)
                 except (TypeError, ValueError) as exc:
-                    record(name, kind, "invalid", f"breaks the {kind} contract: {exc}")
+                    record(descriptor_name, kind, "invalid", f"breaks the {kind} contract: {exc}")
                     continue
-                if name in registry.descriptors[kind]:
-                    record(name, kind, "invalid", f"another {kind} plugin is already named {name!r}")
+                if descriptor_name in registry.descriptors[kind]:
+                    record(descriptor_name, kind, "invalid",
+                           f"another {kind} plugin is already named {descriptor_name!r}")
                     continue
-                registry.descriptors[kind][name] = descriptor
-                record(name, kind, "loaded")
-    if not provided:
-        record(ep_name, None, "invalid", "implements none of the fsi_lab hooks")
+                registry.descriptors[kind][descriptor_name] = descriptor
+                record(descriptor_name, kind, "loaded")

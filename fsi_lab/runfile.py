@@ -514,6 +514,9 @@ def _write_results(handle: h5py.File, path: Path, groups: Mapping[str, Mapping[s
                 unit = content.get("units", {}).get(name)
                 if unit is not None:
                     dataset.attrs["units"] = unit
+                axis = content.get("axes", {}).get(name)
+                if axis is not None:  # the dataset it is drawn against
+                    dataset.attrs["axis"] = axis
             write_attrs(group, content.get("attrs", {}))
             write_attrs(group.create_group("params"), content.get("params", {}))
     except H5_ERRORS as exc:

@@ -60,10 +60,11 @@ def test_start_up_rows_are_cold_and_warm_with_the_floor_measured_as_many_times(t
 
 
 def test_the_whole_chain_row_runs_the_default_chain_on_its_record():
-    from fsi_lab.chain import DEFAULT_CHAIN, run_chain
+    from fsi_lab.chain import default_chain, run_chain
+    from fsi_lab.registry import load_registry
 
     inputs = bench_analysis.chain_inputs(seconds=2.0)
     assert inputs["channels"]["tip"].data.size == 2 * bench_analysis.CHAIN_FS
-    assert list(inputs["params"]) == list(DEFAULT_CHAIN)
+    assert list(inputs["params"]) == default_chain(load_registry())
     _, summary = run_chain(**inputs)
     assert "errors" not in summary["tip"], summary["tip"].get("errors")

@@ -9,7 +9,8 @@ import pytest
 
 from support import GOOD_PROFILE, run_main
 
-from fsi_lab.chain import DEFAULT_CHAIN
+from fsi_lab.chain import default_chain
+from fsi_lab.registry import load_registry
 from fsi_lab.runfile import read_run
 
 
@@ -20,7 +21,7 @@ def exported(tmp_path_factory):
     folder = tmp_path_factory.mktemp("route")
     code, out, err = run_main("run", str(GOOD_PROFILE), "--out", str(folder), "--json",
                               "--set", "run.duration=2",
-                              "--set", "analysis.chain=" + ",".join(DEFAULT_CHAIN),
+                              "--set", "analysis.chain=" + ",".join(default_chain(load_registry())),
                               "--set", "analysis.hvd.components=auto")
     assert code == 0, err
     data = json.loads(out)

@@ -27,7 +27,13 @@ from typing import Any
 import numpy as np
 
 from fsi_lab.dsp._signal import as_record, check_rate, fail
-from fsi_lab.dsp.modal_fit import DEFAULT_GROUPS, MIN_GROUPS, ModalFit, modal_fit
+from fsi_lab.dsp.modal_fit import (
+    DEFAULT_GROUPS,
+    MIN_GROUPS,
+    ModalFit,
+    half_power_damping,
+    modal_fit,
+)
 from fsi_lab.dsp.spectrum import cross_spectra, find_peaks_interpolated
 
 
@@ -83,32 +89,6 @@ class FRF:
     def resolution(self) -> float:
         """Frequency step, Hz."""
         return float(self.frequency[1] - self.frequency[0])
-
-
-def half_power_damping(freqs: np.ndarray, mag: np.ndarray, f_peak: float) -> float:
-    """Half-power damping ratio of the peak of ``mag`` at ``f_peak`` (Hz); NaN if the
-    magnitude does not fall below peak/sqrt(2) on both sides before rising again."""
-    k = int(np.argmin(np.abs(freqs - f_peak)))
-    lo = max(k - 1, 0)
-    hi = min(k + 2, mag.size)
-    k = lo + int(np.argmax(mag[lo:hi]))
-    level = mag[k] / math.sqrt(2.0)
-    i = k
-    while i > 0 and mag[i] > level:
-        if mag[i - 1] > mag[i] * 1.0000001 and i < k:
-            return float("nan")              # another peak before the half-power point
-        i -= 1
-    j = k
-    while j < mag.size - 1 and mag[j] > level:
-        if mag[j + 1] > mag[j] * 1.0000001 and j > k:
-            return float("nan")
-        j += 1
-    if mag[i] > level or mag[j] > level:
-        return float("nan")
-    fa = freqs[i] + (level - mag[i]) * (freqs[i + 1] - freqs[i]) / (mag[i + 1] - mag[i])
-    fb = freqs[j - 1] + (level - mag[j - 1]) * (freqs[j] - freqs[j - 1]) / (mag[j] - mag[j - 1])
-    fn = freqs[k]
-    return float((fb - fa) / (2.0 * fn))
 
 
 def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float = 0.5,

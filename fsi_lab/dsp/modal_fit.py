@@ -255,6 +255,32 @@ def _coherence(sxx: np.ndarray, syy: np.ndarray | None, sxy: np.ndarray) -> np.n
     return np.abs(sxy) ** 2 / np.maximum(sxx * syy, 1e-300)
 
 
+def half_power_damping(freqs: np.ndarray, mag: np.ndarray, f_peak: float) -> float:
+    """Half-power damping ratio of the peak of ``mag`` at ``f_peak`` (Hz); NaN if the
+    magnitude does not fall below peak/sqrt(2) on both sides before rising again."""
+    k = int(np.argmin(np.abs(freqs - f_peak)))
+    lo = max(k - 1, 0)
+    hi = min(k + 2, mag.size)
+    k = lo + int(np.argmax(mag[lo:hi]))
+    level = mag[k] / math.sqrt(2.0)
+    i = k
+    while i > 0 and mag[i] > level:
+        if mag[i - 1] > mag[i] * 1.0000001 and i < k:
+            return float("nan")              # another peak before the half-power point
+        i -= 1
+    j = k
+    while j < mag.size - 1 and mag[j] > level:
+        if mag[j + 1] > mag[j] * 1.0000001 and j > k:
+            return float("nan")
+        j += 1
+    if mag[i] > level or mag[j] > level:
+        return float("nan")
+    fa = freqs[i] + (level - mag[i]) * (freqs[i + 1] - freqs[i]) / (mag[i + 1] - mag[i])
+    fb = freqs[j - 1] + (level - mag[j - 1]) * (freqs[j] - freqs[j - 1]) / (mag[j] - mag[j - 1])
+    fn = freqs[k]
+    return float((fb - fa) / (2.0 * fn))
+
+
 def modal_fit(frequency: Any, sxy: Any, sxx: Any, f_peak: float, *, fs: float,
               segment: int | None = None, window: str = "hann", syy: Any = None,
               counts: Any = None, neighbours_hz: Any = (),
@@ -355,7 +381,6 @@ def modal_fit(frequency: Any, sxy: Any, sxx: Any, f_peak: float, *, fs: float,
                         (f"peak at {peak:.4g} Hz: {reason}",))
 
     # The band: +-4 half-power half-widths (at least +-6 bins), within band_hz.
-    from fsi_lab.dsp.frf import half_power_damping
     zeta_hp = half_power_damping(f, mag, float(f[k]))
     half = max(zeta_hp * f[k] if math.isfinite(zeta_hp) else df, df)
     width = max(6, int(math.ceil(4.0 * half / df)))

@@ -115,6 +115,8 @@ class MainWindow(QMainWindow):
             if record.status in ("failed", "invalid"):
                 self.log.add(LogRecord("WARNING", f"plugin {record.name} ({record.distribution}) "
                                                   f"skipped: {record.error}"))
+        for problem in self.analysis.problems:
+            self.log.add(LogRecord("WARNING", problem))
 
     # ------------------------------------------------------------------ layout
     def _build_layout(self) -> None:

@@ -162,8 +162,8 @@ class Legend(QWidget):
 
     def show_items(self, items: Iterable[pg.PlotDataItem]) -> None:
         """List the named ``items`` in their order, once per name and colour: a curve drawn as
-        a line in one plot and as markers in another (a component's envelope and its
-        backbone) is one entry whose sample shows both."""
+        a line in one plot and as markers in another (a component's curve against time and its
+        points against amplitude) is one entry whose sample shows both."""
         merged: dict[tuple, list] = {}
         for item in items:
             name = item.name() if hasattr(item, "name") else None

@@ -33,6 +33,8 @@ class PluginResult:
     params: dict[str, Any] = field(default_factory=dict)
     datasets: dict[str, np.ndarray] = field(default_factory=dict)
     units: dict[str, str] = field(default_factory=dict)
+    #: the dataset each dataset is drawn against (its ``axis`` attribute), by name
+    axes: dict[str, str] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -109,9 +111,10 @@ def _read_group(channel: str, plugin: str, group: h5py.Group) -> PluginResult:
                 result.datasets[name] = node[()]
             except (OSError, ValueError, TypeError):
                 return
-            unit = node.attrs.get("units")
-            if unit is not None:
-                result.units[name] = unit.decode() if isinstance(unit, bytes) else str(unit)
+            for attribute, into in (("units", result.units), ("axis", result.axes)):
+                value = node.attrs.get(attribute)
+                if value is not None:
+                    into[name] = value.decode() if isinstance(value, bytes) else str(value)
 
     group.visititems(visit)
     return result

@@ -1,9 +1,10 @@
 """Runs browser: open run files (several at once), compare them side by side, export.
 
 Files are read off the UI thread; a file that is not a readable fsi-lab run file is reported
-(``failed``) and the others stay open. The comparison overlays the backbones, damping curves and
-equivalent damping C_q of the ticked runs and lists their identified values (C_i, C_f, R^2);
-figures export as PNG or SVG, the values and the curves as CSV.
+(``failed``) and the others stay open. The comparison overlays the curves the plugins register
+for it (:class:`fsi_lab.presentation.ComparisonCurve`, through the ``fsi_lab_addviews`` hook) of
+the ticked runs and lists their identified values (the columns the plugins register, and the plain
+values of any analysis); figures export as PNG or SVG, the values and the curves as CSV.
 """
 
 from __future__ import annotations
@@ -15,18 +16,34 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import (
-    QComboBox, QFileDialog, QHBoxLayout, QHeaderView, QLabel, QPushButton, QSplitter,
-    QTableWidget, QTableWidgetItem, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget,
+    QComboBox,
+    QFileDialog,
+    QHBoxLayout,
+    QHeaderView,
+    QLabel,
+    QPushButton,
+    QSplitter,
+    QTableWidget,
+    QTableWidgetItem,
+    QTreeWidget,
+    QTreeWidgetItem,
+    QVBoxLayout,
+    QWidget,
 )
 
 from fsi_lab.errors import FsiLabError
-from fsi_lab.gui.analysis.datasets import finite_pairs, per_component, summary_series, table_rows
-from fsi_lab.gui.analysis.names import CQ, CQ_AMPLITUDE, DISPLACEMENT_AMPLITUDE, FREQUENCY, ZETA
+from fsi_lab.gui.analysis.datasets import (
+    finite_pairs,
+    per_component,
+    summary_series,
+    value_columns,
+)
 from fsi_lab.gui.analysis.plotting import COLOURS, robust_range
 from fsi_lab.gui.export import export_figure, write_csv
 from fsi_lab.gui.figure import Figure, FlowLayout, Legend, scrolled
 from fsi_lab.gui.results import RunResults, load_results
 from fsi_lab.gui.worker import TaskPool
+from fsi_lab.presentation import ComparisonCurve, SummaryColumn
 from fsi_lab.registry import Registry
 
 #: Markers of the runs compared (run r in ``SYMBOLS[r % len(SYMBOLS)]``); every curve of the
@@ -36,40 +53,36 @@ SYMBOLS = ("o", "t", "s", "d", "+", "x")
 MAX_COMPARED_COMPONENTS = 6
 #: Initial width of the list of open runs, in pixels.
 LIST_WIDTH = 240
-SUMMARY_COLUMNS = ("run", "file", "exit_status", "start_time", "channel", "component",
-                   "frequency_hz", "c_i", "c_i_ci95_low", "c_i_ci95_high", "c_f", "c_f_ci95_low",
-                   "c_f_ci95_high", "r2", "errors")
+#: Columns of the CSV of identified values before the values, and after them.
+RUN_COLUMNS = ("run", "file", "exit_status", "start_time", "channel", "component")
+END_COLUMNS = ("errors",)
 CURVE_COLUMNS = ("run", "file", "channel", "component", "curve", "x_name", "x", "y_name", "y")
-#: (curve name, plugin, x dataset, y dataset, summary section, summary y, x label, y label)
-CURVES = (
-    ("backbone", "backbone", DISPLACEMENT_AMPLITUDE, FREQUENCY, "backbone", "frequency_hz",
-     "displacement_amplitude_m", "frequency_hz"),
-    ("damping", "damping", DISPLACEMENT_AMPLITUDE, ZETA, "damping", "zeta",
-     "displacement_amplitude_m", "zeta"),
-    ("equivalent_damping", "equivalent-damping", CQ_AMPLITUDE, CQ, None, None,
-     "displacement_amplitude_m", "c_q"),
-)
 
 
-def curves_of(results: RunResults, channel: str) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
-    """Backbone, damping and C_q points per component, from the datasets or the summary."""
+def curves_of(results: RunResults, channel: str, curves: list[ComparisonCurve]
+              ) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
+    """The points of each compared curve per component, from the datasets or the summary."""
     out: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
-    for name, plugin, x_name, y_name, section, summary_y, _, _ in CURVES:
-        result = results.result(channel, plugin)
+    for curve in curves:
+        result = results.result(channel, curve.analysis)
         pairs = []
         if result is not None and result.ok:
-            pairs = finite_pairs(zip(per_component(result, x_name),
-                                     per_component(result, y_name)))
-        if not pairs and section:
-            pairs = summary_series(results, channel, section, "amplitude", summary_y)
-        out[name] = pairs
+            pairs = finite_pairs(zip(per_component(result, curve.x),
+                                     per_component(result, curve.y)))
+        if not pairs and curve.summary:
+            pairs = summary_series(results, channel, *curve.summary)
+        out[curve.name] = pairs
     return out
 
 
-def _ci(value: Any, index: int) -> Any:
-    if isinstance(value, (list, tuple)) and len(value) == 2:
-        return value[index]
-    return None
+def csv_columns(columns: list[SummaryColumn]) -> tuple[str, ...]:
+    """CSV columns of the identified values: each value, and its 95 % interval's bounds."""
+    out = list(RUN_COLUMNS)
+    for column in columns:
+        out.append(column.name)
+        if column.interval:
+            out += [f"{column.name}_ci95_low", f"{column.name}_ci95_high"]
+    return tuple(out) + END_COLUMNS
 
 
 class RunsBrowser(QWidget):
@@ -298,16 +311,14 @@ class RunsBrowser(QWidget):
         self.graphics.clear()
         runs = self._compared()
         plots = {}
-        for col, (name, xlabel, ylabel, yunits) in enumerate((
-                ("backbone", "displacement amplitude", "frequency", "Hz"),
-                ("damping", "displacement amplitude", "damping ratio ζ", None),
-                ("equivalent_damping", "displacement amplitude W", "C_q", "kg/(m s)"))):
+        curves = self.registry.views().curves
+        for col, curve in enumerate(curves):
             plot = self.graphics.addPlot(row=0, col=col)
-            plot.setLabel("bottom", xlabel, units="m")
-            plot.setLabel("left", ylabel, units=yunits)
-            plot.setTitle(name.replace("_", " "))
+            plot.setLabel("bottom", curve.x_label, units=curve.x_unit)
+            plot.setLabel("left", curve.y_label, units=curve.y_unit)
+            plot.setTitle(curve.name.replace("_", " "))
             plot.showGrid(x=True, y=True, alpha=0.2)
-            plots[name] = plot
+            plots[curve.name] = plot
         drawn = 0
         entries = []
         shown: dict[str, list[np.ndarray]] = {name: [] for name in plots}
@@ -318,13 +329,14 @@ class RunsBrowser(QWidget):
             if channel is None:
                 continue
             symbol = SYMBOLS[r % len(SYMBOLS)]
-            curves = curves_of(results, channel)
-            count = min(MAX_COMPARED_COMPONENTS, max(len(p) for p in curves.values()))
+            points = curves_of(results, channel, curves)
+            count = min(MAX_COMPARED_COMPONENTS, max((len(p) for p in points.values()),
+                                                     default=0))
             for k in range(count):
                 colour = COLOURS[(series + k) % len(COLOURS)]
                 label = f"{self._label(results, names)}, component {k}"
                 entries.append((label, Legend.look(symbol=symbol, symbol_colour=colour)))
-                for name, pairs in curves.items():
+                for name, pairs in points.items():
                     if k >= len(pairs):
                         continue
                     x, y = pairs[k]
@@ -343,8 +355,9 @@ class RunsBrowser(QWidget):
         if not runs:
             self.note.setText("Open run files and tick them to compare them.")
         elif not drawn:
-            self.note.setText("The ticked runs hold no backbone, damping or equivalent-damping "
-                              "results (not computed).")
+            names = ", ".join(curve.name.replace("_", " ") for curve in curves) or "none"
+            self.note.setText(f"The ticked runs hold none of the curves compared ({names}): "
+                              "not computed.")
         else:
             self.note.setText(f"{len(runs)} run(s) compared")
 
@@ -356,10 +369,21 @@ class RunsBrowser(QWidget):
         started = str(results.attrs.get("start_time", ""))
         return f"{results.name} ({started[11:19] if len(started) >= 19 else results.path.name})"
 
-    def summary_rows(self, runs: list[RunResults] | None = None) -> list[dict[str, Any]]:
+    def value_columns(self, runs: list[RunResults]) -> list[SummaryColumn]:
+        """The columns of identified values of ``runs`` (each channel), each once."""
+        out: dict[str, SummaryColumn] = {}
+        for results in runs:
+            for column in value_columns(results, results.analysed_channels(), self.registry):
+                out.setdefault(column.name, column)
+        return list(out.values())
+
+    def summary_rows(self, runs: list[RunResults] | None = None,
+                     columns: list[SummaryColumn] | None = None) -> list[dict[str, Any]]:
         """One row per run, channel and component (a run without components gives one row)."""
+        runs = runs if runs is not None else self._compared()
+        columns = columns if columns is not None else self.value_columns(runs)
         out = []
-        for results in runs if runs is not None else self._compared():
+        for results in runs:
             base = {"run": results.name, "file": str(results.path),
                     "exit_status": results.exit_status,
                     "start_time": results.attrs.get("start_time", "")}
@@ -367,22 +391,23 @@ class RunsBrowser(QWidget):
             for channel in channels:
                 errors = "; ".join(f"{r.plugin}: {r.error}"
                                    for r in results.analysis.get(channel, {}).values() if not r.ok)
-                components = table_rows(results, channel) if channel else []
-                for row in components or [{}]:
-                    out.append({**base, "channel": channel, "component": row.get("index"),
-                                "frequency_hz": row.get("frequency_hz"), "c_i": row.get("c_i"),
-                                "c_i_ci95_low": _ci(row.get("c_i_ci95"), 0),
-                                "c_i_ci95_high": _ci(row.get("c_i_ci95"), 1),
-                                "c_f": row.get("c_f"),
-                                "c_f_ci95_low": _ci(row.get("c_f_ci95"), 0),
-                                "c_f_ci95_high": _ci(row.get("c_f_ci95"), 1),
-                                "r2": row.get("r2"), "errors": errors})
+                components = results.components(channel) if channel else []
+                for component in components or [{}]:
+                    row = {**base, "channel": channel, "component": component.get("index"),
+                           "errors": errors}
+                    for column in columns:
+                        row[column.name] = column.value(component)
+                        if column.interval:
+                            row[f"{column.name}_ci95_low"], row[f"{column.name}_ci95_high"] = \
+                                column.bounds(component)
+                    out.append(row)
         return out
 
     def _fill_table(self, runs: list[RunResults]) -> None:
-        rows = self.summary_rows(runs)
-        columns = ("run", "exit_status", "channel", "component", "frequency_hz", "c_i", "c_f",
-                   "r2", "errors")
+        values = self.value_columns(runs)
+        rows = self.summary_rows(runs, values)
+        columns = ("run", "exit_status", "channel", "component",
+                   *(column.name for column in values), "errors")
         self.table.clear()
         self.table.setColumnCount(len(columns))
         self.table.setHorizontalHeaderLabels(list(columns))
@@ -406,17 +431,20 @@ class RunsBrowser(QWidget):
         """The identified values of the ticked runs, one row per component."""
         if self._stale:
             self.compare(force=True)
-        return write_csv(path, SUMMARY_COLUMNS, self.summary_rows())
+        runs = self._compared()
+        columns = self.value_columns(runs)
+        return write_csv(path, csv_columns(columns), self.summary_rows(runs, columns))
 
     def export_curves_csv(self, path: str | Path) -> Path:
-        """Every point of the ticked runs' backbone, damping and C_q curves (long format)."""
+        """Every point of the ticked runs' compared curves (long format)."""
         rows = []
-        labels = {c[0]: (c[6], c[7]) for c in CURVES}
+        curves = self.registry.views().curves
+        labels = {c.name: (c.x_name, c.y_name) for c in curves}
         for results in self._compared():
             channel = self._channel_of(results)
             if channel is None:
                 continue
-            for name, pairs in curves_of(results, channel).items():
+            for name, pairs in curves_of(results, channel, curves).items():
                 for k, (x, y) in enumerate(pairs):
                     for xv, yv in zip(x, y):
                         rows.append({"run": results.name, "file": str(results.path),

@@ -247,23 +247,6 @@ class SimBench:
             "acquisition": f"TCPIP0::127.0.0.1::{e['acquisition'].port}::SOCKET",
         }
 
-    def profile_snippet(self) -> str:
-        """``[bench.*]`` tables of a profile that uses this bench."""
-        from fsi_lab.instruments.keysight33500 import PLUGIN as SOURCE
-        from fsi_lab.instruments.polytec import PLUGIN as VIBROMETER
-        from fsi_lab.instruments.scpi_daq import PLUGIN as ACQUISITION
-        from fsi_lab.instruments.shaker_amplifier import PLUGIN as AMPLIFIER
-
-        a = self.addresses
-        return "\n".join([
-            "[bench.source]", f'plugin = "{SOURCE.name}"', f'address = "{a["source"]}"', "",
-            "[bench.amplifier]", f'plugin = "{AMPLIFIER.name}"', f'address = "{a["amplifier"]}"',
-            "gain = 2.0", "",
-            "[bench.vibrometer]", f'plugin = "{VIBROMETER.name}"',
-            f'address = "{a["vibrometer"]}"', 'range = "125mm/s/V"', "",
-            "[bench.acquisition]", f'plugin = "{ACQUISITION.name}"',
-            f'address = "{a["acquisition"]}"', ""])
-
     # ------------------------------------------------------------------ the wire
     def _exchange(self, role: str, handle: Callable[[bytes, object], bytes | None]):
         def exchange(message: bytes, connection: object = None) -> tuple[bytes | None, bool]:

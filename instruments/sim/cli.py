@@ -7,7 +7,9 @@ the command line (``fsi-lab bench PROFILE``): its ``[specimen]``, ``[model]`` an
 and the ``fast``/``fault`` keys of ``[bench]``; run that profile (with the printed addresses)
 against the bench and the analysis finds the beam the profile describes.
 
-This module is imported to list the command: everything heavy is imported inside :func:`run`.
+This module is a plugin of the ``fsi_lab`` entry-point group (``sim-bench``): it adds the command
+through the ``fsi_lab_addcommands`` hook, and is imported whenever ``fsi-lab`` starts, so
+everything heavy is imported inside :func:`run`.
 """
 
 from __future__ import annotations
@@ -17,7 +19,27 @@ import sys
 from pathlib import Path
 
 from fsi_lab.contract import CliCommand
+from fsi_lab.hookspecs import hookimpl
 from fsi_lab.instruments.sim.faults import FAULTS, ROLES
+
+
+def profile_snippet(bench) -> str:
+    """``[bench.*]`` tables of a profile that uses the running simulated ``bench`` with
+    fsi-lab's lab drivers (the simulator itself knows no driver)."""
+    from fsi_lab.instruments.keysight33500 import PLUGIN as SOURCE
+    from fsi_lab.instruments.polytec import PLUGIN as VIBROMETER
+    from fsi_lab.instruments.scpi_daq import PLUGIN as ACQUISITION
+    from fsi_lab.instruments.shaker_amplifier import PLUGIN as AMPLIFIER
+
+    a = bench.addresses
+    return "\n".join([
+        "[bench.source]", f'plugin = "{SOURCE.name}"', f'address = "{a["source"]}"', "",
+        "[bench.amplifier]", f'plugin = "{AMPLIFIER.name}"', f'address = "{a["amplifier"]}"',
+        "gain = 2.0", "",
+        "[bench.vibrometer]", f'plugin = "{VIBROMETER.name}"',
+        f'address = "{a["vibrometer"]}"', 'range = "125mm/s/V"', "",
+        "[bench.acquisition]", f'plugin = "{ACQUISITION.name}"',
+        f'address = "{a["acquisition"]}"', ""])
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -101,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"fsi-lab: error: cannot start the simulated bench: {exc}", file=sys.stderr)
         return 1
     try:
-        addresses, snippet = bench.addresses, bench.profile_snippet()
+        addresses, snippet = bench.addresses, profile_snippet(bench)
         if args.json:
             print(json.dumps({"addresses": addresses, "profile": snippet}), flush=True)
         else:
@@ -126,6 +148,12 @@ COMMAND = CliCommand(
     configure=configure,
     run=run,
 )
+
+
+@hookimpl
+def fsi_lab_addcommands(subparsers) -> None:
+    """``fsi-lab bench``."""
+    COMMAND.add_to(subparsers)
 
 
 def main(argv: list[str] | None = None) -> int:

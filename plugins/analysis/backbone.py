@@ -11,6 +11,7 @@ from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS
 from fsi_lab.plugins.analysis.results import Backbones, Components, Integrated
+from fsi_lab.presentation import SummaryText
 
 PLUGIN = AnalysisPlugin(
     name="backbone",
@@ -32,3 +33,14 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+@hookimpl
+def fsi_lab_default_chain():
+    return ["backbone"]
+
+
+@hookimpl
+def fsi_lab_summary_lines(component):
+    """The curves are drawn (fsi-lab gui), not written out."""
+    return None if component is None else SummaryText(keys=("backbone", "backbone_velocity"))

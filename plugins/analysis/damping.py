@@ -12,6 +12,7 @@ from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.instantaneous import DECAY_ONLY, INSTANT_PARAMS
 from fsi_lab.plugins.analysis.results import Components, DampingCurves, Integrated
+from fsi_lab.presentation import SummaryText
 
 PLUGIN = AnalysisPlugin(
     name="damping",
@@ -39,3 +40,14 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+@hookimpl
+def fsi_lab_default_chain():
+    return ["damping"]
+
+
+@hookimpl
+def fsi_lab_summary_lines(component):
+    """The curves are drawn (fsi-lab gui), not written out."""
+    return None if component is None else SummaryText(keys=("damping",))

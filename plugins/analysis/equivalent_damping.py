@@ -17,6 +17,7 @@ from fsi_lab.plugins.analysis.results import (
     DampingCurves,
     Integrated,
 )
+from fsi_lab.presentation import SummaryText
 
 METHODS = ("law", "regression", "envelope")
 
@@ -56,3 +57,36 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+@hookimpl
+def fsi_lab_default_chain():
+    return ["equivalent-damping"]
+
+
+def _interval(bounds) -> str:
+    """``(95 %: lo to hi)`` with four significant digits, or nothing."""
+    if not isinstance(bounds, (list, tuple)) or len(bounds) != 2 or None in bounds:
+        return ""
+    return f"(95 %: {bounds[0]:.4g} to {bounds[1]:.4g})"
+
+
+@hookimpl
+def fsi_lab_summary_lines(component):
+    """C_i, C_f, R^2 and the preferred law on the component's line; a coefficient whose
+    interval contains 0 is said not to be resolved."""
+    if component is None:
+        return None
+    eq = component.get("equivalent_damping")
+    if not isinstance(eq, dict) or eq.get("c_i") is None:
+        return SummaryText(keys=("equivalent_damping",))
+    text = (f": C_i = {eq['c_i']:.4g} kg/(m s) {_interval(eq.get('c_i_ci95'))}, "
+            f"C_f = {eq['c_f']:.4g} kg/m^2 {_interval(eq.get('c_f_ci95'))}, "
+            f"R^2 = {eq['r2']:.3f}")
+    if eq.get("preferred_law"):
+        text += f", preferred law: {eq['preferred_law']}"
+    for name in ("c_i", "c_f"):
+        bounds = eq.get(f"{name}_ci95")
+        if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
+            text += f"; {name[0].upper()}{name[1:]} is not resolved (its interval contains 0)"
+    return SummaryText(keys=("equivalent_damping",), inline=text)

@@ -9,6 +9,7 @@ from __future__ import annotations
 from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
+from fsi_lab.presentation import SummaryText
 
 PLUGIN = AnalysisPlugin(
     name="frf",
@@ -38,3 +39,29 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+def _mode(frequency, zeta, bounds) -> str:
+    text = f"{frequency:.4g} Hz"
+    if zeta is None:
+        return text + " (damping ratio not resolved)"
+    interval = f", 95 %: {bounds[0]:.2g} to {bounds[1]:.2g}" if isinstance(
+        bounds, (list, tuple)) and len(bounds) == 2 and None not in bounds else ""
+    return text + f" (damping ratio {zeta:.3g}{interval})"
+
+
+@hookimpl
+def fsi_lab_summary_lines(summary, component):
+    """The modes the FRF's modal fit found, with their damping ratios (fsi-lab shows the
+    warnings it keeps under its key)."""
+    if component is not None:
+        return None
+    frf = summary.get("frf")
+    if not isinstance(frf, dict):
+        return None
+    frequencies = frf.get("natural_frequencies_hz") or []
+    zetas = frf.get("damping_ratios") or [None] * len(frequencies)
+    bounds = frf.get("damping_ratio_ci95") or [None] * len(frequencies)
+    modes = [_mode(f, z, b) for f, z, b in zip(frequencies, zetas, bounds) if f is not None]
+    return SummaryText(keys=("frf",), lines=(
+        f"frf against {frf.get('reference')}: " + (", ".join(modes) or "no mode found"),))

@@ -13,6 +13,7 @@ from fsi_lab.dsp.choices import PADDINGS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.results import Components
+from fsi_lab.presentation import SummaryText
 
 METHODS = ("bands", "hvd")
 
@@ -63,3 +64,18 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+@hookimpl
+def fsi_lab_default_chain():
+    return ["hvd"]
+
+
+@hookimpl
+def fsi_lab_summary_lines(component):
+    """The core shows each component's frequency; the identification's details stay in the
+    JSON summary."""
+    if component is None:
+        return None
+    return SummaryText(keys=("damped_frequency_hz", "spectral_peak_hz", "band_hz", "extrema",
+                             "decays", "hvd_peak_envelope", "cutoff_hz", "hvd"))

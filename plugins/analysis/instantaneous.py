@@ -12,6 +12,7 @@ from fsi_lab.dsp.choices import OFFSETS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.results import Components, InstantaneousCurves, Integrated
+from fsi_lab.presentation import SummaryText
 
 #: Parameters shared by the plugins that measure extrema (backbone, damping).
 INSTANT_PARAMS = (
@@ -49,3 +50,14 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+@hookimpl
+def fsi_lab_default_chain():
+    return ["instantaneous"]
+
+
+@hookimpl
+def fsi_lab_summary_lines(component):
+    """The weighted mean frequency stays in the JSON summary."""
+    return None if component is None else SummaryText(keys=("instantaneous",))

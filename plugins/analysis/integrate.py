@@ -10,6 +10,7 @@ from fsi_lab.contract import AnalysisPlugin, Deferred
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.results import Components, Integrated
+from fsi_lab.presentation import SummaryText
 
 PLUGIN = AnalysisPlugin(
     name="integrate",
@@ -33,3 +34,16 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+@hookimpl
+def fsi_lab_default_chain():
+    return ["integrate"]
+
+
+@hookimpl
+def fsi_lab_summary_lines(component):
+    """The peaks of the integrated signals stay in the JSON summary."""
+    if component is None:
+        return None
+    return SummaryText(keys=("displacement_peak", "velocity_peak", "integrate"))

@@ -18,6 +18,7 @@ from fsi_lab.plugins.analysis.results import (
     Integrated,
     ModalComparison,
 )
+from fsi_lab.presentation import SummaryText
 
 PLUGIN_NAME = "modal-model"
 
@@ -59,3 +60,21 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+@hookimpl
+def fsi_lab_summary_lines(summary, component):
+    """Under each component, how the model compares with it. The model is one beam with one
+    C_i and C_f for every component, taken from where ``c_source`` says (a component's own fit
+    only for that component)."""
+    if component is None:
+        return SummaryText(keys=("modal_model",))
+    model = component.get("modal_model")
+    if not isinstance(model, dict) or model.get("envelope_rms_error") is None:
+        return SummaryText(keys=("modal_model",))
+    source = (summary.get("modal_model") or {}).get("c_source")
+    origin = f" from {source}" if isinstance(source, str) and source else ""
+    return SummaryText(keys=("modal_model",), lines=(
+        f"modal model (C_i = {model['c_i']:.4g}, C_f = {model['c_f']:.4g}{origin}) vs "
+        f"measurement: envelope RMS error {100 * model['envelope_rms_error']:.1f} %, "
+        f"frequency error {model['frequency_error_pct']:+.2f} %",))

@@ -11,6 +11,7 @@ from fsi_lab.dsp.choices import WINDOWS
 from fsi_lab.hookspecs import hookimpl
 from fsi_lab.params import Param
 from fsi_lab.plugins.analysis.results import Spectrum
+from fsi_lab.presentation import SummaryText
 
 PLUGIN = AnalysisPlugin(
     name="spectrum",
@@ -37,3 +38,19 @@ PLUGIN = AnalysisPlugin(
 @hookimpl
 def fsi_lab_analyses():
     return [PLUGIN]
+
+
+@hookimpl
+def fsi_lab_default_chain():
+    return ["spectrum"]
+
+
+@hookimpl
+def fsi_lab_summary_lines(summary, component):
+    """The channel's peaks on its line."""
+    if component is not None:
+        return None
+    peaks = [p for p in summary.get("spectrum_peaks_hz") or [] if p is not None]
+    return SummaryText(keys=("spectrum_peaks_hz", "spectrum_peak_amplitudes"),
+                       inline=f": spectrum peaks {', '.join(f'{p:.2f}' for p in peaks[:6])} Hz"
+                       if peaks else "")

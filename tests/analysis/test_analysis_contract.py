@@ -12,17 +12,16 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from types import SimpleNamespace
+from types import ModuleType
 
 import numpy as np
-import pluggy
 import pytest
 
 from test_analysis_plugins import load_registry, run, two_mode_velocity
 from test_modal_model import SPECIMEN, bench_record
 from test_modal_model import registry as registry_with_modal_model
 from fsi_lab import hookspecs
-from fsi_lab.chain import DEFAULT_CHAIN, check_chain, run_chain
+from fsi_lab.chain import check_chain, default_chain, run_chain
 from fsi_lab.contract import (
     AnalysisContext,
     AnalysisPlugin,
@@ -34,7 +33,11 @@ from fsi_lab.contract import (
 from fsi_lab.errors import ParameterError, ProfileError
 from fsi_lab.params import validate
 from fsi_lab.plugins.analysis.results import Components, DampingCurves
-from fsi_lab.registry import Registry, _collect, load_registry as load_installed
+from fsi_lab.registry import Registry, add_plugin, load_registry as load_installed
+
+#: The chain the built-ins put in the default chain, in an order check_chain accepts.
+DEFAULT_CHAIN = ("spectrum", "hvd", "integrate", "instantaneous", "backbone", "damping",
+                 "equivalent-damping")
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -59,6 +62,7 @@ def test_every_kind_a_built_in_reads_is_provided_by_a_built_in():
         assert set(p.requires + p.uses) <= provided, p.name
     check_chain(DEFAULT_CHAIN, registry)
     check_chain(DEFAULT_CHAIN + ("modal-model",), registry)
+    check_chain(default_chain(load_installed()), load_installed())
     for name in registry.names("analysis"):          # each alone, except what requires
         if not registry.get("analysis", name).requires:
             check_chain([name], registry)
@@ -124,20 +128,17 @@ def test_a_declaration_that_is_not_kinds_is_refused_saying_what_to_write(declara
 def test_a_plugin_that_declares_wrongly_is_refused_when_it_is_loaded():
     """Through the plugin manager, as the entry points are loaded: listed invalid with the
     reason, and not usable."""
-    module = SimpleNamespace(__name__="declares_wrongly")
+    module = ModuleType("declares_wrongly")
 
     @hookspecs.hookimpl
     def fsi_lab_analyses():
         return [AnalysisPlugin("bad", (), lambda c, p: None, requires="hvd")]
 
     module.fsi_lab_analyses = fsi_lab_analyses
-    manager = pluggy.PluginManager(hookspecs.PROJECT)
-    manager.add_hookspecs(hookspecs)
-    manager.register(module, name="declares-wrongly")
-    records, registry = [], Registry()
-    _collect(manager, module, "declares-wrongly", registry,
-             lambda name, kind, status, error=None: records.append((name, kind, status, error)))
-    ((name, kind, status, error),) = records
+    registry = Registry()
+    add_plugin(registry, module, "declares-wrongly")
+    ((name, kind, status, error),) = [(r.name, r.kind, r.status, r.error)
+                                       for r in registry.records]
     assert (name, kind, status) == ("declares-wrongly", "analysis", "invalid")
     assert "write requires=('hvd',)" in error
     assert not registry.descriptors["analysis"]

@@ -12,7 +12,7 @@ import pytest
 
 from _analysis_sims import decaying_tone, linear_decay, noisy, quadratic_record, time_axis
 from fsi_lab import hookspecs
-from fsi_lab.chain import DEFAULT_CHAIN, run_chain
+from fsi_lab.chain import run_chain
 from fsi_lab.contract import AnalysisContext, ChannelData, check_descriptor
 from fsi_lab.errors import AnalysisError
 from fsi_lab.params import validate
@@ -24,6 +24,11 @@ MODULES = {
     "backbone": "backbone", "damping": "damping", "equivalent-damping": "equivalent_damping",
     "spectrum": "spectrum", "frf": "frf",
 }
+
+#: The built-ins' default chain (fsi_lab.chain.default_chain orders it so, or equivalently).
+DEFAULT_CHAIN = ("spectrum", "hvd", "integrate", "instantaneous", "backbone", "damping",
+                 "equivalent-damping")
+
 
 
 def load_registry() -> Registry:

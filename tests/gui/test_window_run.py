@@ -9,7 +9,7 @@ from conftest import (
 )
 from PySide6.QtCore import Qt
 
-from fsi_lab.chain import DEFAULT_CHAIN
+from fsi_lab.chain import default_chain
 from fsi_lab.runfile import read_run
 
 def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_path):
@@ -17,7 +17,7 @@ def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_pa
     window = make_window(registry)
     assert window.open_profile(path)
     chain = list(window.session.base.analysis["chain"])
-    installed = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
+    installed = default_chain(registry)
     assert chain and set(chain) <= set(registry.descriptors["analysis"])
     wait_checked(qtbot, window)
     start = window.run_control.start_button

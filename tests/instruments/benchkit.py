@@ -1,22 +1,19 @@
 """Helpers for the instrument tests.
 
-- :class:`ScriptedPeer` and :class:`PtyPeer`: a loopback peer (TCP, or a pseudo-terminal for
-  serial drivers) that records every byte a driver sends and answers scripted replies, for
-  tests that assert the exact bytes exchanged (PyMeasure's ``expected_protocol`` style).
+- :class:`ScriptedPeer` and :class:`PtyPeer` (from the conformance kit, :mod:`fsi_lab.testing`):
+  a loopback peer (TCP, or a pseudo-terminal for serial drivers) that records every byte a
+  driver sends and answers scripted replies, for tests that assert the exact bytes exchanged
+  (PyMeasure's ``expected_protocol`` style); the kit's pytest plugin gives the ``tcp_peer``
+  and ``pty_peer`` fixtures, re-exported here for the modules that import them.
 - :func:`lab_registry`: the installed plugins plus the lab drivers and excitations of this
   package, taken from their modules' hook implementations (what their entry points name).
 - :func:`bench_profile`: a profile on the embedded simulated bench.
-- fixtures ``tcp_peer``, ``pty_peer`` and ``sim_bench``, which stop what they start.
+- fixture ``sim_bench``, which stops what it starts.
 """
 
 from __future__ import annotations
 
-import os
-import select
-import socket
 import threading
-import time
-import tty
 from pathlib import Path
 
 import pytest
@@ -27,12 +24,12 @@ from fsi_lab.plugins.excitation import impulse_train, random_noise
 from fsi_lab.profile import load_profile
 from fsi_lab.registry import load_registry
 from fsi_lab.runner import Runner
+from fsi_lab.testing.peers import PtyPeer, Script, ScriptedPeer  # noqa: F401 - re-exported
+from fsi_lab.testing.plugin import pty_peer, tcp_peer  # noqa: F401 - re-exported fixtures
 
 LAB_MODULES = (keysight33500, shaker_amplifier, polytec, scpi_daq)
 EXCITATION_MODULES = (impulse_train, random_noise)
 BENCH_THREAD = "fsi-lab-sim-bench"
-#: (expected bytes, reply): the reply is None, bytes, or (delay s, bytes) for a slow instrument.
-Script = list[tuple[bytes, "bytes | tuple[float, bytes] | None"]]
 
 
 def lab_registry():
@@ -53,160 +50,6 @@ def settings(module, **values) -> dict:
     from fsi_lab.params import validate
 
     return validate(module.PLUGIN.params, values, module.PLUGIN.name)
-
-
-# --------------------------------------------------------------------------- scripted peers
-class _Peer:
-    """Runs a script on a thread: read exactly the expected bytes, then send the reply."""
-
-    def __init__(self, script: Script, timeout: float = 5.0) -> None:
-        self.script = script
-        self.timeout = timeout
-        self.received = bytearray()
-        self.errors: list[str] = []
-        self._thread = threading.Thread(target=self._run, daemon=True, name="scripted-peer")
-        self._stop = threading.Event()
-
-    def start(self):
-        self._open()
-        self._thread.start()
-        return self
-
-    def _run(self) -> None:
-        try:
-            self._accept()
-            for step, (expected, reply) in enumerate(self.script):
-                got = self._read(len(expected))
-                self.received += got
-                if got != expected:
-                    self.errors.append(f"step {step}: expected {expected!r}, got {got!r}")
-                    return
-                if isinstance(reply, tuple):  # (seconds, bytes): a slow instrument
-                    self._stop.wait(reply[0])
-                    reply = reply[1]
-                if reply:
-                    self._send(reply)
-            self.received += self._read(1 << 20, quiet=0.2)  # anything sent after the script
-        except Exception as exc:  # noqa: BLE001 - reported by finish()
-            self.errors.append(f"{type(exc).__name__}: {exc}")
-
-    def _read(self, count: int, quiet: float | None = None) -> bytes:
-        data = bytearray()
-        deadline = time.monotonic() + (quiet if quiet is not None else self.timeout)
-        while len(data) < count and not self._stop.is_set():
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                break
-            chunk = self._recv(count - len(data), min(remaining, 0.05))
-            if chunk is None:
-                break
-            data += chunk
-        return bytes(data)
-
-    def finish(self) -> bytes:
-        """Wait for the script to end; the bytes received."""
-        self._thread.join(self.timeout + 2)
-        assert not self._thread.is_alive(), "the scripted peer did not finish"
-        return bytes(self.received)
-
-    def expect_all(self) -> None:
-        """Assert that the driver sent exactly the script's bytes and nothing more."""
-        received = self.finish()
-        assert not self.errors, self.errors
-        assert received == b"".join(expected for expected, _ in self.script)
-
-    def stop(self) -> None:
-        self._stop.set()
-        self._thread.join(self.timeout + 2)
-        self._close()
-
-
-class ScriptedPeer(_Peer):
-    """A TCP peer on 127.0.0.1; :attr:`address` is its VISA resource name."""
-
-    def _open(self) -> None:
-        self._server = socket.socket()
-        self._server.bind(("127.0.0.1", 0))
-        self._server.listen(1)
-        self._server.settimeout(self.timeout)
-        self.address = f"TCPIP0::127.0.0.1::{self._server.getsockname()[1]}::SOCKET"
-        self._conn = None
-
-    def _accept(self) -> None:
-        self._conn, _ = self._server.accept()
-
-    def _recv(self, count: int, wait: float) -> bytes | None:
-        readable, _, _ = select.select([self._conn], [], [], wait)
-        if not readable:
-            return b""
-        try:
-            chunk = self._conn.recv(count)
-        except ConnectionResetError:  # the driver closed with our reply unread
-            return None
-        return chunk or None
-
-    def _send(self, data: bytes) -> None:
-        self._conn.sendall(data)
-
-    def _close(self) -> None:
-        for sock in (self._conn, self._server):
-            if sock is not None:
-                sock.close()
-
-
-class PtyPeer(_Peer):
-    """A serial peer on a pseudo-terminal; :attr:`address` is the device path."""
-
-    def _open(self) -> None:
-        self._master, self._slave = os.openpty()
-        tty.setraw(self._slave)
-        self.address = os.ttyname(self._slave)
-
-    def _accept(self) -> None:
-        pass
-
-    def _recv(self, count: int, wait: float) -> bytes | None:
-        readable, _, _ = select.select([self._master], [], [], wait)
-        if not readable:
-            return b""
-        return os.read(self._master, count)
-
-    def _send(self, data: bytes) -> None:
-        os.write(self._master, data)
-
-    def _close(self) -> None:
-        for fd in (self._master, self._slave):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
-
-
-def _peer_fixture(cls):
-    peers: list[_Peer] = []
-
-    def make(script: Script) -> _Peer:
-        peer = cls(script).start()
-        peers.append(peer)
-        return peer
-
-    return peers, make
-
-
-@pytest.fixture
-def tcp_peer():
-    peers, make = _peer_fixture(ScriptedPeer)
-    yield make
-    for peer in peers:
-        peer.stop()
-
-
-@pytest.fixture
-def pty_peer():
-    peers, make = _peer_fixture(PtyPeer)
-    yield make
-    for peer in peers:
-        peer.stop()
 
 
 # --------------------------------------------------------------------------- the bench

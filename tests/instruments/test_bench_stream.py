@@ -6,6 +6,7 @@ import os
 from benchkit import sim_bench  # noqa: F401
 
 from bench import bench_stream
+from fsi_lab.instruments.sim.cli import profile_snippet
 from fsi_lab.runfile import read_run
 
 
@@ -14,7 +15,7 @@ def test_the_runner_record_streams_four_inputs_into_its_run_file(sim_bench, tmp_
     monkeypatch.setenv("FSI_LAB_LOCK_DIR", str(tmp_path / "locks"))
     bench = sim_bench()
     profile = tmp_path / "stream.toml"
-    profile.write_text(bench_stream.stream_profile(bench.profile_snippet(), 0.3))
+    profile.write_text(bench_stream.stream_profile(profile_snippet(bench), 0.3))
     measured = bench_stream.runner_record(profile, tmp_path / "runs", os.getpid())
     assert measured["cpu"] > 0 and measured["wall"] > 0
     run = read_run(next((tmp_path / "runs").glob("*.h5")))

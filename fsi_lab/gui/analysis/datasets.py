@@ -1,4 +1,5 @@
-"""Datasets picked out of a run's results: per-component rows, summary series, time axes, chain."""
+"""Datasets picked out of a run's results: per-component rows, summary series, time axes, the
+chain, and the columns of the tables of identified values."""
 
 from __future__ import annotations
 
@@ -6,11 +7,13 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.chain import DEFAULT_CHAIN
+from fsi_lab.chain import default_chain
 from fsi_lab.errors import FsiLabError
 from fsi_lab.gui.results import PluginResult, RunResults
+from fsi_lab.presentation import SummaryColumn
 from fsi_lab.profile import parse_profile
 from fsi_lab.registry import Registry
+from fsi_lab.summary import claimed_keys, plain_values
 
 
 def rows(array: np.ndarray | None) -> list[np.ndarray]:
@@ -64,8 +67,8 @@ def summary_series(results: RunResults, channel: str, section: str, x: str, y: s
 
 def time_axis(results: RunResults, channel: str, result: PluginResult | None, n: int
               ) -> np.ndarray:
-    """Sample times of a dataset of ``n`` samples (hvd stores none of its own): the channel's
-    sample times from where the decomposition started (``start_s`` of hvd)."""
+    """Sample times of a dataset of ``n`` samples of ``result`` that stores none of its own:
+    the channel's sample times from where the analysis started (its ``start_s`` attribute)."""
     data = results.channels.get(channel)
     if data is not None and data.sample_rate > 0:
         return origin(results, channel, result) + np.arange(n) / data.sample_rate
@@ -79,14 +82,12 @@ def channel_t0(results: RunResults, channel: str) -> float:
 
 
 def origin(results: RunResults, channel: str, result: PluginResult | None = None) -> float:
-    """Time (s, on the run's clock) of sample 0 of the analysed components: the channel's t0
-    plus the start the decomposition chose (``start_s``), when there is one."""
+    """Time (s, on the run's clock) of sample 0 of ``result``'s datasets: the channel's t0 plus
+    the start the analysis chose (its ``start_s`` attribute), when it has one."""
     t0 = channel_t0(results, channel)
-    for candidate in (result, results.result(channel, "hvd")):
-        if candidate is not None:
-            start = candidate.scalar("start_s")
-            if isinstance(start, (int, float)):
-                return t0 + float(start)
+    start = result.scalar("start_s") if result is not None else None
+    if isinstance(start, (int, float)):
+        return t0 + float(start)
     return t0
 
 
@@ -112,7 +113,7 @@ def chain_of(results: RunResults, registry: Registry) -> tuple[dict[str, Any], d
         pass
     chain = list(analysis["chain"])
     if not results.profile_text.strip() and not chain:
-        chain = [name for name in DEFAULT_CHAIN if name in registry.descriptors["analysis"]]
+        chain = default_chain(registry)
     for groups in results.analysis.values():
         for plugin, result in groups.items():
             if plugin not in chain and plugin in registry.descriptors["analysis"]:
@@ -123,14 +124,37 @@ def chain_of(results: RunResults, registry: Registry) -> tuple[dict[str, Any], d
     return analysis, params
 
 
-def table_rows(results: RunResults, channel: str) -> list[dict[str, Any]]:
-    """One flat dictionary per component: index, frequency and the equivalent damping."""
-    out = []
-    for component in results.components(channel):
-        row = {"index": component.get("index"), "frequency_hz": component.get("frequency_hz")}
-        eq = component.get("equivalent_damping")
-        if isinstance(eq, dict):
-            for key in ("c_i", "c_i_ci95", "c_f", "c_f_ci95", "r2"):
-                row[key] = eq.get(key)
-        out.append(row)
-    return out
+#: The first column of the tables of identified values: each component's frequency.
+FREQUENCY_COLUMN = SummaryColumn("frequency_hz", "frequency (Hz)", "frequency_hz", order=0)
+
+
+def value_columns(results: RunResults, channels: list[str], registry: Registry
+                  ) -> list[SummaryColumn]:
+    """Columns of a table of the identified values of ``channels`` (one row per component):
+    the frequency, the columns the plugins register (``fsi_lab_addviews``), then a column for
+    each plain value of the summary's components that no plugin shows in its own way; only
+    those with a value in some component.
+
+    Parameters
+    ----------
+    results
+        The run.
+    channels
+        Analysed channels of the run.
+    registry
+        Loaded plugins.
+    """
+    columns = [FREQUENCY_COLUMN] + sorted(registry.views().columns, key=lambda c: c.order)
+    known = {c.key for c in columns} | {c.interval for c in columns if c.interval}
+    generic: dict[str, SummaryColumn] = {}
+    entries = []
+    for channel in channels:
+        info = (results.summary or {}).get("channels", {}).get(channel, {})
+        for component in results.components(channel):
+            entries.append(component)
+            claimed = claimed_keys(registry, channel, info, component)
+            for key, _ in plain_values(component, claimed):
+                if key not in known and key not in generic:
+                    generic[key] = SummaryColumn(key, key, key, order=500)
+    columns += list(generic.values())
+    return [c for c in columns if any(c.value(e) is not None for e in entries)]

@@ -7,7 +7,6 @@ from typing import Any, Iterator
 
 from PySide6.QtCore import QObject, QTimer
 
-
 #: Pause (ms) between two slices of a drawing spread over turns of the event loop, and the
 #: longest a slice may go on before it hands the event loop back.
 PAUSE_MS = 8

@@ -7,20 +7,22 @@ from typing import Any
 
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
-    QComboBox, QHBoxLayout, QLabel, QScrollArea, QSplitter, QTabWidget, QVBoxLayout, QWidget,
+    QComboBox,
+    QHBoxLayout,
+    QLabel,
+    QScrollArea,
+    QSplitter,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
 )
 
-from fsi_lab.gui.analysis.amplitude_views import BackboneView, DampingView
 from fsi_lab.gui.analysis.dataset_browser import DatasetBrowser
 from fsi_lab.gui.analysis.datasets import chain_of
-from fsi_lab.gui.analysis.equivalent_damping_view import EquivalentDampingView
-from fsi_lab.gui.analysis.modal_model_view import ModalModelView
-from fsi_lab.gui.analysis.overview import OverviewView
+from fsi_lab.gui.analysis.generic_view import GenericView
 from fsi_lab.gui.analysis.parameters import AnalysisParameters
-from fsi_lab.gui.analysis.spectrum_view import SpectrumView
 from fsi_lab.gui.analysis.stepper import Stepper
 from fsi_lab.gui.analysis.summary import SummaryView
-from fsi_lab.gui.analysis.time_views import FrequencyView, HVDView
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.analysis_job import AnalysisJob
 from fsi_lab.gui.figure import scrolled
@@ -29,8 +31,30 @@ from fsi_lab.gui.worker import TaskPool
 from fsi_lab.registry import Registry
 
 
+def registered_views(registry: Registry, report) -> list[Any]:
+    """The widgets of the views the plugins register (``fsi_lab_addviews``), in the order of
+    their tabs; one that cannot be made is left out and ``report(text)`` says why."""
+    views = []
+    for descriptor in sorted(registry.views().views, key=lambda v: (v.order, v.title)):
+        try:
+            widget = descriptor.view()
+            if not isinstance(widget, QWidget):
+                raise TypeError(f"made a {type(widget).__name__}, not a QWidget")
+        except Exception as exc:  # noqa: BLE001 - a broken view must not take the window down
+            report(f"view {descriptor.title!r} left out: {type(exc).__name__}: {exc}")
+            continue
+        widget.title = descriptor.title
+        widget.analyses = descriptor.analyses
+        views.append(widget)
+    return views
+
+
 class AnalysisViews(QWidget):
     """The views of one run, a channel selector and the parameter panel.
+
+    The tabs are the views the plugins register, then a generic view
+    (:class:`~fsi_lab.gui.analysis.generic_view.GenericView`) for each analysis of the run
+    shown that no registered view draws, then the Results and All datasets tabs.
 
     Signals: ``reanalysed(path)`` after an analysis was stored, ``analysis_failed(path)``,
     ``message(level, text)``.
@@ -56,9 +80,12 @@ class AnalysisViews(QWidget):
         self.state = QLabel("")
         self.state.setWordWrap(True)
         self.state.setVisible(False)
-        self.views: list[Any] = [OverviewView(), HVDView(), FrequencyView(), BackboneView(), DampingView(),
-                                 EquivalentDampingView(), ModalModelView(), SpectrumView(),
-                                 SummaryView(), DatasetBrowser()]
+        self.problems: list[str] = []
+        self.views: list[Any] = registered_views(registry, self.problems.append) + [
+            SummaryView(registry), DatasetBrowser()]
+        #: generic views, by analysis, made for the runs shown (kept, hidden when not needed)
+        self.generic: dict[str, GenericView] = {}
+        self.drawn_by_views = registry.views().drawn()
         self.tabs = QTabWidget()
         self.tabs.setObjectName("analysis-tabs")
         for view in self.views:
@@ -67,7 +94,9 @@ class AnalysisViews(QWidget):
         # Draws the figures of the tab shown, then builds the parameter forms of a new run, a
         # slice per turn of the event loop, in that order.
         self.stepper = Stepper(self)
-        self.view(OverviewView).stepper = self.stepper
+        for view in self.views:  # a view made of parts (the Overview) shares the stepper
+            if hasattr(view, "stepper"):
+                view.stepper = self.stepper
         self.tabs.currentChanged.connect(self._draw_current)
         # build the figures' plot items in idle time, one view per turn of the event loop
         self._prebuild = [v for v in self.views if hasattr(v, "prebuild")]
@@ -110,8 +139,46 @@ class AnalysisViews(QWidget):
             self._prebuild.pop(0).prebuild()
             self._prebuild_timer.start(0)
 
-    def view(self, cls: type) -> Any:
+    def view(self, cls: type | str) -> Any:
+        """The view of class ``cls``, or titled ``cls``."""
+        if isinstance(cls, str):
+            return next(v for v in self.views if v.title == cls)
         return next(v for v in self.views if isinstance(v, cls))
+
+    def _show_a_view_with_results(self, results: RunResults) -> None:
+        """When the tab shown draws analyses the run does not have, the first tab that draws
+        one it has (a run of a third-party analysis opens on its view, not on an empty
+        Overview)."""
+        present = {plugin for groups in results.analysis.values() for plugin in groups}
+        current = self.views[self.tabs.currentIndex()] if self.tabs.currentIndex() >= 0 \
+            else None
+        if not present or current is None or set(getattr(current, "analyses", present)) & present:
+            return
+        for index, view in enumerate(self.views):
+            if self.tabs.isTabVisible(index) and set(getattr(view, "analyses", ())) & present:
+                self.tabs.blockSignals(True)
+                self.tabs.setCurrentIndex(index)
+                self.tabs.blockSignals(False)
+                return
+
+    def _generic_views(self, results: RunResults) -> None:
+        """A generic view for each analysis of ``results`` that no registered view draws
+        (before the Results tab), shown; those of other runs hidden."""
+        wanted = [plugin for groups in results.analysis.values() for plugin in groups
+                  if plugin not in self.drawn_by_views]
+        wanted = list(dict.fromkeys(wanted))
+        added = False
+        for name in wanted:
+            if name not in self.generic:
+                view = self.generic[name] = GenericView(name)
+                index = self.views.index(self.view(SummaryView))
+                self.views.insert(index, view)
+                self.tabs.insertTab(index, scrolled(view), view.title)
+                added = True
+        for name, view in self.generic.items():
+            self.tabs.setTabVisible(self.views.index(view), name in wanted)
+        if added:
+            self._drawn.clear()
 
     def show_results(self, results: RunResults) -> None:
         """Show a run (already read off the UI thread).
@@ -120,6 +187,8 @@ class AnalysisViews(QWidget):
         one per turn of the event loop, then the parameter forms are built (see
         :attr:`pending` and :meth:`finish`)."""
         self.results = results
+        self._generic_views(results)
+        self._show_a_view_with_results(results)
         status = results.exit_status
         started = results.attrs.get("start_time", "")
         self.title.setText(f"<b>{results.name}</b> — {results.path.name} — {status}"
@@ -139,7 +208,8 @@ class AnalysisViews(QWidget):
             self.state.setText("not computed: this run file has no analysis results "
                                f"(exit status {status}); set the parameters and re-run")
         else:
-            errors = [f"{r.plugin} on {r.channel}: {r.error}" for groups in results.analysis.values()
+            errors = [f"{r.plugin} on {r.channel}: {r.error}"
+                      for groups in results.analysis.values()
                       for r in groups.values() if not r.ok]
             self.state.setText("failed: " + "; ".join(errors) if errors else "")
         self.state.setVisible(bool(self.state.text()))
@@ -176,7 +246,7 @@ class AnalysisViews(QWidget):
             return
         self._drawn.add(index)
         view, channel = self.views[index], self.channel.currentData() or ""
-        if isinstance(view, OverviewView) and not now:
+        if hasattr(view, "stepper") and not now:
             view.show_results(self.results, channel)  # queues its parts on the stepper
         elif isinstance(view, View) and not now:
             self.stepper.add(view.drawing(self.results, channel), view)
@@ -184,11 +254,12 @@ class AnalysisViews(QWidget):
             view.show_results(self.results, channel)
 
     def filled(self) -> dict[str, bool]:
-        """Whether each view shows data (draws the views not drawn yet)."""
+        """Whether each view shown for the run shows data (draws the views not drawn yet)."""
         for index in range(len(self.views)):
             self._draw(index, now=True)
         self.finish()
-        return {view.title: view.filled for view in self.views}
+        return {view.title: view.filled for index, view in enumerate(self.views)
+                if self.tabs.isTabVisible(index)}
 
     # ------------------------------------------------------------------ re-analysis
     @property

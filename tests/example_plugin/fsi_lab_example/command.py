@@ -3,6 +3,7 @@
 from pathlib import Path
 
 from fsi_lab.contract import CliCommand
+from fsi_lab.hookspecs import hookimpl
 
 
 def _configure(parser):
@@ -16,4 +17,8 @@ def _run(args) -> int:
 
 COMMAND = CliCommand(name="example-count", help="count the lines of a file",
                      configure=_configure, run=_run)
-NOT_A_COMMAND = "a string where a CliCommand belongs"
+
+
+@hookimpl
+def fsi_lab_addcommands(subparsers):
+    COMMAND.add_to(subparsers)

@@ -6,12 +6,12 @@ from typing import Iterator
 
 from PySide6.QtWidgets import QGridLayout, QWidget
 
-from fsi_lab.gui.analysis.amplitude_views import BackboneView
-from fsi_lab.gui.analysis.equivalent_damping_view import EquivalentDampingView
 from fsi_lab.gui.analysis.stepper import Stepper
-from fsi_lab.gui.analysis.time_views import FrequencyView, HVDView
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults
+from fsi_lab.plugins.analysis.views.amplitude_views import BackboneView
+from fsi_lab.plugins.analysis.views.equivalent_damping_view import EquivalentDampingView
+from fsi_lab.plugins.analysis.views.time_views import FrequencyView, HVDView
 
 #: Smallest plot of an Overview figure (axes included), in pixels.
 OVERVIEW_MIN_PLOT = (240, 140)

@@ -9,16 +9,29 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QWidget
 
 from fsi_lab.gui.analysis.datasets import (
-    channel_t0, finite_pairs, per_component, time_axis,
-)
-from fsi_lab.gui.analysis.names import (
-    HVD_COMPONENTS, HVD_EDGE, HVD_ENVELOPES, HVD_FREQUENCIES, ZC_FREQUENCY, ZC_TIME,
+    channel_t0,
+    finite_pairs,
+    per_component,
+    time_axis,
 )
 from fsi_lab.gui.analysis.plotting import (
-    COLOURS, MAX_COMPONENTS_DRAWN, active_span, draw_line, draw_points, robust_range,
+    COLOURS,
+    MAX_COMPONENTS_DRAWN,
+    active_span,
+    draw_line,
+    draw_points,
+    robust_range,
 )
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults
+from fsi_lab.plugins.analysis.views.names import (
+    HVD_COMPONENTS,
+    HVD_EDGE,
+    HVD_ENVELOPES,
+    HVD_FREQUENCIES,
+    ZC_FREQUENCY,
+    ZC_TIME,
+)
 
 
 class HVDView(View):

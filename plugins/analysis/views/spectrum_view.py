@@ -9,10 +9,14 @@ import pyqtgraph as pg
 from PySide6.QtCore import Qt
 
 from fsi_lab.gui.analysis.datasets import rows
-from fsi_lab.gui.analysis.names import SPECTRUM_AMPLITUDE, SPECTRUM_FREQUENCY, SPECTRUM_PEAKS
 from fsi_lab.gui.analysis.plotting import COLOURS, draw_line
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults
+from fsi_lab.plugins.analysis.views.names import (
+    SPECTRUM_AMPLITUDE,
+    SPECTRUM_FREQUENCY,
+    SPECTRUM_PEAKS,
+)
 
 #: Heights (fractions of the plot) of the labels of successive spectrum peaks.
 PEAK_LABEL_HEIGHTS = (0.95, 0.85, 0.75)

@@ -9,10 +9,10 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QLabel, QWidget
 
 from fsi_lab.gui.analysis.datasets import finite_pairs, format_ci, per_component
-from fsi_lab.gui.analysis.names import CQ, CQ_AMPLITUDE
 from fsi_lab.gui.analysis.plotting import COLOURS, draw_line, draw_points, robust_range
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import PluginResult, RunResults
+from fsi_lab.plugins.analysis.views.names import CQ, CQ_AMPLITUDE
 
 
 class EquivalentDampingView(View):

@@ -10,14 +10,22 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QWidget
 
 from fsi_lab.gui.analysis.datasets import finite_pairs, per_component, summary_series
-from fsi_lab.gui.analysis.names import (
-    DISPLACEMENT_AMPLITUDE, FREQUENCY, VELOCITY_AMPLITUDE, VELOCITY_FREQUENCY, ZETA,
-)
 from fsi_lab.gui.analysis.plotting import (
-    COLOURS, MAX_COMPONENTS_DRAWN, draw_line, draw_points, robust_range,
+    COLOURS,
+    MAX_COMPONENTS_DRAWN,
+    draw_line,
+    draw_points,
+    robust_range,
 )
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults
+from fsi_lab.plugins.analysis.views.names import (
+    DISPLACEMENT_AMPLITUDE,
+    FREQUENCY,
+    VELOCITY_AMPLITUDE,
+    VELOCITY_FREQUENCY,
+    ZETA,
+)
 
 
 class _AmplitudeView(View):

@@ -1,0 +1,142 @@
+"""The analysis summary as text (``fsi-lab run``, ``analyze``, ``show``) and its plain values.
+
+The core shows what the summary's layout defines (docs/json-output.md): each channel, its
+``notes``, ``warnings`` and ``errors``, its components with their ``index``, ``frequency_hz``
+(and its ``frequency_ci95_hz``), ``warnings`` and the per-component errors of any analysis, and
+the ``warnings`` an analysis keeps under its own key (``frf``'s at channel level). Everything
+else is the plugins': each says what it shows of its keys through the
+``fsi_lab_summary_lines`` hook (:class:`fsi_lab.presentation.SummaryText`), and the values of
+the keys no plugin claims are shown as ``key: value`` lines when they are numbers, strings or
+tables of them (:func:`plain_values`), so that a third-party analysis's scalar results are in
+the text summary without any code that knows it.
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+from fsi_lab.presentation import SummaryText
+
+#: Keys of a channel's summary the core shows itself.
+CHANNEL_KEYS = ("components", "notes", "errors", "warnings")
+#: Keys of a component entry the core shows itself.
+COMPONENT_KEYS = ("index", "frequency_hz", "frequency_ci95_hz", "warnings")
+
+
+def _registry(registry):
+    if registry is None:
+        from fsi_lab.registry import load_registry
+
+        registry = load_registry()
+    return registry
+
+
+def warnings_of(entry: dict[str, Any]) -> list[tuple[str, str]]:
+    """Every warning of a channel's or a component's summary as (key, sentence): its own
+    ``warnings`` (key "") and those of each analysis that keeps them under its key (``frf``'s
+    at channel level, for one); a channel's components are not looked into."""
+    found = [("", w) for w in entry.get("warnings", [])]
+    for key, value in entry.items():
+        if isinstance(value, dict):
+            found.extend((key, w) for w in value.get("warnings", []))
+    return found
+
+
+def format_value(value: Any) -> str:
+    """A plain value as text: numbers with four significant digits, booleans and strings as
+    they are."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return str(value)
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    return f"{float(value):.4g}"
+
+
+def _plain(value: Any) -> bool:
+    return value is not None and (isinstance(value, (str, bool, numbers.Real)))
+
+
+def plain_values(entry: dict[str, Any], skip: set[str] | tuple[str, ...]) -> list[tuple[str, Any]]:
+    """The plain values of a summary entry outside ``skip``: ``(key, value)`` for a number,
+    string or boolean, and ``(key.sub, value)`` for those of a table one level down (its
+    ``error`` and ``warnings`` left out: the core shows them)."""
+    out = []
+    for key, value in entry.items():
+        if key in skip:
+            continue
+        if _plain(value):
+            out.append((key, value))
+        elif isinstance(value, dict):
+            out.extend((f"{key}.{sub}", item) for sub, item in value.items()
+                       if sub not in ("error", "warnings") and _plain(item))
+    return out
+
+
+def _texts(registry, channel: str, info: dict[str, Any], component: dict[str, Any] | None
+           ) -> tuple[list[SummaryText], set[str]]:
+    texts = registry.summary_texts(channel, info, component)
+    claimed = {key for text in texts for key in text.keys}
+    return texts, claimed
+
+
+def claimed_keys(registry, channel: str, info: dict[str, Any],
+                 component: dict[str, Any] | None = None) -> set[str]:
+    """Keys of a channel's summary (or of one of its components) that the core or a plugin
+    shows in its own way (the others are shown as plain values)."""
+    _, claimed = _texts(registry, channel, info, component)
+    return claimed | set(CHANNEL_KEYS if component is None else COMPONENT_KEYS)
+
+
+def format_summary(summary: dict[str, Any], registry=None) -> str:
+    """The analysis summary as a few readable lines.
+
+    Parameters
+    ----------
+    summary
+        The ``fsi-lab analyze --json`` object (its ``channels``).
+    registry
+        The loaded plugins (:func:`fsi_lab.registry.load_registry`, loaded when None), whose
+        ``fsi_lab_summary_lines`` hooks show their keys.
+    """
+    registry = _registry(registry)
+    lines = []
+    for channel, info in summary.get("channels", {}).items():
+        texts, claimed = _texts(registry, channel, info, None)
+        lines.append(f"channel {channel}" + "".join(t.inline for t in texts))
+        for note in info.get("notes", []):
+            lines.append(f"  note: {note}")
+        lines.extend(f"  {key + ' ' if key else ''}warning: {w}" for key, w in warnings_of(info))
+        lines.extend(f"  {line}" for text in texts for line in text.lines)
+        lines.extend(f"  {key}: {format_value(value)}"
+                     for key, value in plain_values(info, claimed | set(CHANNEL_KEYS)))
+        for component in info.get("components", []):
+            lines.extend(_component_lines(registry, channel, info, component))
+        for error in info.get("errors", []):
+            lines.append(f"  failed {error['plugin']}: {error['message']}")
+    return "\n".join(lines)
+
+
+def _component_lines(registry, channel: str, info: dict[str, Any],
+                     component: dict[str, Any]) -> list[str]:
+    texts, claimed = _texts(registry, channel, info, component)
+    text = f"  component {component['index']}"
+    if component.get("frequency_hz") is not None:
+        text += f" at {component['frequency_hz']:.3f} Hz"
+        bounds = component.get("frequency_ci95_hz")
+        if bounds and None not in bounds:
+            text += f" (+-{0.5 * (bounds[1] - bounds[0]):.2g})"
+    lines = [text + "".join(t.inline for t in texts)]
+    lines.extend(f"    {key + ' ' if key else ''}warning: {w}"
+                 for key, w in warnings_of(component))
+    # Per-component errors (hvd's on a component that switches modes is carried by every
+    # later analysis): each distinct message once.
+    seen: list[str] = []
+    for value in component.values():
+        if isinstance(value, dict) and value.get("error") and value["error"] not in seen:
+            seen.append(value["error"])
+    lines.extend(f"    not analysed: {message}" for message in seen)
+    lines.extend(f"    {line}" for t in texts for line in t.lines)
+    lines.extend(f"    {key}: {format_value(value)}"
+                 for key, value in plain_values(component, claimed | set(COMPONENT_KEYS)))
+    return lines
