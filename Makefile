@@ -45,12 +45,13 @@ gui: $(VENV)/.installed-gui qt-libs
 screenshots: $(VENV)/.installed-gui
 	$(BIN)/python docs/screenshots.py
 
+# ruff first: a lint error stops the run before the tests start.
 test: $(VENV)/.installed-dev,gui h5dump-tool
+	$(BIN)/ruff check .
 	$(BIN)/python -m pytest
 
 # ruff with the rule set stated in pyproject.toml ([tool.ruff.lint]); LINT narrows it to some
-# paths (make lint LINT="fsi_lab/testing tests/test_hooks.py"). It joins `test` once the whole
-# code base passes.
+# paths (make lint LINT="fsi_lab/testing tests/test_hooks.py").
 LINT ?= .
 lint: $(VENV)/.installed-dev,gui
 	$(BIN)/ruff check $(LINT)

@@ -21,7 +21,8 @@ from bench.table import Row, render
 
 
 def main() -> int:
-    names = sorted(m.name for m in pkgutil.iter_modules(bench.__path__) if m.name.startswith("bench_"))
+    names = sorted(m.name for m in pkgutil.iter_modules(bench.__path__)
+                   if m.name.startswith("bench_"))
     wanted = sys.argv[1:]
     all_rows: list[Row] = []
     for name in names:

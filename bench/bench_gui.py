@@ -35,9 +35,9 @@ from pathlib import Path
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from bench.table import REPEAT, Row, cold_times, figure, median  # noqa: E402
+from bench.table import REPEAT, Row, cold_times, figure, median
 
 ROOT = Path(__file__).resolve().parents[1]
 CHANNELS = 4

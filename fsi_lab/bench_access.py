@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from fsi_lab.contract import PURPOSES, ROLE_INTERFACES, BenchContext, Instrument  # noqa: F401
+from fsi_lab.contract import PURPOSES, ROLE_INTERFACES, BenchContext, Instrument  # noqa: F401 - re-exported for drivers
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
 from fsi_lab.signals import RunSignals
@@ -91,12 +91,12 @@ def safe_and_close(instruments: Mapping[str, Instrument], cleanup: list[Callable
     for role, instrument in opened:
         try:
             instrument.close()
-        except Exception as exc:  # noqa: BLE001
+        except Exception as exc:  # noqa: BLE001 - a driver's close must not stop the others
             log("WARNING", f"{role}: close failed: {exc}")
     for stop in reversed(cleanup):
         try:
             stop()
-        except Exception as exc:  # noqa: BLE001
+        except Exception as exc:  # noqa: BLE001 - every cleanup runs, whatever one raises
             log("WARNING", f"bench cleanup failed: {exc}")
     return states
 
@@ -113,7 +113,7 @@ def _safe_state(instrument: Instrument) -> str | None:
 def _read_state(instrument: Instrument) -> dict[str, Any]:
     try:
         return dict(instrument.read_state())
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:  # noqa: BLE001 - a dead driver's state is reported, not raised
         return {"error": f"could not read state: {type(exc).__name__}: {exc}"}
 
 

@@ -47,12 +47,14 @@ class Console:
                 self._print(f"[{event.level.lower()}] {event.message}")
         elif isinstance(event, StateChanged):
             if self.level <= LEVELS["INFO"]:
-                self._print(f"[state] {event.state}" + (f": {event.detail}" if event.detail else ""))
+                detail = f": {event.detail}" if event.detail else ""
+                self._print(f"[state] {event.state}{detail}")
         elif isinstance(event, Progress) and self.bar is not None:
             task = self.tasks.get(event.stage)
             if task is None:
                 task = self.tasks[event.stage] = self.bar.add_task(event.stage, total=1.0)
-            self.bar.update(task, completed=event.fraction, description=event.message or event.stage)
+            self.bar.update(task, completed=event.fraction,
+                            description=event.message or event.stage)
         elif isinstance(event, DataBlock):
             pass  # the headless runner has no live plot
 
@@ -142,7 +144,8 @@ def cmd_run(args) -> int:
         _emit_json(outcome.as_json())
     else:
         print(f"run file:    {outcome.path}")
-        print(f"exit status: {outcome.exit_status}" + (f" ({outcome.error})" if outcome.error else ""))
+        error = f" ({outcome.error})" if outcome.error else ""
+        print(f"exit status: {outcome.exit_status}{error}")
         if outcome.summary:
             print(format_summary(outcome.summary, registry))
     code = EXIT_FOR_STATUS[outcome.exit_status]

@@ -67,7 +67,7 @@ class EventBus:
         for subscriber in list(self._subscribers):
             try:
                 subscriber(event)
-            except Exception:  # noqa: BLE001 - a display problem must not stop the experiment
+            except Exception:
                 log.exception("event subscriber %r failed", subscriber)
 
     def log(self, level: str, message: str) -> None:

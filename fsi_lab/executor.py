@@ -432,7 +432,7 @@ class DaskExecutor(Executor):
         if status == "error":
             try:
                 exc = future.exception(timeout=CONNECT_TIMEOUT_S)
-            except Exception as other:  # noqa: BLE001
+            except Exception as other:  # noqa: BLE001 - whatever Dask raises is the task's error
                 exc = other
             if _killed_worker(exc):
                 return TaskResult(index, error=f"the workers that ran it died ({exc})",

@@ -20,10 +20,8 @@ from fsi_lab.contract import ChannelData
 from fsi_lab.errors import AnalysisError, InputFileError
 from fsi_lab.inputfiles import require_regular_file
 from fsi_lab.isolation import crash_or_hang, in_child
+from fsi_lab.runcheck import CHANNEL_RATES_HZ, H5_ERRORS, MAX_T0_S, RunFileReader, decode_attr
 from fsi_lab.runcheck import EXPECTED as RUN_FILE
-from fsi_lab.runcheck import (
-    CHANNEL_RATES_HZ, H5_ERRORS, MAX_T0_S, RunFileReader, decode_attr,
-)
 from fsi_lab.signals import INTERRUPTED  # noqa: F401 - the error recorded for Ctrl+C
 from fsi_lab.units import QUANTITIES
 
@@ -303,7 +301,8 @@ def _read_run(path: Path, load_data: bool) -> RunData:
             channels[name] = ChannelData(name, data, rate, quantity, unit, t0)
         if reference and reference not in channels:
             raise reader.refuse("/ attribute 'reference'", f"names {reference!r}, which is not "
-                                "a channel of the file", "one of " + (", ".join(channels) or "none"))
+                                "a channel of the file",
+                                "one of " + (", ".join(channels) or "none"))
         instruments = {}
         group = reader.child(handle, "instruments", h5py.Group)
         for role in reader.names(group) if group is not None else []:
@@ -572,7 +571,8 @@ def _read_summary(path: Path) -> dict[str, Any] | None:
     if text is None or text == "":
         return None
     if not isinstance(text, dict):  # decode_attr parses what is JSON
-        raise reader.refuse("/analysis attribute 'summary'", f"is not a JSON object ({_kind(text)})",
+        raise reader.refuse("/analysis attribute 'summary'",
+                            f"is not a JSON object ({_kind(text)})",
                             "the JSON object fsi-lab analyze writes")
     return text
 

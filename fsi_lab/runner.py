@@ -38,7 +38,12 @@ from fsi_lab.preflight import check_safety, run_setting
 from fsi_lab.profile import Profile
 from fsi_lab.registry import Registry
 from fsi_lab.runfile import (
-    INTERRUPTED, RunFileWriter, new_run_path, read_run, software_version, utc_now,
+    INTERRUPTED,
+    RunFileWriter,
+    new_run_path,
+    read_run,
+    software_version,
+    utc_now,
 )
 from fsi_lab.safety import SafetyReport, require_safe
 from fsi_lab.signals import RunSignals

@@ -272,4 +272,5 @@ def _drive_problem(peak: float, waveform: np.ndarray, limit: float,
 def require_safe(report: SafetyReport, where: str) -> None:
     """Raise SafetyError listing every exceeded limit; ``where`` names the profile."""
     if not report.ok:
-        raise SafetyError(f"{where}: refused before anything was sent: " + "; ".join(report.problems))
+        raise SafetyError(f"{where}: refused before anything was sent: "
+                          + "; ".join(report.problems))

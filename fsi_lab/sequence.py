@@ -33,9 +33,7 @@ from fsi_lab.events import EventBus, Progress
 from fsi_lab.plan import Plan, PlannedRun, check_plan, load_plan
 from fsi_lab.registry import Registry
 from fsi_lab.runfile import read_analysis_summary, read_run, utc_now
-from fsi_lab.seqfile import (
-    SEQUENCE_FILE, SequenceRecord, compact_results, holder, load_record,
-)
+from fsi_lab.seqfile import SEQUENCE_FILE, SequenceRecord, compact_results, holder, load_record
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
 #: Exit code of ``fsi-lab sequence`` for each final status.

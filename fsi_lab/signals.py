@@ -13,7 +13,6 @@ from typing import Any, Callable
 from fsi_lab.errors import RunAborted
 from fsi_lab.events import Progress
 
-
 #: The error recorded for a run (or a command) ended by Ctrl+C.
 INTERRUPTED = "interrupted (Ctrl+C)"
 

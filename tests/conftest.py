@@ -8,10 +8,9 @@ import sys
 from pathlib import Path
 
 import pytest
+from support import EXAMPLE_PLUGIN, SIM_PROFILE
 
 from fsi_lab.registry import load_registry
-
-from support import EXAMPLE_PLUGIN, SIM_PROFILE
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 

@@ -110,7 +110,8 @@ class LineReader:
         self._queue.put(None)
 
     def wait_for(self, predicate, timeout: float) -> str:
-        """The first line (from now on) for which ``predicate`` is true; AssertionError on timeout."""
+        """The first line (from now on) for which ``predicate`` is true; AssertionError on
+        timeout."""
         import queue
         import time
 
@@ -124,7 +125,8 @@ class LineReader:
             except queue.Empty:
                 continue
             if line is None:
-                raise AssertionError(f"stream ended without a matching line; got {self.lines[-20:]}")
+                raise AssertionError("stream ended without a matching line; "
+                                     f"got {self.lines[-20:]}")
             self.lines.append(line)
             if predicate(line):
                 return line

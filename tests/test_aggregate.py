@@ -12,7 +12,6 @@ import math
 
 import numpy as np
 import pytest
-
 from support import run_main, write_decay_run
 
 from fsi_lab.aggregate import aggregate_extracts, format_aggregate, group_modes

@@ -14,7 +14,6 @@ import signal
 
 import h5py
 import pytest
-
 from support import cli, run_main, write_decay_run
 
 import fsi_lab.batch as batch_module

@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import pytest
-
 from support import GOOD_PROFILE, run_main
 
 from fsi_lab.chain import default_chain

@@ -8,7 +8,6 @@ import signal
 import h5py
 import numpy as np
 import pytest
-
 from support import SIM_PROFILE, run_main
 
 from fsi_lab.errors import AnalysisError, InputFileError

@@ -12,12 +12,7 @@ import time
 import pytest
 
 from fsi_lab.errors import InputFileError, ParameterError
-from fsi_lab.executor import (
-    DaskExecutor,
-    InProcess,
-    LocalProcesses,
-    make_executor,
-)
+from fsi_lab.executor import DaskExecutor, InProcess, LocalProcesses, make_executor
 from fsi_lab.workers import PINNED_ENV
 
 

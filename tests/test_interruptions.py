@@ -1,6 +1,7 @@
 """Ctrl+C and SIGTERM are honoured from the first line of the ``fsi-lab`` script to the last
-write (exit 130, one message), also when a library swallows the exception the handler raises; and a run killed
-with ``kill -9`` loses at most the span the README promises, whenever the kill comes."""
+write (exit 130, one message), also when a library swallows the exception the handler raises;
+and a run killed with ``kill -9`` loses at most the span the README promises, whenever the kill
+comes."""
 
 import dataclasses
 import json
@@ -10,9 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-import h5py
 import pytest
-
 from support import SIM_PROFILE, run_main
 
 import fsi_lab.cli as cli_module

@@ -8,8 +8,7 @@ from scipy.integrate import solve_ivp
 
 from fsi_lab.beam import BeamModel, Damping
 from fsi_lab.errors import ParameterError
-from fsi_lab.modal_integrator import (MAX_OMEGA_DT, OUTPUTS, ModalSimulator, check_step,
-                                     simulate)
+from fsi_lab.modal_integrator import MAX_OMEGA_DT, OUTPUTS, ModalSimulator, check_step, simulate
 from fsi_lab.specimen import Specimen
 
 SPECIMEN = Specimen.from_mapping({})

@@ -58,7 +58,8 @@ def test_parse_command_line_strings(name, text, expected):
 
 
 def test_parse_refuses_unreadable_text():
-    with pytest.raises(ParameterError, match=r"x.components: cannot read 'two'; expected an integer"):
+    with pytest.raises(ParameterError,
+                       match=r"x.components: cannot read 'two'; expected an integer"):
         SCHEMA[1].parse("two", "x.components")
 
 

@@ -30,7 +30,8 @@ BAD_CASES = [
     ("syntax", "[run]\n", "[run\n", "TOML syntax error"),
     ("unknown key", "duration = 10.0", "duraton = 10.0",
      "run.duraton: unknown key; allowed keys are block_duration, duration, name, sample_rate"),
-    ("unknown section", "\n[shaker]\n", "\n[shakr]\n", "shakr: unknown section; allowed sections are"),
+    ("unknown section", "\n[shaker]\n", "\n[shakr]\n",
+     "shakr: unknown section; allowed sections are"),
     ("wrong type", "gain = 2.0", 'gain = "high"',
      "bench.amplifier.gain: got 'high' (str); expected a number >= 0 V/V and <= 100 V/V"),
     ("out of bounds", "sample_rate = 10000.0", "sample_rate = 1e6",
@@ -140,7 +141,8 @@ def test_safety_limits_refuse_before_anything_is_written(tmp_path):
     proc = cli("run", str(GOOD), "--out", str(out), "--set", "bench.amplifier.gain=9.5",
                "--set", "safety.max_stroke_mm=1")
     assert proc.returncode == 2
-    assert "predicted stroke" in proc.stderr and "exceeds safety.max_stroke_mm = 1 mm" in proc.stderr
+    assert "predicted stroke" in proc.stderr
+    assert "exceeds safety.max_stroke_mm = 1 mm" in proc.stderr
     assert not out.exists()
 
 
@@ -198,7 +200,12 @@ def test_sensor_is_not_checked_when_the_bench_is_left_out(registry):
 def test_every_numeric_parameter_of_the_core_instruments_and_excitations_has_bounds(registry):
     from fsi_lab.modelling import MODEL_PARAMS
     from fsi_lab.profile import (
-        ANALYSIS_PARAMS, BENCH_PARAMS, CHANNEL_PARAMS, RUN_PARAMS, SAFETY_PARAMS, SHAKER_PARAMS,
+        ANALYSIS_PARAMS,
+        BENCH_PARAMS,
+        CHANNEL_PARAMS,
+        RUN_PARAMS,
+        SAFETY_PARAMS,
+        SHAKER_PARAMS,
     )
     from fsi_lab.specimen import SPECIMEN_PARAMS
 

@@ -12,7 +12,6 @@ import sys
 import h5py
 import numpy as np
 import pytest
-
 from support import GOOD_PROFILE, ROOT, run_main
 
 from fsi_lab.errors import AnalysisError

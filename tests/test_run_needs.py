@@ -3,7 +3,6 @@ model or the record would refuse at run time is refused by the check, and by ``r
 run file exists (one message naming the file and the key, exit 2)."""
 
 import pytest
-
 from support import GOOD_PROFILE, SIM_PROFILE, run_main
 
 WET = GOOD_PROFILE.read_text()

@@ -5,8 +5,13 @@ import numpy as np
 import pytest
 
 from fsi_lab.errors import AnalysisError, InputFileError
-from fsi_lab.runfile import (RunFileWriter, new_run_path, read_analysis_summary, read_run,
-                             write_analysis)
+from fsi_lab.runfile import (
+    RunFileWriter,
+    new_run_path,
+    read_analysis_summary,
+    read_run,
+    write_analysis,
+)
 
 
 @pytest.fixture

@@ -6,7 +6,6 @@ import json
 
 import h5py
 import pytest
-
 from support import ROOT, run_main
 
 from fsi_lab.plan import check_plan, load_plan, parse_plan

@@ -14,7 +14,6 @@ import subprocess
 import sys
 
 import pytest
-
 from support import GOOD_PROFILE, run_main
 
 from fsi_lab.seqfile import SEQUENCE_FILE

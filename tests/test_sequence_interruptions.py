@@ -14,7 +14,6 @@ import subprocess
 import sys
 
 import pytest
-
 from support import SIM_PROFILE, run_main
 
 import fsi_lab.cli as cli_module

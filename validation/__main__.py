@@ -37,7 +37,6 @@ from validation import real_data
 from validation.cases import matrix
 from validation.run import Row, evaluate
 
-
 #: Fewest trials with numbers for the coverage to be judged.
 MIN_COVERAGE_TRIALS = 20
 #: Coverage target, and the significance of a count outside it.

@@ -1354,6 +1354,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     # Step 6: filter correction, the last pass with the record's noise.
     # Noise-free passes until the quadratic law moves by less than PASS_TOLERANCE of its
     # standard errors (a large smear, in short decays, takes several), then one with noise.
+    moved = math.inf
     for n_pass in range(MAX_PASSES + 1):
         last = n_pass == MAX_PASSES or (n_pass > 0 and moved < PASS_TOLERANCE)
         before = [m.fits["quadratic"] for m in modes]

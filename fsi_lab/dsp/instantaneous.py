@@ -33,13 +33,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from fsi_lab.dsp._signal import (
-    MIN_SAMPLES_PER_CYCLE,
-    as_record,
-    check_rate,
-    fail,
-    moving_average,
-)
+from fsi_lab.dsp._signal import MIN_SAMPLES_PER_CYCLE, as_record, check_rate, fail, moving_average
 from fsi_lab.dsp.choices import OFFSETS  # "cycles": from successive extrema (see module doc)
 
 

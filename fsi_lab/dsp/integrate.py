@@ -24,14 +24,7 @@ from typing import Any
 import numpy as np
 import scipy.fft as sfft
 
-from fsi_lab.dsp._signal import (
-    FFT_WORKERS,
-    as_record,
-    check_rate,
-    fail,
-    highpass_gain,
-    predict_pad,
-)
+from fsi_lab.dsp._signal import FFT_WORKERS, as_record, check_rate, fail, highpass_gain, predict_pad
 from fsi_lab.dsp.spectrum import free_decay_peaks
 
 #: Default high-pass corner as a fraction of the lowest significant spectral peak.

@@ -21,8 +21,20 @@ import pyqtgraph as pg
 from PySide6.QtCore import QCoreApplication, QEvent, QEventLoop, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (
-    QApplication, QDockWidget, QFileDialog, QFrame, QGroupBox, QHBoxLayout, QLabel, QMainWindow,
-    QPushButton, QScrollArea, QSplitter, QTabWidget, QVBoxLayout, QWidget,
+    QApplication,
+    QDockWidget,
+    QFileDialog,
+    QFrame,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QMainWindow,
+    QPushButton,
+    QScrollArea,
+    QSplitter,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
 )
 
 from fsi_lab.events import LogRecord
@@ -103,7 +115,8 @@ class MainWindow(QMainWindow):
         self.designer = ExcitationDesigner(self.session)
         self.run_control = RunControl(self.session, self.forwarder, ready=self._forms_valid,
                                       out_dir=out_dir)
-        self.bench = BenchPanel(self.session, self.pool, run_active=lambda: self.run_control.running)
+        self.bench = BenchPanel(self.session, self.pool,
+                                run_active=lambda: self.run_control.running)
         self.live = LivePlots()
         self.analysis = AnalysisViews(self.registry, self.pool)
         self.runs = RunsBrowser(self.registry, self.pool)
@@ -337,7 +350,7 @@ class MainWindow(QMainWindow):
     def busy(self) -> bool:
         return self.run_control.running or self.pool.busy or self.analysis.busy
 
-    def closeEvent(self, event) -> None:  # noqa: N802 - Qt override
+    def closeEvent(self, event) -> None:
         if self.run_control.running:
             # Never leave a bench driving: abort, and close once the runner has made it safe.
             self._closing = True

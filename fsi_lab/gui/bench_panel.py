@@ -16,7 +16,13 @@ from typing import Any, Callable
 
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import (
-    QFormLayout, QGroupBox, QHBoxLayout, QLabel, QPushButton, QScrollArea, QVBoxLayout, QWidget,
+    QFormLayout,
+    QGroupBox,
+    QLabel,
+    QPushButton,
+    QScrollArea,
+    QVBoxLayout,
+    QWidget,
 )
 
 from fsi_lab.bench_access import OPEN_ORDER, probe_bench, problems, safe_bench
@@ -236,7 +242,8 @@ class BenchPanel(QWidget):
                     state[key] = info[key]
             box.show_state(state)
         self.check_button.setEnabled(bool(self.boxes))
-        self.status.setText(f"{what}: " + ("; ".join(errors) if errors else "all instruments answered"))
+        answer = "; ".join(errors) if errors else "all instruments answered"
+        self.status.setText(f"{what}: {answer}")
         if errors:
             self.message.emit("ERROR", f"{what}: " + "; ".join(errors))
 

@@ -14,7 +14,13 @@ from typing import Any
 import pyqtgraph as pg
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
-    QComboBox, QFormLayout, QGroupBox, QLabel, QSizePolicy, QVBoxLayout, QWidget,
+    QComboBox,
+    QFormLayout,
+    QGroupBox,
+    QLabel,
+    QSizePolicy,
+    QVBoxLayout,
+    QWidget,
 )
 
 from fsi_lab.gui.forms import ParamForm
@@ -53,7 +59,8 @@ class ExcitationDesigner(QWidget):
         for name in self.registry.names("excitation"):
             descriptor = self.registry.get("excitation", name)
             self.plugin.addItem(name, name)
-            self.plugin.setItemData(self.plugin.count() - 1, descriptor.help, Qt.ItemDataRole.ToolTipRole)
+            self.plugin.setItemData(self.plugin.count() - 1, descriptor.help,
+                                    Qt.ItemDataRole.ToolTipRole)
         self.plugin.currentIndexChanged.connect(self._plugin_changed)
         self.plugin_help = QLabel()
         self.plugin_help.setWordWrap(True)

@@ -16,8 +16,17 @@ from typing import Any, Mapping, Sequence
 
 from PySide6.QtCore import Signal
 from PySide6.QtWidgets import (
-    QAbstractSpinBox, QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QLabel,
-    QLineEdit, QSpinBox, QVBoxLayout, QWidget,
+    QAbstractSpinBox,
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QSpinBox,
+    QVBoxLayout,
+    QWidget,
 )
 
 from fsi_lab.errors import ParameterError
@@ -69,17 +78,17 @@ class _DoubleSpin(QDoubleSpinBox):
         if param.unit:
             self.setSuffix(f" {param.unit}")
 
-    def textFromValue(self, value: float) -> str:  # noqa: N802 - Qt override
+    def textFromValue(self, value: float) -> str:
         return f"{value:.10g}"
 
-    def valueFromText(self, text: str) -> float:  # noqa: N802
+    def valueFromText(self, text: str) -> float:
         text = text.removesuffix(self.suffix()).strip()
         try:
             return float(text)
         except ValueError:
             return self.value()
 
-    def validate(self, text: str, pos: int):  # noqa: D102
+    def validate(self, text: str, pos: int):
         from PySide6.QtGui import QValidator
 
         body = text.removesuffix(self.suffix()).strip()
@@ -91,7 +100,7 @@ class _DoubleSpin(QDoubleSpinBox):
             return QValidator.State.Invalid, text, pos
         return QValidator.State.Acceptable, text, pos
 
-    def stepBy(self, steps: int) -> None:  # noqa: N802
+    def stepBy(self, steps: int) -> None:
         super().stepBy(steps)
         lo, hi = self._param.minimum, self._param.maximum
         if hi is not None and self.value() > hi:
@@ -99,7 +108,8 @@ class _DoubleSpin(QDoubleSpinBox):
         if lo is not None and self.value() < lo:
             self.setValue(lo)
 
-    def sizeHint(self):  # noqa: N802 - the wide range must not make the box wide
+    def sizeHint(self):
+        # the spin box's wide range must not make the box wide
         hint = super().sizeHint()
         hint.setWidth(min(hint.width(), 160))
         return hint
@@ -116,7 +126,7 @@ class _IntSpin(QSpinBox):
         if param.unit:
             self.setSuffix(f" {param.unit}")
 
-    def stepBy(self, steps: int) -> None:  # noqa: N802
+    def stepBy(self, steps: int) -> None:
         super().stepBy(steps)
         lo, hi = self._param.minimum, self._param.maximum
         if hi is not None and self.value() > hi:
@@ -124,7 +134,7 @@ class _IntSpin(QSpinBox):
         if lo is not None and self.value() < lo:
             self.setValue(int(math.ceil(lo)))
 
-    def sizeHint(self):  # noqa: N802
+    def sizeHint(self):
         hint = super().sizeHint()
         hint.setWidth(min(hint.width(), 160))
         return hint

@@ -120,7 +120,7 @@ class LivePlots(QWidget):
         self.timer.timeout.connect(self.refresh)
         self.timer.start()
 
-    def eventFilter(self, watched, event) -> bool:  # noqa: N802 - Qt override
+    def eventFilter(self, watched, event) -> bool:
         if event.type() == QEvent.Type.Paint:
             self.paints += 1
         return False
@@ -205,7 +205,8 @@ class LivePlots(QWidget):
     def on_block(self, block: DataBlock) -> None:
         """Append one block (UI thread; called through the event forwarder)."""
         names = [n for n in block.data if n in self.buffers]
-        if not self.buffers or len(names) < len(block.data) or block.sample_rate != self.sample_rate:
+        if (not self.buffers or len(names) < len(block.data)
+                or block.sample_rate != self.sample_rate):
             # a channel we were not told about, or the digitiser rounded the rate
             units = {**self.units, **{n: self.units.get(n, "") for n in block.data}}
             self.configure(units, block.sample_rate)

@@ -18,14 +18,24 @@ from typing import Callable
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QFont
 from PySide6.QtWidgets import (
-    QComboBox, QFileDialog, QGridLayout, QHBoxLayout, QLabel, QLineEdit, QPlainTextEdit,
-    QProgressBar, QPushButton, QToolButton, QVBoxLayout, QWidget,
+    QComboBox,
+    QFileDialog,
+    QGridLayout,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QPlainTextEdit,
+    QProgressBar,
+    QPushButton,
+    QToolButton,
+    QVBoxLayout,
+    QWidget,
 )
 
 from fsi_lab.events import LogRecord, Progress, StateChanged
+from fsi_lab.gui.run_process import RunProcess
 from fsi_lab.gui.session import ProfileSession
 from fsi_lab.gui.worker import EventForwarder, Task
-from fsi_lab.gui.run_process import RunProcess
 from fsi_lab.runner import RunOutcome
 
 LEVELS = {"DEBUG": 10, "INFO": 20, "WARNING": 30, "ERROR": 40}
@@ -104,7 +114,8 @@ class RunControl(QWidget):
         self.abort_button.setObjectName("abort")
         self.abort_button.setToolTip("Stop now: the bench goes to its safe state and the data "
                                      "acquired so far is kept.")
-        self.abort_button.setStyleSheet("QPushButton:enabled { color: #b00020; font-weight: bold; }")
+        self.abort_button.setStyleSheet(
+            "QPushButton:enabled { color: #b00020; font-weight: bold; }")
         self.stop_button = QPushButton("Stop")
         self.stop_button.setObjectName("stop")
         self.stop_button.setToolTip("End the acquisition after the current block: the bench "
@@ -246,7 +257,8 @@ class RunControl(QWidget):
 
     def _on_progress(self, event: Progress) -> None:
         self.progress.setValue(int(round(1000 * max(0.0, min(1.0, event.fraction)))))
-        self.progress_text.setText(f"{event.stage}: {event.message}" if event.message else event.stage)
+        self.progress_text.setText(f"{event.stage}: {event.message}" if event.message
+                                   else event.stage)
 
     def _on_outcome(self, outcome: RunOutcome) -> None:
         self.outcome = outcome

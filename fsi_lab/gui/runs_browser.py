@@ -32,12 +32,7 @@ from PySide6.QtWidgets import (
 )
 
 from fsi_lab.errors import FsiLabError
-from fsi_lab.gui.analysis.datasets import (
-    finite_pairs,
-    per_component,
-    summary_series,
-    value_columns,
-)
+from fsi_lab.gui.analysis.datasets import finite_pairs, per_component, summary_series, value_columns
 from fsi_lab.gui.analysis.plotting import COLOURS, robust_range
 from fsi_lab.gui.export import export_figure, write_csv
 from fsi_lab.gui.figure import Figure, FlowLayout, Legend, scrolled
@@ -296,7 +291,7 @@ class RunsBrowser(QWidget):
             return channel
         return channels[0] if channels else None
 
-    def showEvent(self, event) -> None:  # noqa: N802 - Qt override
+    def showEvent(self, event) -> None:
         super().showEvent(event)
         if self._stale:
             self.compare(force=True)

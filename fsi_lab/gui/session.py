@@ -18,12 +18,12 @@ import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
 
 from fsi_lab.errors import FsiLabError
+from fsi_lab.gui.decimate import min_max_decimate
+from fsi_lab.gui.worker import TaskPool
 from fsi_lab.preflight import check_safety
 from fsi_lab.profile import Profile, parse_profile
 from fsi_lab.registry import Registry
 from fsi_lab.safety import SafetyReport
-from fsi_lab.gui.decimate import min_max_decimate
-from fsi_lab.gui.worker import TaskPool
 
 PREVIEW_POINTS = 4000
 

@@ -104,7 +104,7 @@ class InstrumentContract:
         for step in (opened.safe_state, opened.close, *reversed(context.cleanup)):
             try:
                 step()
-            except Exception:  # noqa: BLE001, S110 - reported by the test of that step
+            except Exception:  # noqa: BLE001 - reported by the test of that step
                 pass
 
     # ------------------------------------------------------------------ the contract

@@ -4,9 +4,9 @@ When a profile says ``[bench] embedded = true``, drivers whose address is ``"emb
 empty) call :func:`resolve_address`. The first one starts the bench from the run's shared
 context (physics from ``specimen``, ``model`` and ``shaker``; ``fast``, ``fault``,
 ``fault_after_s`` and ``fault_target`` from ``bench``; its integrator loaded at start only when
-the ``purpose`` is a run), stores it there and registers its ``stop`` in the context's ``cleanup`` list, which the
-runner calls once every instrument is safe and closed. The drivers then connect to it through
-their real protocol.
+the ``purpose`` is a run), stores it there and registers its ``stop`` in the context's
+``cleanup`` list, which the runner calls once every instrument is safe and closed. The drivers
+then connect to it through their real protocol.
 """
 
 from __future__ import annotations

@@ -16,10 +16,10 @@ from types import ModuleType
 
 import numpy as np
 import pytest
-
 from test_analysis_plugins import load_registry, run, two_mode_velocity
 from test_modal_model import SPECIMEN, bench_record
 from test_modal_model import registry as registry_with_modal_model
+
 from fsi_lab import hookspecs
 from fsi_lab.chain import check_chain, default_chain, run_chain
 from fsi_lab.contract import (
@@ -33,7 +33,8 @@ from fsi_lab.contract import (
 from fsi_lab.errors import ParameterError, ProfileError
 from fsi_lab.params import validate
 from fsi_lab.plugins.analysis.results import Components, DampingCurves
-from fsi_lab.registry import Registry, add_plugin, load_registry as load_installed
+from fsi_lab.registry import Registry, add_plugin
+from fsi_lab.registry import load_registry as load_installed
 
 #: The chain the built-ins put in the default chain, in an order check_chain accepts.
 DEFAULT_CHAIN = ("spectrum", "hvd", "integrate", "instantaneous", "backbone", "damping",
@@ -272,8 +273,8 @@ def test_modal_model_reads_the_decomposition_s_coordinate_not_a_sentence():
 
 
 def test_a_plugin_can_be_called_directly_with_typed_results():
-    from fsi_lab.plugins.analysis.integrate import PLUGIN as INTEGRATE
     from fsi_lab.plugins.analysis.hvd import PLUGIN as HVD
+    from fsi_lab.plugins.analysis.integrate import PLUGIN as INTEGRATE
 
     q, ch = two_mode_velocity()
     context = AnalysisContext(channel=ch, channels={"tip": ch}, results={})

@@ -7,18 +7,29 @@ import math
 
 import numpy as np
 import pytest
+from _analysis_sims import (
+    decaying_tone,
+    envelope_law,
+    noisy,
+    quadratic_damping_decay,
+    quadratic_record,
+    time_axis,
+)
 
-from _analysis_sims import (decaying_tone, envelope_law, noisy, quadratic_damping_decay,
-                            quadratic_record, time_axis)
-from fsi_lab.errors import AnalysisError
 from fsi_lab.dsp.damping import (
-    MIN_FIT_PEAKS, damping, damping_decrement, damping_eq5, damping_eq7, damping_envelope_fit,
+    MIN_FIT_PEAKS,
+    damping,
+    damping_decrement,
+    damping_envelope_fit,
+    damping_eq5,
+    damping_eq7,
     damping_from_peaks,
 )
 from fsi_lab.dsp.equivalent_damping import equivalent_damping, equivalent_damping_from_envelope
 from fsi_lab.dsp.hvd import hvd
 from fsi_lab.dsp.instantaneous import instantaneous
 from fsi_lab.dsp.integrate import integrate
+from fsi_lab.errors import AnalysisError
 
 
 @pytest.mark.parametrize("method", ["decrement", "envelope-fit", "eq5", "eq7"])

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from _analysis_sims import decaying_tone, middle, noisy, rel_rms, time_axis
-from fsi_lab.errors import AnalysisError
+
 from fsi_lab.dsp.hvd import hvd
+from fsi_lab.errors import AnalysisError
 
 
 def two_tones(fs=2000.0, duration=10.0, f1=8.0, f2=27.0, a2=0.3, z1=0.01, z2=0.005):

@@ -6,13 +6,20 @@ import math
 
 import numpy as np
 import pytest
+from _analysis_sims import (
+    decaying_tone,
+    duffing_exact_backbone,
+    duffing_hb_backbone,
+    duffing_record,
+    middle,
+    noisy,
+    time_axis,
+)
 
-from _analysis_sims import (decaying_tone, duffing_exact_backbone, duffing_hb_backbone,
-                            duffing_record, middle, noisy, time_axis)
-from fsi_lab.errors import AnalysisError
 from fsi_lab.dsp.backbone import backbone
 from fsi_lab.dsp.hvd import hvd
 from fsi_lab.dsp.instantaneous import instantaneous
+from fsi_lab.errors import AnalysisError
 
 
 @pytest.mark.parametrize("fs", [80.0, 200.0, 2000.0])     # 8, 20 and 200 samples per cycle

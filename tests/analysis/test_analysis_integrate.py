@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from _analysis_sims import linear_decay, noisy, time_axis
-from fsi_lab.errors import AnalysisError
+
 from fsi_lab.dsp.integrate import integrate
+from fsi_lab.errors import AnalysisError
 
 FS = 5000.0
 T = time_axis(8.0, FS)

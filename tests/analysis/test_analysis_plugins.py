@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pluggy
 import pytest
+from _analysis_sims import linear_decay, noisy, quadratic_record
 
-from _analysis_sims import decaying_tone, linear_decay, noisy, quadratic_record, time_axis
 from fsi_lab import hookspecs
 from fsi_lab.chain import run_chain
 from fsi_lab.contract import AnalysisContext, ChannelData, check_descriptor

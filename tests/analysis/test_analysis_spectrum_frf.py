@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 import scipy.signal as ssig
-
 from _analysis_sims import decaying_tone, time_axis
-from fsi_lab.errors import AnalysisError
+
 from fsi_lab.dsp.frf import frf
 from fsi_lab.dsp.spectrum import amplitude_spectrum, spectral_peaks
+from fsi_lab.errors import AnalysisError
 
 
 def test_amplitude_spectrum_of_tones():

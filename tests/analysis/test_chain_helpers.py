@@ -9,9 +9,9 @@ import traceback
 import numpy as np
 import pytest
 import scipy.fft
-
 from _analysis_sims import decaying_tone, linear_decay, noisy, time_axis
 from test_analysis_plugins import DEFAULT_CHAIN, run
+
 from fsi_lab.contract import AnalysisContext, ChannelData, SharedRecord, record_spectrum
 from fsi_lab.dsp.damping import damping_from_peaks
 from fsi_lab.dsp.decays import decay_runs, smooth_per_decay

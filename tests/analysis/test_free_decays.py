@@ -12,19 +12,26 @@ import math
 
 import numpy as np
 import pytest
-
-from _analysis_sims import (decaying_tone, duffing_hb_backbone, duffing_record,
-                            impulse_train_response, modal_chirp_response, noisy,
-                            quadratic_record, time_axis)
+from _analysis_sims import (
+    decaying_tone,
+    duffing_hb_backbone,
+    duffing_record,
+    impulse_train_response,
+    modal_chirp_response,
+    noisy,
+    quadratic_record,
+    time_axis,
+)
 from test_analysis_plugins import run
+
 from fsi_lab.contract import ChannelData
-from fsi_lab.errors import AnalysisError
-from fsi_lab.plugins.analysis._chain import Component, decay_labels
 from fsi_lab.dsp.decays import block_maxima, decay_segments, first_decay_peak, split_decays
 from fsi_lab.dsp.hvd import hvd
 from fsi_lab.dsp.instantaneous import instantaneous
 from fsi_lab.dsp.integrate import lowest_mode
 from fsi_lab.dsp.spectrum import free_decay_peaks, spectral_peaks
+from fsi_lab.errors import AnalysisError
+from fsi_lab.plugins.analysis._chain import Component, decay_labels
 from fsi_lab.plugins.excitation.impulse_train import impulse_amplitudes, impulse_train
 
 COUNT, SPACING, WIDTH, DELAY = 4, 8.0, 0.02, 0.5

@@ -17,15 +17,15 @@ import re
 
 import numpy as np
 import pytest
-
 from _analysis_sims import duffing_decay, impulse_train_response, noisy, time_axis
 from test_analysis_plugins import load_registry, run
 from test_free_decays import COUNT, SPACING, WIDTH, check_split, forces, quadratic_train
+
 from fsi_lab.contract import ChannelData
-from fsi_lab.errors import AnalysisError, ParameterError
-from fsi_lab.params import validate
 from fsi_lab.dsp._signal import bandpass, bandpass_smear
 from fsi_lab.dsp.hvd import hvd
+from fsi_lab.errors import AnalysisError, ParameterError
+from fsi_lab.params import validate
 
 UPPER_HZ, UPPER_ZETA, UPPER_GAIN = 14.0, 0.01, 10.0
 CHAIN = ("hvd", "integrate", "backbone", "damping", "equivalent-damping")

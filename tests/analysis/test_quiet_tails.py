@@ -133,12 +133,13 @@ def test_rounding_junk_below_the_floor_starts_no_decay():
 def long_tailed_run(tmp_path_factory):
     """The wet profile's simulated record, 60 s at 2 kHz: its decay is at rounding level after
     about 15 s (a noise-free simulation), the rest is a quiet tail."""
+    from support import PROFILES
+
     from fsi_lab.preflight import prepare_excitation
     from fsi_lab.profile import load_profile
     from fsi_lab.registry import load_registry
     from fsi_lab.runfile import read_run
     from fsi_lab.simulation import simulate_run
-    from support import PROFILES
 
     registry = load_registry()
     profile = load_profile(PROFILES / "wet-beam-sim.toml", registry)

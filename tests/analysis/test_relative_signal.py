@@ -10,8 +10,8 @@ def test_base_motion_is_aligned_on_t0():
     fs, delay = 10000.0, 1.1e-3
     t = np.arange(40000) / fs
     f_base, f_beam = 30.0, 17.0
-    base_velocity = lambda time: 0.02 * np.sin(2 * np.pi * f_base * time)  # noqa: E731
-    base_acc = lambda time: 0.02 * 2 * np.pi * f_base * np.cos(2 * np.pi * f_base * time)  # noqa: E731
+    base_velocity = lambda time: 0.02 * np.sin(2 * np.pi * f_base * time)
+    base_acc = lambda time: 0.02 * 2 * np.pi * f_base * np.cos(2 * np.pi * f_base * time)
     relative = 0.05 * np.sin(2 * np.pi * f_beam * t)
     # the vibrometer channel starts `delay` earlier than the accelerometer channel
     tip_time = t - delay

@@ -16,7 +16,6 @@ from typing import Any, Iterable
 
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
-
 from support import run_main
 
 #: The settings of every fuzzing test: reproducible, no time limit per case, no database.

@@ -10,7 +10,6 @@ import pytest
 from fuzzkit import FUZZ, check_command, scalars, tally, texts, toml_dumps, toml_values
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from support import SIM_PROFILE
 
 import fsi_lab.plan

@@ -8,7 +8,6 @@ import tomllib
 from fuzzkit import FUZZ, check_command, scalars, tally, texts, toml_dumps, toml_values
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from support import PROFILES, SIM_PROFILE
 
 BASES = {path.name: path.read_text() for path in sorted(PROFILES.glob("*.toml"))}

@@ -11,7 +11,6 @@ import pytest
 from fuzzkit import EDGE_FLOATS, EDGE_INTS, FUZZ, check_command, tally, texts
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from support import SIM_PROFILE, run_main
 
 EDIT_CASES = 200

@@ -8,12 +8,16 @@ import tomllib
 from fuzzkit import FUZZ, check_command, number_texts, tally, texts
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from support import PROFILES
 
 from fsi_lab.modelling import MODEL_PARAMS
 from fsi_lab.profile import (
-    ANALYSIS_PARAMS, BENCH_PARAMS, CHANNEL_PARAMS, RUN_PARAMS, SAFETY_PARAMS, SHAKER_PARAMS,
+    ANALYSIS_PARAMS,
+    BENCH_PARAMS,
+    CHANNEL_PARAMS,
+    RUN_PARAMS,
+    SAFETY_PARAMS,
+    SHAKER_PARAMS,
 )
 from fsi_lab.registry import load_registry
 from fsi_lab.specimen import SPECIMEN_PARAMS

@@ -2,14 +2,19 @@
 
 import numpy as np
 from conftest import (
-    LOAD_TIMEOUT_MS, RUN_TIMEOUT_MS, UI_TIMEOUT_MS, write_corrupt, write_foreign, write_run,
+    LOAD_TIMEOUT_MS,
+    RUN_TIMEOUT_MS,
+    UI_TIMEOUT_MS,
+    write_corrupt,
+    write_foreign,
+    write_run,
 )
 
+from fsi_lab.gui.results import load_results
 from fsi_lab.plugins.analysis.views.amplitude_views import BackboneView, DampingView
 from fsi_lab.plugins.analysis.views.equivalent_damping_view import EquivalentDampingView
 from fsi_lab.plugins.analysis.views.spectrum_view import SpectrumView
 from fsi_lab.plugins.analysis.views.time_views import FrequencyView, HVDView
-from fsi_lab.gui.results import load_results
 
 
 def _open(qtbot, window, path):
@@ -157,8 +162,8 @@ def test_views_draw_the_plugin_layout_directly(qtbot, tmp_path):
 
 def test_a_run_is_drawn_over_turns_of_the_event_loop(qtbot, make_window, registry, tmp_path,
                                                      monkeypatch):
-    from fsi_lab.plugins.analysis.views.overview import OverviewView
     from fsi_lab.gui.analysis.plotting import MIN_DRAW_POINTS
+    from fsi_lab.plugins.analysis.views.overview import OverviewView
 
     def measured_size(views):
         return views.results.result("tip_velocity", "hvd").datasets["components"].shape[1]

@@ -29,8 +29,8 @@ def test_missing_x11_libraries_are_named_with_their_packages():
 
 
 def test_nothing_to_say_when_qt_can_open_a_window_or_was_told_where():
-    everything = lambda name: True  # noqa: E731
-    nothing = lambda name: False  # noqa: E731
+    everything = lambda name: True
+    nothing = lambda name: False
     assert window_problem({"DISPLAY": ":0"}, "linux", everything) is None
     assert window_problem({"QT_QPA_PLATFORM": "offscreen"}, "linux", nothing) is None
     assert window_problem({"WAYLAND_DISPLAY": "wayland-0"}, "linux", nothing) is None

@@ -4,7 +4,12 @@ readable: no plot area collapses, whatever the window holds."""
 import numpy as np
 import pytest
 from conftest import (
-    CHECK_TIMEOUT_MS, LOAD_TIMEOUT_MS, UI_TIMEOUT_MS, assert_readable, wait_checked, write_run,
+    CHECK_TIMEOUT_MS,
+    LOAD_TIMEOUT_MS,
+    UI_TIMEOUT_MS,
+    assert_readable,
+    wait_checked,
+    write_run,
 )
 
 from fsi_lab.events import DataBlock

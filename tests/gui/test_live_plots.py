@@ -3,8 +3,8 @@
 import numpy as np
 
 from fsi_lab.events import DataBlock
-from fsi_lab.gui.live_plots import LivePlots, RingBuffer
 from fsi_lab.gui.decimate import min_max_decimate
+from fsi_lab.gui.live_plots import LivePlots, RingBuffer
 
 
 def test_ring_buffer_keeps_the_latest_samples_in_order():

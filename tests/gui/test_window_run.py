@@ -4,13 +4,18 @@ import h5py
 import numpy as np
 import pytest
 from conftest import (
-    RUN_TIMEOUT_MS, UI_TIMEOUT_MS, assert_readable, wait_checked, wait_finished,
+    RUN_TIMEOUT_MS,
+    UI_TIMEOUT_MS,
+    assert_readable,
+    wait_checked,
+    wait_finished,
     wet_inprocess_profile,
 )
 from PySide6.QtCore import Qt
 
 from fsi_lab.chain import default_chain
 from fsi_lab.runfile import read_run
+
 
 def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_path):
     path = wet_inprocess_profile(tmp_path)
@@ -50,7 +55,7 @@ def test_start_run_live_plots_then_analysis(qtbot, make_window, registry, tmp_pa
         qtbot.waitUntil(lambda: window.analysis.results is not None
                         and window.analysis.results.path == outcome.path.resolve()
                         and bool(window.analysis.results.analysis), timeout=RUN_TIMEOUT_MS)
-    except Exception:
+    except Exception:  # noqa: BLE001 - pytest-qt's timeout, said with the window's state
         raise AssertionError(f"no analysis shown: state {window.run_control.state_label.text()!r}, "
                              f"job {window.analysis.job}, messages {window.messages.messages}, "
                              f"results {window.analysis.results and window.analysis.results.path}")

@@ -24,8 +24,8 @@ from fsi_lab.plugins.excitation import impulse_train, random_noise
 from fsi_lab.profile import load_profile
 from fsi_lab.registry import load_registry
 from fsi_lab.runner import Runner
-from fsi_lab.testing.peers import PtyPeer, Script, ScriptedPeer  # noqa: F401 - re-exported
-from fsi_lab.testing.plugin import pty_peer, tcp_peer  # noqa: F401 - re-exported fixtures
+from fsi_lab.testing.peers import PtyPeer, Script, ScriptedPeer
+from fsi_lab.testing.plugin import pty_peer, tcp_peer
 
 LAB_MODULES = (keysight33500, shaker_amplifier, polytec, scpi_daq)
 EXCITATION_MODULES = (impulse_train, random_noise)

@@ -6,7 +6,7 @@ e-stop that was pressed and released; the real driver opens it over loopback TCP
 """
 
 import pytest
-from benchkit import settings, sim_bench  # noqa: F401
+from benchkit import settings, sim_bench
 
 from fsi_lab.instruments import shaker_amplifier
 

@@ -3,7 +3,7 @@ simulated bench: every path it measures streams every sample of 4 inputs at 204.
 
 import os
 
-from benchkit import sim_bench  # noqa: F401
+from benchkit import sim_bench
 
 from bench import bench_stream
 from fsi_lab.instruments.sim.cli import profile_snippet

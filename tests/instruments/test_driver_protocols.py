@@ -9,7 +9,7 @@ import struct
 
 import numpy as np
 import pytest
-from benchkit import ScriptedPeer, pty_peer, settings, tcp_peer  # noqa: F401
+from benchkit import ScriptedPeer, pty_peer, settings, tcp_peer
 
 from fsi_lab.errors import InstrumentError
 from fsi_lab.instruments import keysight33500, polytec, scpi_daq, shaker_amplifier
@@ -431,7 +431,8 @@ def test_daq_names_a_block_cut_short(tcp_peer):
     try:
         daq.configure({"drive": 1, "vel": 3}, 1000.0, 0.004)
         daq.arm()
-        with pytest.raises(InstrumentError, match=r"^scpi-daq at TCPIP0::127\.0\.0\.1::\d+::SOCKET: "
+        with pytest.raises(InstrumentError,
+                           match=r"^scpi-daq at TCPIP0::127\.0\.0\.1::\d+::SOCKET: "
                                                   r"no reply within 0\.3 s \(after sending "
                                                   r"'FETC\? 2'\)$"):
             daq.read_block(2.0)

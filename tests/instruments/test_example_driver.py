@@ -4,7 +4,7 @@ as fsi-lab opens it, checked before anything is sent, made safe and read back; t
 run on the embedded bench, installed through its entry point like any third-party plugin."""
 
 import pytest
-from benchkit import bench_profile, lab_registry, run_profile, settings, sim_bench  # noqa: F401
+from benchkit import bench_profile, lab_registry, run_profile, settings, sim_bench
 
 from fsi_lab.contract import BenchContext, OutputState
 from fsi_lab.errors import InstrumentError
@@ -20,7 +20,7 @@ def example(with_example_plugin):
 
 
 @pytest.fixture
-def address(sim_bench):  # noqa: F811 - benchkit's fixture
+def address(sim_bench):
     """The VISA address of a simulated amplifier (stopped at the end of the test)."""
     return sim_bench().addresses["amplifier"]
 

@@ -2,7 +2,7 @@
 (through pyvisa-py with a scripted peer on 127.0.0.1)."""
 
 import pytest
-from benchkit import tcp_peer  # noqa: F401
+from benchkit import tcp_peer
 
 from fsi_lab.contract import OutputState
 from fsi_lab.errors import InstrumentError
@@ -66,7 +66,7 @@ def test_a_setting_is_the_profile_parameter_that_gives_it():
     assert Generator.shape.param("sine", name="waveform").choices == ("sine", "dc")
 
 
-def test_the_output_template_exchanges_these_bytes(tcp_peer):  # noqa: F811
+def test_the_output_template_exchanges_these_bytes(tcp_peer):
     script = [(b"OUTP2?\n", b"1\n"), (b"OUTP2 OFF\n", None), (b"*IDN?\n", IDN), (b"*CLS\n", None),
               (b"OUTP2 OFF\n", None), NO_ERROR,
               (b"SOUR2:VOLT:OFFS 1.5\n", None), NO_ERROR,
@@ -99,7 +99,7 @@ def test_the_output_template_exchanges_these_bytes(tcp_peer):  # noqa: F811
     peer.expect_all()
 
 
-def test_an_identity_that_is_not_one_names_what_was_sent_first(tcp_peer):  # noqa: F811
+def test_an_identity_that_is_not_one_names_what_was_sent_first(tcp_peer):
     peer = tcp_peer([(b"OUTP1?\n", b"0\n"), (b"OUTP1 OFF\n", None), (b"*IDN?\n", b"PA-1\n")])
     link = connect("acme-gen", "source", peer.address, {"timeout_s": 2.0}, {})
     try:

@@ -4,7 +4,7 @@ commands with their status model, on every simulated SCPI instrument, through py
 
 import numpy as np
 import pytest
-from benchkit import sim_bench  # noqa: F401
+from benchkit import sim_bench
 
 from fsi_lab.instruments.sim import scpi
 from fsi_lab.instruments.sim.scpi import MAX_ERROR_TEXT, ErrorQueue, Framer

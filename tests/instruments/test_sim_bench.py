@@ -6,8 +6,14 @@ import time
 
 import numpy as np
 import pytest
-from benchkit import (ACCELEROMETER, bench_profile, bench_threads, lab_registry, run_profile,
-                      settings, sim_bench)  # noqa: F401
+from benchkit import (
+    ACCELEROMETER,
+    bench_profile,
+    bench_threads,
+    lab_registry,
+    run_profile,
+    settings,
+    )
 from scipy import signal
 
 from fsi_lab.errors import InstrumentError

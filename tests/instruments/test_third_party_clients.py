@@ -5,7 +5,7 @@ arb is uploaded, and the instrument's error queue must stay empty."""
 
 import numpy as np
 import pytest
-from benchkit import sim_bench  # noqa: F401
+from benchkit import sim_bench
 
 pymeasure = pytest.importorskip("pymeasure", reason="the dev extra installs pymeasure")
 qcodes = pytest.importorskip("qcodes", reason="the dev extra installs qcodes")

@@ -16,13 +16,12 @@ import signal
 import time
 
 import pytest
-from benchkit import bench_profile, settings, sim_bench  # noqa: F401
+from benchkit import bench_profile, settings, sim_bench
 from support import PROFILES, LineReader, run_main, start_cli
+from test_bench_command import start_bench, stop
 
 from fsi_lab.instruments import shaker_amplifier
 from fsi_lab.instruments.sim.amplifier import INTERLOCK_BITS
-
-from test_bench_command import start_bench, stop
 
 TRIALS = int(os.environ.get("FSI_LAB_KILL_TRIALS", "3"))
 #: The watchdog time the driver arms by default, s; the output must be off within 2 s.

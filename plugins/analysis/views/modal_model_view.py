@@ -8,13 +8,7 @@ import numpy as np
 from PySide6.QtCore import Qt
 
 from fsi_lab.gui.analysis.datasets import channel_t0, finite_pairs, per_component
-from fsi_lab.gui.analysis.plotting import (
-    COLOURS,
-    active_span,
-    draw_line,
-    draw_points,
-    robust_range,
-)
+from fsi_lab.gui.analysis.plotting import COLOURS, active_span, draw_line, draw_points, robust_range
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults
 

@@ -8,12 +8,7 @@ import numpy as np
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QWidget
 
-from fsi_lab.gui.analysis.datasets import (
-    channel_t0,
-    finite_pairs,
-    per_component,
-    time_axis,
-)
+from fsi_lab.gui.analysis.datasets import channel_t0, finite_pairs, per_component, time_axis
 from fsi_lab.gui.analysis.plotting import (
     COLOURS,
     MAX_COMPONENTS_DRAWN,
