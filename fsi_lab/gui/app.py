@@ -120,7 +120,7 @@ class MainWindow(QMainWindow):
         self.live = LivePlots()
         self.analysis = AnalysisViews(self.registry, self.pool)
         self.runs = RunsBrowser(self.registry, self.pool)
-        self.sequence = SequenceTab()
+        self.sequence = SequenceTab(self.registry)
         self._build_layout()
         self._build_menu()
         self._connect()

@@ -37,7 +37,7 @@ README = '''\
 
 $summary
 
-A $kind plugin for [fsi-lab](https://github.com/), written from `fsi-lab plugin new $kind $name`.
+$article $kind plugin for fsi-lab, written from `fsi-lab plugin new $kind $name`.
 
 ## Install
 
@@ -448,7 +448,7 @@ def files(kind: str, name: str) -> dict[str, str]:
     spec = KINDS[kind]
     values = {"name": name, "under": under, "package": package, "kind": kind,
               "cls": "".join(part.title() for part in name.split("-")) + "Amplifier",
-              "summary": spec["summary"]}
+              "summary": spec["summary"], "article": "An" if kind[0] in "aeiou" else "A"}
 
     def fill(text: str) -> str:
         return Template(text).substitute(values)
