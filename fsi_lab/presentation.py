@@ -40,6 +40,14 @@ class SummaryText:
             raise TypeError("SummaryText: keys and lines are tuples of strings, not a string")
         object.__setattr__(self, "keys", tuple(self.keys))
         object.__setattr__(self, "lines", tuple(self.lines))
+        if not isinstance(self.inline, str):
+            raise TypeError(f"SummaryText: inline is a string; got "
+                            f"{type(self.inline).__name__}")
+        for what in ("keys", "lines"):
+            wrong = [item for item in getattr(self, what) if not isinstance(item, str)]
+            if wrong:
+                raise TypeError(f"SummaryText: {what} are strings; got {wrong[0]!r} "
+                                f"({type(wrong[0]).__name__})")
 
 
 @dataclass(frozen=True)

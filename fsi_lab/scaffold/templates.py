@@ -41,9 +41,10 @@ $article $kind plugin for fsi-lab, written from `fsi-lab plugin new $kind $name`
 
 ## Install
 
-    pip install -e .
+    pip install -e '.[test]'
 
-`fsi-lab plugins` then lists `$name` as `loaded` (or says why it is not).
+into the environment where fsi-lab is installed (`test` brings pytest). `fsi-lab plugins` then
+lists `$name` as `loaded` (or says why it is not).
 
 ## Test
 
@@ -69,8 +70,8 @@ Name it in a profile's chain (`[analysis] chain = ["$name"]`, its parameters in
     fsi-lab analyze RUN.h5 --set analysis.chain=$name --set analysis.$name.window=0.2
 
 Its values are in the JSON summary (`fsi-lab analyze RUN.h5 --json`: `channels.<channel>.$under`)
-and in the text summary; `fsi-lab gui RUN.h5` draws its datasets (`rms` against `time`, with
-their units) in a tab of its own.'''
+and in the text summary; `fsi-lab gui RUN.h5 --view $name` draws its datasets (`rms` against
+`time`, with their units) in a tab of its own.'''
 
 ANALYSIS_CHANGE = '''\
 - `$package/plugin.py` declares the analysis: its name, its parameters (each with its unit,
