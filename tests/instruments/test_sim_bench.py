@@ -6,14 +6,15 @@ import time
 
 import numpy as np
 import pytest
-from benchkit import (
+from benchkit import (  # sim_bench: benchkit's fixture, named by the tests below
     ACCELEROMETER,
     bench_profile,
     bench_threads,
     lab_registry,
     run_profile,
     settings,
-    )
+    sim_bench,
+)
 from scipy import signal
 
 from fsi_lab.errors import InstrumentError
