@@ -118,6 +118,7 @@ def _loaded_plugins():
 
 def _registry():
     registry = _loaded_plugins()
+    registry.check_hooks()  # a failing default-chain or views hook is named with the others
     for record in registry.records:
         if record.status in ("failed", "invalid"):
             print(f"[warning] plugin {record.name} ({record.distribution}) skipped: "
@@ -991,6 +992,9 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     p.add_argument("--size", type=_window_size, metavar="WxH",
                    help="window size in pixels (default: what fits the screen, up to "
                         "1680x1050; 1366x768 for --screenshot)")
+    p.add_argument("--view", metavar="NAME",
+                   help="open the Analysis panel on the view titled NAME, or on the view "
+                        "drawing the analysis NAME (its generic view if it has none)")
     p.set_defaults(func=cmd_gui)
 
     p = sub.add_parser("profile", help="profile tools")
