@@ -461,7 +461,7 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                                     fmin=2.0 / shortest, _func="identify")
     high = peaks.amplitudes >= MODE_THRESHOLD * float(np.max(peaks.amplitudes, initial=0.0))
     f, a = peaks.frequencies[high], peaks.amplitudes[high]
-    level = float(np.median(amp[_away_from(freqs, f)]))
+    level = _spectrum_level(freqs, amp, f, a)
     keep = np.ones(f.size, dtype=bool)
     for i, fi in enumerate(f):
         col = _col(fi, float(a[i]), f[:i][keep[:i]], freqs, amp)
@@ -518,6 +518,26 @@ def _decay_spectrum(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f
         freqs, amp = amplitude_spectrum(x[a:c], fs, window="decay", nfft=nfft, _func="identify")
         power = power + amp * amp
     return freqs, np.sqrt(power / len(segments))
+
+
+def _spectrum_level(freqs: np.ndarray, amp: np.ndarray, peaks: np.ndarray,
+                    heights: np.ndarray) -> float:
+    """The noise level of a spectrum ``amp`` (the median of its bins away from its peaks, see
+    :func:`_away_from`), kept out of the octaves around only those of the ``peaks`` (Hz, by
+    decreasing ``heights``) that stand :data:`NOISE_MARGIN` times above that level: a long
+    record's noise shows peaks of its own above 1 % of a mode's, and an octave kept out around
+    each of them leaves no noise to measure (only the lowest bins, which hold the release's
+    step in displacement). Starts from the largest peak alone and repeats until the peaks kept
+    out settle."""
+    strong = peaks[:1]
+    level = float(np.median(amp[_away_from(freqs, strong)]))
+    for _ in range(4):
+        now = peaks[heights >= NOISE_MARGIN * level]
+        if now.size == 0 or np.array_equal(now, strong):
+            break
+        strong = now
+        level = float(np.median(amp[_away_from(freqs, strong)]))
+    return level
 
 
 def _away_from(freqs: np.ndarray, peaks: np.ndarray) -> np.ndarray:

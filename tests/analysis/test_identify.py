@@ -188,6 +188,21 @@ def test_a_single_mode_record_gives_one_component(seed):
     assert found.modes[0].frequency_hz == pytest.approx(WET_F, rel=0.01)
 
 
+@pytest.mark.parametrize("seed", (1, 4, 10))
+def test_a_clean_long_decay_at_a_low_rate_is_never_refused(seed):
+    """0.1 % noise, 500 Hz, 6 s from 2 mm: the decay falls into the noise within a second, and
+    the rest of the record's spectrum holds a few noise peaks above 1 % of the mode's. Those
+    seeds were refused ("no usable spectral peak"): every such peak was kept out of the noise
+    level with an octave around it, which left only the lowest bins (the release's step in
+    displacement) to measure the noise on, ten times too high."""
+    case = release(noise=0.001, fs=500.0, duration=6.0, x0=2e-3)
+    est = fsi_lab_estimate(case, trial(case, seed))
+    assert not est.refused
+    assert est.c_i == pytest.approx(WET_C_I, rel=0.02)
+    assert est.c_f == pytest.approx(WET_C_F, rel=0.05)
+    assert est.frequency == pytest.approx(WET_F, rel=1e-3)
+
+
 def test_two_modes_an_octave_apart_are_found_kept_apart_and_identified():
     case = Case("two", (Mode(WET_F, c_f=WET_C_F, x0=1e-3), Mode(2.0 * WET_F, c_i=1.0, x0=3e-4)),
                 duration=4.0, noise=0.002)
