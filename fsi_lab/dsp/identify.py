@@ -447,10 +447,13 @@ def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
 
 def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                 components: Any, band: tuple[float, float] | None, f_dom: float
-                ) -> tuple[np.ndarray, np.ndarray, list[str]]:
+                ) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
     """Candidate mode frequencies (Hz) and spectral amplitudes from the windows' averaged
-    spectrum, and notes on the peaks left out."""
+    spectrum, notes on the peaks left out, and the frequencies (Hz) of those left out that
+    still stand out of the spectrum as modes do (undersampled, or too slow for the windows):
+    they keep bands of their own (guards), so no mode's band passes them."""
     notes = []
+    guards = []
     segs = [(a, c) for a, _, c in windows]
     freqs, amp = _decay_spectrum(x, fs, segs, f_dom)
     shortest = min(c - a for a, c in segs) / fs
@@ -477,11 +480,13 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
             continue
         if fs / fi < MIN_SAMPLES_PER_CYCLE:
             keep[i] = False
+            guards.append(fi)
             notes.append(f"the spectral peak at {fi:.4g} Hz is undersampled ({fs / fi:.1f} "
                          f"samples per cycle at {fs:g} Hz; at least {MIN_SAMPLES_PER_CYCLE:g} "
                          "needed): left out")
         elif fi * longest < MIN_CYCLES:
             keep[i] = False
+            guards.append(fi)
             notes.append(f"the spectral peak at {fi:.4g} Hz completes fewer than {MIN_CYCLES} "
                          f"cycles in the longest free decay ({longest:.3g} s): left out"
                          + (f" ({_spacing_advice(fi)})" if len(segs) > 1 else ""))
@@ -500,7 +505,7 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                                f"free decays show {inside} usable spectral peak(s)"
                                + (f" ({', '.join(f'{v:.4g}' for v in f)} Hz)" if f.size
                                   else "") + "; ask for fewer or use components = 'auto'")
-    return f, a, notes
+    return f, a, notes, np.array(guards, dtype=np.float64)
 
 
 def _decay_spectrum(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f_dom: float
@@ -822,11 +827,15 @@ def _data_stiffening(p_data: np.ndarray, x_amp: np.ndarray, weight: np.ndarray
     """Relative change of the measured frequency from zero to the largest amplitude, from a
     weighted straight line of frequency^2 against amplitude^2, and its standard error."""
     w2 = (math.pi / p_data) ** 2
-    design = np.stack((np.ones_like(x_amp), x_amp ** 2), axis=1) * weight[:, None]
+    # On the amplitude relative to the largest: in the record's own unit (1e-4 m, say) the
+    # amplitude^2 column is 1e-8 of the other, and the covariance's pseudo-inverse drops it
+    # (a standard error of 1e-20: any stiffening looked resolved).
+    u = x_amp / max(float(np.max(x_amp)), 1e-300)
+    design = np.stack((np.ones_like(u), u ** 2), axis=1) * weight[:, None]
     coef, *_ = np.linalg.lstsq(design, w2 * weight, rcond=None)
     resid = w2 * weight - design @ coef
     cov = np.linalg.pinv(design.T @ design) * float(resid @ resid) / max(w2.size - 2, 1)
-    top = float(np.max(x_amp)) ** 2 / max(float(coef[0]), 1e-300)
+    top = 1.0 / max(float(coef[0]), 1e-300)
     return 0.5 * float(coef[1]) * top, 0.5 * math.sqrt(max(float(cov[1, 1]), 0.0)) * top
 
 
@@ -845,7 +854,11 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
     x_amp = amp / mode.w0 if quantity == "velocity" else amp
     weight = x_amp / np.max(x_amp)          # a crossing's time error ~ 1 / amplitude
     r = (p_data - p_model) * weight
-    jac = np.stack((-p_model / mode.w0, -0.375 * p_model * x_amp ** 2 / mode.w0 ** 2), axis=1)
+    # The stiffness column on the amplitude relative to the largest (``top``): in the record's
+    # unit it can be 1e-11 of the other, and the covariance's pseudo-inverse would drop it.
+    top = max(float(np.max(x_amp)), 1e-300) ** 2
+    jac = np.stack((-p_model / mode.w0, -0.375 * p_model * (x_amp ** 2 / top) / mode.w0 ** 2),
+                   axis=1)
     jac *= weight[:, None]
     n = r.size
     use_alpha = n >= 8 and np.ptp(x_amp) > 0
@@ -855,8 +868,8 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
     s2 = float(resid @ resid) / max(n - cols, 1)
     cov = np.linalg.pinv(jac[:, :cols].T @ jac[:, :cols]) * s2
     if use_alpha:
-        alpha_new = mode.alpha + float(step[1])
-        se_alpha = math.sqrt(max(cov[1, 1], 0.0))
+        alpha_new = mode.alpha + float(step[1]) / top
+        se_alpha = math.sqrt(max(cov[1, 1], 0.0)) / top
         # Kept only when clearly resolved and large enough to matter: the frequency it moves
         # at the largest amplitude (harmonic balance) at least STIFFNESS_SHIFT.
         shift = 0.375 * alpha_new * float(np.max(x_amp)) ** 2 / mode.w0 ** 2
@@ -1282,10 +1295,17 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     follow = "displacement" if quantity == "displacement" else "velocity"
     record = record - float(np.mean(record))
     # Dominant oscillation and the noise: the spectrum of the whole record.
+    # The dominant oscillation is one the sampling resolves: decays split on the half periods
+    # of a mode with 4 samples per cycle fall apart at every beat with the others.
     freqs, amp = averaged_spectrum(record, fs, [(0, record.size)])
-    top = find_peaks_interpolated(freqs, amp, min_relative=0.05, max_peaks=1,
-                                  smoothing=PEAK_SMOOTHING, fmin=2.0 * fs / record.size,
-                                  _func=func)
+    resolved = freqs <= fs / MIN_SAMPLES_PER_CYCLE
+    top = find_peaks_interpolated(freqs[resolved], amp[resolved], min_relative=0.05,
+                                  max_peaks=1, smoothing=PEAK_SMOOTHING,
+                                  fmin=2.0 * fs / record.size, _func=func)
+    if top.frequencies.size == 0:
+        top = find_peaks_interpolated(freqs, amp, min_relative=0.05, max_peaks=1,
+                                      smoothing=PEAK_SMOOTHING, fmin=2.0 * fs / record.size,
+                                      _func=func)
     if top.frequencies.size == 0:
         raise fail(func, "found no spectral peak: the record holds no oscillation above "
                          f"{2.0 * fs / record.size:.3g} Hz")
@@ -1296,8 +1316,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, "found no free decay of at least 32 samples")
     if reference is not None:
         windows = _unforced(windows, reference, fs, f_dom)
-    cand_f, cand_a, notes = _candidates(record, fs, windows, int(components)
-                                        if components != "auto" else "auto", band_t, f_dom)
+    cand_f, cand_a, notes, guards = _candidates(record, fs, windows, int(components)
+                                                if components != "auto" else "auto", band_t,
+                                                f_dom)
     if len(windows) == 1:
         _refuse_comb(cand_f, f_dom)
     if cand_f.size == 0:
@@ -1305,12 +1326,17 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, f"found no usable spectral peak{where}; "
                          + ("; ".join(notes) if notes else "the record holds no free decay"))
     sigma = _noise_rms(record, fs, cand_f)
-    order = np.argsort(cand_f)
-    bands = ModeBands.around(cand_f[order], fs)
+    # Peaks left out but standing out as modes do keep bands of their own (not analysed), so
+    # that no mode's band passes them (their crossings would pull its frequency away).
+    guards = guards[(guards < 0.9 * 0.5 * fs)
+                    & (np.min(np.abs(guards[:, None] / cand_f[None, :] - 1.0), axis=1) > 0.1)]
+    bands = ModeBands.around(np.concatenate((cand_f, guards)), fs)
     integrate = quantity == "acceleration"
     modes = []
     for k in range(bands.count):
         f_k = float(bands.centres[k])
+        if not np.any(cand_f == f_k):
+            continue
         noise_k = sigma * math.sqrt(bands.noise_fraction(k, fs, integrate))
         # An extremum of signal + band-limited noise is found where the noise's slope moves
         # it: on average noise^2 <w_n^2> / (2 A w^2) too large (<w_n^2>: the noise's mean
