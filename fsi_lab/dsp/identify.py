@@ -973,8 +973,10 @@ def _drift(mode: _Mode, decays: list[dict], follow: str) -> tuple[LawFit, dict[s
     for i, name in enumerate(full.names):
         allowed = max(float(unscaled_late[i, i] - unscaled_full[i, i]),
                       1e-3 * abs(float(unscaled_late[i, i])), 0.0)
-        spread = math.sqrt(max(s2, 0.0) * allowed + 1e-300)
-        z[name] = float(fit.params[i] - full.params[i]) / spread
+        spread = math.sqrt(max(s2, 0.0) * allowed)
+        # A fit that pins nothing (an undetermined or exact one) is no test of the start.
+        if math.isfinite(spread) and spread > 0.0:
+            z[name] = float(fit.params[i] - full.params[i]) / spread
     return full, z
 
 
@@ -1045,7 +1047,8 @@ def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
         allowed = np.maximum(np.diag(later.cov) - variance, 0.0)
         moved = (later.params - base.params) ** 2
         extra = np.maximum(extra, moved - START_Z ** 2 * allowed)
-    if not (np.all(np.isfinite(extra)) and np.all(variance > 0.0)):
+    if not (np.all(np.isfinite(extra)) and np.all(np.isfinite(variance))
+            and np.all(variance > 0.0)):
         return {}
     factor = np.sqrt((variance + extra) / variance)
     mode.fits["quadratic"] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
@@ -1075,7 +1078,8 @@ def _noise_spread(mode: _Mode) -> dict[str, float]:
         for r in range(count)])
     spread = np.var(moves, axis=0, ddof=1)
     variance = np.diag(base.cov)
-    if not (np.all(np.isfinite(spread)) and np.all(variance > 0.0)):
+    if not (np.all(np.isfinite(spread)) and np.all(np.isfinite(variance))
+            and np.all(variance > 0.0)):
         return {}
     factor = np.sqrt(np.maximum(spread / variance, 1.0))
     mode.fits["quadratic"] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))

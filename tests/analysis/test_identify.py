@@ -413,3 +413,19 @@ def test_random_excitation_through_the_whole_record_is_refused_and_its_end_is_wa
                      decay_starts=list(quiet_times(x[1], early.fs)))
     assert [start / early.fs > 1.0 for _, start, _ in found.free_windows] == [True]
     assert any(abs(m.frequency_hz / 17.1 - 1) < 0.02 for m in found.modes)
+
+
+def test_a_fit_driven_where_its_decay_explodes_gives_a_number_not_an_overflow():
+    """The wet bench's ramp derivative at 0.02 V s, seed 10, through the chain as ``fsi-lab
+    run`` runs it: a late fit of the start test (a negative quadratic damping that makes the
+    model's decay grow) had derivatives so large that its covariance underflowed to zero, the
+    start's drift came out at 1e150 standard errors, and squaring it crashed hvd with
+    "OverflowError: (34, 'Numerical result out of range')". Such a fit is now undetermined
+    (infinite variances): no test of the start, never a zero-width interval."""
+    from validation.bench import bench_cases, bench_estimate
+
+    case = next(c for c in bench_cases() if c.name == "wet bench, ramp derivative 0.02 V s")
+    est = bench_estimate(case, trial(case, 10))
+    assert not est.refused, est.refused
+    assert est.c_i == pytest.approx(WET_C_I, rel=0.1)
+    assert est.c_i_ci[0] < est.c_i_ci[1] and est.c_f_ci[0] < est.c_f_ci[1]
