@@ -1137,6 +1137,31 @@ def _relative_width(fit: LawFit, name: str) -> float:
     return 0.5 * (high - low) / value if value > 0.0 else math.inf
 
 
+def _off_peak(m: ModeIdentification) -> str:
+    """A sentence when the mode's frequency disagrees with the spectral peak it was found at,
+    else "". The damped frequencies of the identified oscillator over the record's amplitudes
+    (one value, or a range with a cubic stiffness) must reach the peak within the larger of
+    the frequency's 95 % half-interval, the peak's half-power half-width (decay rate / 2 pi)
+    and half the spectral resolution of the longest decay (1 / (2 T)): a frequency off by
+    more was pulled away by something else in the mode's band."""
+    ci = 0.5 * (m.frequency_ci[1] - m.frequency_ci[0])
+    a = max(m.laws.fits[m.laws.preferred].value("a"), 0.0)
+    span = max((float(d.times[-1] - d.times[0]) for d in m.decays), default=0.0)
+    tol = max(ci if math.isfinite(ci) else math.inf, a / (2.0 * math.pi),
+              0.5 / span if span > 0.0 else math.inf)
+    w0 = 2.0 * math.pi * m.frequency_hz
+    amp = m.backbone.amplitude[np.isfinite(m.backbone.amplitude)]
+    x2 = np.array([0.0, float(np.max(amp)) ** 2]) if amp.size and m.alpha else np.zeros(1)
+    damped = np.sqrt(np.maximum(w0 * w0 + 0.75 * m.alpha * x2 - a * a, 0.0)) / (2.0 * math.pi)
+    lo, hi = float(np.min(damped)) - tol, float(np.max(damped)) + tol
+    if lo <= m.spectral_peak_hz <= hi:
+        return ""
+    return (f"the damped natural frequency {m.damped_frequency_hz:.5g} Hz disagrees with the "
+            f"spectral peak the mode was found at ({m.spectral_peak_hz:.5g} Hz) by more than "
+            f"either's precision ({tol:.2g} Hz): something else in the mode's band (another "
+            "mode, a line, drift) pulls its zero crossings; the frequency is not to be trusted")
+
+
 def _warnings(m: ModeIdentification) -> list[str]:
     """Sentences on how far to trust the mode's numbers."""
     out = []
@@ -1167,6 +1192,9 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.append(f"the natural frequency {m.frequency_hz:.4g} Hz lies outside the mode's band "
                    f"({low:.4g} to {high:.4g} Hz, spectral peak {m.spectral_peak_hz:.4g} Hz): "
                    "it is not determined by this record")
+    off = _off_peak(m)
+    if off:
+        out.append(off)
     cycles = m.extrema_count / 2.0
     if cycles < 5:
         out.append(f"only {cycles:.1f} cycles above the noise floor: too few for a reliable "
