@@ -149,6 +149,8 @@ EDGE_EXTREMA = 3
 MODEL_LIMIT = 3.0
 #: Relative error scale (weight 1 / WILD_SCALE^2) of an extremum the correction cannot follow.
 WILD_SCALE = 10.0
+#: The preferred law's whitened residuals correlated more than this at lag 1 are warned.
+RESIDUAL_RHO = 0.6
 #: Seed of the simulated noise: the same record always gives the same numbers.
 NOISE_SEED = 20261123
 #: Confidence level of the intervals.
@@ -252,7 +254,8 @@ class ModeIdentification:
         (:func:`_one_law`); ``start_a``, ``start_beta``: the factors their standard errors
         were widened by for the start's sensitivity (:func:`_start_sensitivity`);
         ``noise_a``, ``noise_beta``: those for the noise's spread through the filters'
-        padding (:func:`_noise_spread`).
+        padding (:func:`_noise_spread`); ``residual_rho``: the lag-1 correlation of the
+        preferred law's whitened residuals (:func:`_residual_correlation`).
     warnings
         Sentences on how far to trust the numbers; empty when every check passed.
     """
@@ -1130,6 +1133,25 @@ def _one_law(mode: _Mode, follow: str) -> dict[str, float]:
     return out
 
 
+def _residual_correlation(mode: _Mode, comparison: LawComparison) -> float:
+    """Lag-1 correlation of the preferred law's residuals after the fit's whitening (NaN for
+    fewer than 8 extrema). The extrema of a band signal err together as the band's noise does
+    (:meth:`.bands.ModeBands.correlation`: the narrower the band, the more); whitened, the
+    residuals of a law that describes the decay are white, and only what the law misses (a
+    beat with a close mode, a drifting frequency, a missing term) leaves them correlated."""
+    best = comparison.fits[comparison.preferred]
+    parts = []
+    for d, resid in zip(mode.decays, best.residuals):
+        whitener = Whitener(d["times"], np.sign(d["values"]), mode.correlation,
+                            d.get("scale", np.ones(d["amplitude"].size)))
+        parts.append(whitener.apply(np.asarray(resid, dtype=np.float64)))
+    r = np.concatenate(parts) if parts else np.empty(0)
+    if r.size < 8 or not np.all(np.isfinite(r)):
+        return math.nan
+    r = r - r.mean()
+    return float(r[1:] @ r[:-1]) / max(float(r @ r), 1e-300)
+
+
 def _relative_width(fit: LawFit, name: str) -> float:
     """Half-width of a coefficient's 95 % interval over its value (inf at zero)."""
     low, high = fit.interval(name, LEVEL)
@@ -1232,12 +1254,9 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.append(f"the band filters smear this mode's first cycles by up to "
                    f"{100 * m.correction:.0f} % (modes close together or heavily damped); "
                    "corrected with the fitted model, so the result leans on that model")
-    best = cmp.fits[cmp.preferred]
-    resid = np.concatenate(best.residuals)
-    if resid.size >= 8:
-        r = resid - resid.mean()
-        rho = float(r[1:] @ r[:-1]) / max(float(r @ r), 1e-300)
-        if rho > 0.6:
+    rho = m.start_drift.get("residual_rho", math.nan)
+    if math.isfinite(rho):
+        if rho > RESIDUAL_RHO:
             out.append(f"the fitted law leaves correlated residuals (lag-1 correlation "
                        f"{rho:.2f}): the decay is not that of one mode with this law "
                        "(beating with a close mode, a drifting frequency or a missing term)")
@@ -1453,6 +1472,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])
+        mode.drift["residual_rho"] = _residual_correlation(mode, comparison)
         decays = [DecayExtrema(window=(windows[d["w"]][0], windows[d["w"]][2]),
                                times=d["times"], values=d["values"], amplitude=d["amplitude"],
                                crossings=d["crossings"][(d["crossings"] >= d["times"][0])
