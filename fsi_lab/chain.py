@@ -29,6 +29,7 @@ from fsi_lab.contract import (
 from fsi_lab.errors import FsiLabError, ParameterError
 from fsi_lab.events import EventBus, Progress
 from fsi_lab.registry import Registry
+from fsi_lab.summary import json_safe
 from fsi_lab.tails import QuietTail, analysed_end
 
 ANALYSED_QUANTITIES = ("velocity", "displacement")
@@ -153,8 +154,9 @@ def stored_result(plugin: AnalysisPlugin, out: Any) -> tuple[AnalysisResult, Res
 
 
 def merge_summary(into: dict[str, Any], part: Mapping[str, Any]) -> None:
-    """Merge one analysis's summary into a channel summary (``components`` by ``index``)."""
-    for key, value in part.items():
+    """Merge one analysis's summary into a channel summary (``components`` by ``index``;
+    NaN and infinities as None, so that the summary is JSON)."""
+    for key, value in json_safe(dict(part)).items():
         if key == "components":
             existing = {c["index"]: c for c in into.setdefault("components", [])}
             for component in value:

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from fsi_lab.errors import FsiLabError, InputFileError, RunAborted
+from fsi_lab.errors import FsiLabError, InputFileError, PluginError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
@@ -75,7 +75,9 @@ _json_emitted = False  # whether this command printed its one JSON object
 
 def _emit_json(obj: dict[str, Any]) -> None:
     global _json_emitted
-    print(json.dumps(_clean(obj), indent=2, default=_json_default, allow_nan=False))
+    from fsi_lab.summary import json_safe
+
+    print(json.dumps(json_safe(obj), indent=2, default=_json_default, allow_nan=False))
     _json_emitted = True
 
 
@@ -90,17 +92,6 @@ def _json_default(value):
     except ImportError:  # pragma: no cover
         pass
     return str(value)
-
-
-def _clean(obj):
-    """Replace NaN and infinities (not valid JSON) by None."""
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    return obj
 
 
 _plugins = None  # the plugins this command loaded (load_registry), once per command
@@ -243,7 +234,7 @@ def cmd_analyze(args) -> int:
         _emit_json(summary)
     else:
         print(format_summary(summary, registry))
-    refused = nothing_identified(summary)
+    refused = nothing_identified(summary, registry)
     if refused:
         print(f"fsi-lab: error: {args.run[0]}: {refused}", file=sys.stderr)
         return 2
@@ -304,7 +295,7 @@ def _analyze_batch(args) -> int:
                     entry.update(status="analysed", analysis=summary, problems=problems,
                                  worker=result.value["worker"],
                                  exit_code=EXIT_STRICT if args.strict and problems else 0)
-                    refused = nothing_identified(summary)
+                    refused = nothing_identified(summary, _loaded_plugins())
                     if refused:
                         entry.update(error=refused, exit_code=2)
                         bus.log("ERROR", f"{entry['run']}: {refused}")
@@ -766,17 +757,28 @@ def strict_problems(summary: dict[str, Any]) -> list[str]:
     return list(dict.fromkeys(problems))
 
 
-def nothing_identified(summary: dict[str, Any]) -> str | None:
-    """Why nothing in an analysed record was identified, or None: every channel analysed has a
-    refused analysis and no component (a record of noise, or of no free decay), so the exit
-    code says so (2: a signal the analysis cannot handle) although its spectrum was stored."""
-    channels = summary.get("channels") or {}
+def nothing_identified(summary: dict[str, Any], registry) -> str | None:
+    """Why nothing in an analysed record was identified, or None: on every channel the analysis
+    that provides its components (the decomposition into modes) was refused and none came out
+    (a record of noise, or of no free decay), so the exit code says so (2: a signal the
+    analysis cannot handle) although what could be computed was stored."""
     reasons = []
-    for name, info in channels.items():
-        if info.get("components") or not info.get("errors"):
+    for name, info in (summary.get("channels") or {}).items():
+        if info.get("components"):
             return None
-        reasons.append(f"channel {name}: {info['errors'][0]['message']}")
+        refused = [error for error in info.get("errors", [])
+                   if _provides(registry, error.get("plugin"), "components")]
+        if not refused:
+            return None
+        reasons.append(f"channel {name}: {refused[0]['message']}")
     return "nothing was identified: " + "; ".join(reasons) if reasons else None
+
+
+def _provides(registry, analysis: Any, kind: str) -> bool:
+    try:
+        return registry.get("analysis", analysis).provides == kind
+    except PluginError:  # an analysis no longer installed provides nothing
+        return False
 
 
 def _strict_exit(summary: dict[str, Any], code: int) -> int:

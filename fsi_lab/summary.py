@@ -13,6 +13,7 @@ the text summary without any code that knows it.
 
 from __future__ import annotations
 
+import math
 import numbers
 from typing import Any
 
@@ -22,6 +23,18 @@ from fsi_lab.presentation import SummaryText
 CHANNEL_KEYS = ("components", "notes", "errors", "warnings")
 #: Keys of a component entry the core shows itself.
 COMPONENT_KEYS = ("index", "frequency_hz", "frequency_ci95_hz", "warnings")
+
+
+def json_safe(obj: Any) -> Any:
+    """``obj`` with NaN and infinities (not valid JSON) replaced by None: an undetermined
+    standard error or an unbounded interval is stored and printed as null."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    return obj
 
 
 def _registry(registry):
