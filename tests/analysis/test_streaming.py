@@ -1,0 +1,137 @@
+"""Analysis that streams (issue 16, item 1; docs/streaming-analysis.md): channels read from the
+run file when used, a chunk at a time where a step needs one pass, and the same numbers as the
+analysis of the channels held in memory."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tracemalloc
+
+import numpy as np
+import pytest
+
+
+@pytest.fixture(scope="module")
+def wet_run(tmp_path_factory):
+    """The wet profile's simulated record, 8 s at 2 kHz (drive, base acceleration, tip
+    velocity; the chain analyses the tip velocity against the base acceleration)."""
+    from support import PROFILES
+
+    from fsi_lab.preflight import prepare_excitation
+    from fsi_lab.profile import load_profile
+    from fsi_lab.registry import load_registry
+    from fsi_lab.simulation import simulate_run
+
+    registry = load_registry()
+    profile = load_profile(PROFILES / "wet-beam-sim.toml", registry)
+    waveform, rate = prepare_excitation(profile, registry)
+    out = tmp_path_factory.mktemp("stream") / "wet.h5"
+    simulate_run(profile, waveform, rate, 8.0, 2000.0, out, None,
+                 {"uuid": "0" * 32, "start_time": "2026-11-25T00:00:00.000000+00:00",
+                  "profile": profile.text, "profile_path": str(profile.path), "overrides": []})
+    return registry, out
+
+
+def _as_json(value):
+    return json.loads(json.dumps(value, default=str))
+
+
+def test_a_run_file_read_lazily_gives_the_numbers_of_its_channels_in_memory(wet_run, tmp_path):
+    """``fsi-lab analyze``'s path (channels read from the file when first used) against the
+    chain on the channels loaded whole: the same summary to the bit, and only the channels the
+    chain uses are read, each once."""
+    from fsi_lab import sources
+    from fsi_lab.batch import AnalyseTask, analyse_file, analysis_profile
+    from fsi_lab.chain import run_chain
+    from fsi_lab.runfile import read_run
+
+    registry, path = wet_run
+    copy = tmp_path / "wet.h5"
+    shutil.copy(path, copy)
+    loaded = read_run(path)
+    assert not any(isinstance(c, sources.LazyChannelData) for c in loaded.channels.values())
+    profile = analysis_profile(loaded, registry)
+    _, in_memory = run_chain(loaded.channels, profile.analysis, profile.analysis_params,
+                             registry, profile.specimen)
+    before = len(sources.whole_reads())
+    streamed = analyse_file(AnalyseTask(str(copy)), registry)["summary"]["channels"]
+    reads = sources.whole_reads()[before:]
+    assert sorted(reads) == [("base_acceleration", 16000), ("tip_velocity", 16000)]
+    assert "errors" not in streamed["tip_velocity"]
+    assert _as_json(streamed) == _as_json(in_memory)
+
+
+def _long_run(path, samples, channels=4):
+    """A run file of ``channels`` channels of ``samples`` samples: a 50 Hz decay every 2 s in
+    noise (the first channel a velocity, the rest accelerations), at 10 kHz."""
+    from fsi_lab.runfile import RunFileWriter
+
+    rate = 10_000.0
+    t = np.arange(samples) / rate
+    phase = t % 2.0
+    signal = np.exp(-3.0 * phase) * np.sin(2 * np.pi * 50.0 * phase)
+    rng = np.random.default_rng(5)
+    writer = RunFileWriter(path, {"kind": "imported", "profile": "", "overrides": []})
+    for k in range(channels):
+        name = f"ch{k}"
+        writer.create_channel(name, {"units": "m/s" if k == 0 else "m/s^2",
+                                     "quantity": "velocity" if k == 0 else "acceleration",
+                                     "sample_rate": rate, "t0": 0.0})
+        for start in range(0, samples, 1 << 16):
+            part = signal[start:start + (1 << 16)]
+            writer.append(name, part + 1e-4 * rng.standard_normal(part.size))
+    writer.set_attrs({"exit_status": "completed"})
+    writer.close()
+    return path
+
+
+def test_checking_a_run_and_cutting_its_quiet_tail_hold_no_whole_channel(tmp_path, monkeypatch):
+    """``read_run`` (lazily), ``require_analysable`` and ``cut_quiet_tail`` on a run of 4
+    channels of 400 000 samples (3.2 MB each), read 32 768 samples at a time: no whole-record
+    read (refused beyond 0 samples), and a traced peak of less than one channel's size
+    (held whole, the 4 channels take 12.8 MB)."""
+    from fsi_lab import sources
+    from fsi_lab.chain import cut_quiet_tail
+    from fsi_lab.dsp import envelope
+    from fsi_lab.runfile import read_run, require_analysable
+
+    path = _long_run(tmp_path / "long.h5", 400_000)
+    monkeypatch.setattr(sources, "CHUNK", 1 << 15)
+    monkeypatch.setattr(envelope, "CHUNK", 1 << 15)
+    run = read_run(path, load_data=False, lazy=True)
+    tracemalloc.start()
+    try:
+        with sources.whole_read_limit(0):
+            require_analysable(run)
+            channels, tail = cut_quiet_tail(run.channels, list(run.channels))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert not tail.cut
+    assert all(not c.loaded for c in channels.values())
+    assert peak < 0.5 * 400_000 * 8, peak
+    # The guard refuses a whole read, naming the channel.
+    with sources.whole_read_limit(1000), pytest.raises(Exception, match="'ch0'.*400000"):
+        channels["ch0"].data
+    # Without it, the channel is read once, as float64, equal to the file's.
+    first = channels["ch0"].data
+    assert first is channels["ch0"].data and first.dtype == np.float64
+    np.testing.assert_array_equal(first, read_run(path).channels["ch0"].data)
+
+
+def test_a_nan_in_a_lazily_read_channel_is_refused_with_its_first_index(tmp_path):
+    import h5py
+
+    from fsi_lab.errors import InputFileError
+    from fsi_lab.runfile import read_run, require_analysable
+
+    path = _long_run(tmp_path / "nan.h5", 100_000, channels=2)
+    with h5py.File(path, "r+") as handle:
+        data = handle["channels/ch1"]
+        data[70_000] = np.nan
+        data[90_001] = np.inf
+    run = read_run(path, load_data=False, lazy=True)
+    with pytest.raises(InputFileError, match=r"ch1 holds 2 NaN or infinite samples \(the "
+                                             r"first at index 70000\)"):
+        require_analysable(run)
