@@ -332,13 +332,18 @@ def decay_segments(x: Any, fs: float, period: float, floor: float = 0.0,
     block = max(period, n / fs / MAX_BLOCKS)
     tb, ib, mb = block_maxima(x, fs, block)
     whole = [(0, n)]
-    # Blocks at the record's floor (a quiet tail of noise, or rounding in a simulation:
-    # :func:`.envelope.envelope_floor`) start no decay: a decay ends where it reaches them.
-    above = mb > ABOVE * envelope_floor(mb)
-    tb, ib, mb = tb[above], ib[above], mb[above]
+    if floor > 0.0:
+        # A known noise level: blocks below it count as it, so only a rise out of the noise
+        # starts a decay (a lull of the noise does not).
+        mb = np.maximum(mb, float(floor))
+    else:
+        # Blocks at the record's own floor (a quiet tail of noise, or rounding in a
+        # simulation: :func:`.envelope.envelope_floor`) start no decay: a decay ends where it
+        # reaches them.
+        above = mb > ABOVE * envelope_floor(mb)
+        tb, ib, mb = tb[above], ib[above], mb[above]
     if tb.size < 4:
         return whole
-    mb = np.maximum(mb, float(floor))
     decays = split_decays(tb, mb, confirm=confirm)
     if decays.count < 2:
         return whole

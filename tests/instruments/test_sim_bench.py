@@ -13,7 +13,8 @@ from benchkit import (
     lab_registry,
     run_profile,
     settings,
-    )
+    sim_bench,
+)
 from scipy import signal
 
 from fsi_lab.errors import InstrumentError
