@@ -38,11 +38,24 @@ from fsi_lab.dsp.decays import decay_segments
 MIN_SEGMENT = 64
 
 
-@functools.lru_cache(maxsize=8)
+#: Windows and ramps up to this many samples are cached (a run's records share their lengths);
+#: longer ones, of long records, are made for each use rather than held for the process.
+CACHED_SAMPLES = 1 << 18
+
+
 def _window(name: str, n: int) -> np.ndarray:
-    """Window samples (cached, read-only); ``"decay"`` is flat over the first half and a
-    half-Hann over the second, which keeps the early, large part of a free decay (and
-    fast-decaying modes) at full weight."""
+    """Window samples (read-only; cached up to :data:`CACHED_SAMPLES`); ``"decay"`` is flat
+    over the first half and a half-Hann over the second, which keeps the early, large part of a
+    free decay (and fast-decaying modes) at full weight."""
+    return _cached_window(name, n) if n <= CACHED_SAMPLES else _make_window(name, n)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_window(name: str, n: int) -> np.ndarray:
+    return _make_window(name, n)
+
+
+def _make_window(name: str, n: int) -> np.ndarray:
     if name == "boxcar":
         w = np.ones(n)
     elif name == "decay":
@@ -55,9 +68,17 @@ def _window(name: str, n: int) -> np.ndarray:
     return w
 
 
-@functools.lru_cache(maxsize=8)
 def _ramp(n: int) -> np.ndarray:
-    """Centred ramp i - (n - 1) / 2 (cached: records of one run share their length)."""
+    """Centred ramp i - (n - 1) / 2 (read-only; cached up to :data:`CACHED_SAMPLES`)."""
+    return _cached_ramp(n) if n <= CACHED_SAMPLES else _make_ramp(n)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_ramp(n: int) -> np.ndarray:
+    return _make_ramp(n)
+
+
+def _make_ramp(n: int) -> np.ndarray:
     t = np.arange(n, dtype=np.float64) - 0.5 * (n - 1)
     t.setflags(write=False)
     return t
