@@ -13,6 +13,7 @@ size (:func:`whole_read_limit`): the list of those reads is what is left to make
 from __future__ import annotations
 
 import contextlib
+import math
 import threading
 from pathlib import Path
 from typing import Any, Iterator
@@ -179,3 +180,83 @@ def head_of(channel: ChannelData, length: int) -> ChannelData:
     if isinstance(channel, LazyChannelData):
         return channel.head(length)
     return dataclasses.replace(channel, data=channel.data[:length])
+
+
+def is_source(data: Any) -> bool:
+    """Whether ``data`` is a source read by slices (:class:`DatasetSource`, or anything with
+    ``len`` and ``read``) rather than samples in memory."""
+    return hasattr(data, "read") and hasattr(data, "__len__") and not isinstance(data,
+                                                                                np.ndarray)
+
+
+def check_source(data: Any, func: str, *, min_samples: int = 16, name: str = "signal",
+                 allow_constant: bool = False, check_clipping: bool = True) -> int:
+    """The checks of :func:`fsi_lab.dsp._signal.as_record` (enough samples, finite, not
+    constant, not clipped), a chunk at a time; returns the number of samples.
+
+    Raises
+    ------
+    AnalysisError
+        As :func:`~fsi_lab.dsp._signal.as_record`, with the same messages.
+    """
+    from fsi_lab.dsp._signal import fail
+
+    n = int(len(data))
+    if n < min_samples:
+        raise fail(func, f"{name} has {n} samples, too short; need at least {min_samples} "
+                         "samples")
+    bad, first = 0, -1
+    lo, hi = math.inf, -math.inf
+    for start, chunk in chunks(data):
+        finite = np.isfinite(chunk)
+        if not finite.all():
+            where = np.flatnonzero(~finite)
+            first = start + int(where[0]) if first < 0 else first
+            bad += where.size
+            continue
+        lo, hi = min(lo, float(chunk.min())), max(hi, float(chunk.max()))
+    if bad:
+        raise fail(func, f"{name} contains {bad} NaN or infinite samples (first at index "
+                         f"{first}); expected finite values - remove or interpolate them")
+    if not allow_constant and hi - lo <= 1e-12 * max(abs(lo), abs(hi), 1e-300):
+        raise fail(func, f"{name} is constant (every sample is {lo:g}); expected an "
+                         "oscillating record")
+    if check_clipping:
+        where = _clipping(data, n, lo, hi)
+        if where is not None:
+            raise fail(func, f"{name} looks clipped: {where}; the analysis needs an unclipped "
+                             "record - lower the input range or the excitation")
+    return n
+
+
+def _clipping(data: Any, n: int, lo: float, hi: float) -> str | None:
+    """:func:`fsi_lab.dsp._signal.clipping` of a source (whose extremes are ``lo`` and
+    ``hi``), a chunk at a time: runs of the extreme value are carried across chunks."""
+    long_run = max(8, n // 1000)
+    for label, value in (("maximum", hi), ("minimum", lo)):
+        count, carry, runs = 0, 0, []
+        for _, chunk in chunks(data):
+            at = chunk == value
+            count += int(at.sum())
+            if not at.any():
+                if carry:
+                    runs.append(carry)
+                carry = 0
+                continue
+            edges = np.flatnonzero(np.diff(np.concatenate(([0], at.view(np.int8), [0]))))
+            lengths = list(edges[1::2] - edges[0::2])
+            if at[0] and carry:
+                lengths[0] += carry
+            elif carry:
+                runs.append(carry)
+            carry = lengths.pop() if at[-1] else 0
+            runs.extend(lengths)
+        if carry:
+            runs.append(carry)
+        if count < 3:
+            continue
+        flat = np.array([r for r in runs if r >= 3], dtype=np.int64)
+        if flat.size >= 2 or (flat.size and flat.max() > long_run):
+            return (f"the {label} {value:g} is held flat over {int(flat.sum())} samples in "
+                    f"{flat.size} place(s)")
+    return None

@@ -450,7 +450,8 @@ def cross_spectra(x: Any, y: Any, fs: float, *, segment: int, step: int, window:
     ----------
     x, y
         Reference and response records of the same length, units U_x and U_y (1-D, finite,
-        checked by the caller).
+        checked by the caller): arrays, or sources read a chunk of segments at a time
+        (:class:`fsi_lab.sources.DatasetSource`: the same numbers, to the bit).
     fs
         Sample rate, Hz.
     segment
@@ -481,9 +482,11 @@ def cross_spectra(x: Any, y: Any, fs: float, *, segment: int, step: int, window:
     >>> bool(np.allclose(sxy[1:] / sxx[1:], 2.0))
     True
     """
-    xa = np.asarray(x, dtype=np.float64)
-    ya = np.asarray(y, dtype=np.float64)
-    n_seg = 1 + (xa.size - segment) // step if xa.size >= segment else 0
+    streamed = hasattr(x, "read") or hasattr(y, "read")
+    xa = x if streamed else np.asarray(x, dtype=np.float64)
+    ya = y if streamed else np.asarray(y, dtype=np.float64)
+    size = int(len(xa))
+    n_seg = 1 + (size - segment) // step if size >= segment else 0
     if not 1 <= groups <= n_seg:
         raise fail(_func, f"{n_seg} segment(s) of {segment} samples cannot make {groups} "
                           "group(s); expected at least one segment per group")
@@ -503,8 +506,14 @@ def cross_spectra(x: Any, y: Any, fs: float, *, segment: int, step: int, window:
     for first in range(0, n_seg, per_chunk):
         seg = np.arange(first, min(n_seg, first + per_chunk))
         idx = seg[:, None] * step + offsets[None, :]
-        xs = xa[idx]
-        ys = ya[idx]
+        if streamed:  # this chunk's stretch of each record, read from its source
+            lo, hi = int(seg[0]) * step, int(seg[-1]) * step + segment
+            idx -= lo
+            xs = np.asarray(xa[lo:hi], dtype=np.float64)[idx]
+            ys = np.asarray(ya[lo:hi], dtype=np.float64)[idx]
+        else:
+            xs = xa[idx]
+            ys = ya[idx]
         xs -= xs.mean(axis=1, keepdims=True)
         ys -= ys.mean(axis=1, keepdims=True)
         fx = rfft(xs * w)
