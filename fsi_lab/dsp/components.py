@@ -136,10 +136,10 @@ def _envelopes_and_frequencies(rows: np.ndarray, fs: float) -> tuple[np.ndarray,
     freq = np.empty(rows.shape)
     for k, row in enumerate(rows):
         z = _analytic_row(row)
-        env[k] = np.abs(z)
-        phase = np.unwrap(np.angle(z))
+        np.abs(z, out=env[k])
+        angle = np.angle(z)
         del z
-        freq[k] = np.gradient(phase) * (fs / (2.0 * math.pi))
+        freq[k] = np.gradient(np.unwrap(angle)) * (fs / (2.0 * math.pi))
     return env, freq
 
 

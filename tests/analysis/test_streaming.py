@@ -172,7 +172,7 @@ def test_components_row_by_row_equal_the_rows_transformed_together():
 def test_band_components_hold_one_band_transform_at_a_time():
     """The components of a 30 s two-mode decay at 2 kHz (60 000 samples): beyond what they
     keep (components, envelopes, frequencies, the mask, the residual and the record), the
-    traced peak stays under 120 bytes per sample (the whole-record band split and one band's
+    traced peak stays under 90 bytes per sample (the whole-record band split and one band's
     analytic signal; transforming the bands together took about 200)."""
     from fsi_lab.dsp.components import band_components
     from fsi_lab.dsp.identify import identify
@@ -190,7 +190,7 @@ def test_band_components_hold_one_band_transform_at_a_time():
     kept = sum(a.nbytes for a in (res.components, res.envelopes, res.frequencies,
                                   res.edge_mask, res.residual, res.record))
     assert current >= kept
-    assert (peak - kept) / x.size < 120.0, (peak - kept) / x.size
+    assert (peak - kept) / x.size < 90.0, (peak - kept) / x.size
 
 
 # ----------------------------------------------------------------------------- integration
