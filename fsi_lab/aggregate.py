@@ -248,6 +248,13 @@ def plain(value: Any) -> Any:
 
 
 #: The datasets of each mode's curves in a stored aggregation (``curves[name][key]``).
+def main_mode(agg: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The aggregated mode with the most extrema (the best measured: what a sequence's stop
+    rule watches by default and the GUI draws), or None when the aggregation has none."""
+    modes = (agg or {}).get("modes") or []
+    return max(modes, key=lambda m: m.get("extrema", 0)) if modes else None
+
+
 CURVES = {"backbone": ("amplitude_m", "frequency_hz", "run"),
           "damping": ("amplitude_m", "c_q", "zeta", "run")}
 

@@ -118,6 +118,7 @@ def _loaded_plugins():
 
 def _registry():
     registry = _loaded_plugins()
+    registry.check_hooks()  # a failing default-chain or views hook is named with the others
     for record in registry.records:
         if record.status in ("failed", "invalid"):
             print(f"[warning] plugin {record.name} ({record.distribution}) skipped: "
@@ -242,6 +243,10 @@ def cmd_analyze(args) -> int:
         _emit_json(summary)
     else:
         print(format_summary(summary, registry))
+    refused = nothing_identified(summary)
+    if refused:
+        print(f"fsi-lab: error: {args.run[0]}: {refused}", file=sys.stderr)
+        return 2
     return _strict_exit(summary, 0) if args.strict else 0
 
 
@@ -299,6 +304,10 @@ def _analyze_batch(args) -> int:
                     entry.update(status="analysed", analysis=summary, problems=problems,
                                  worker=result.value["worker"],
                                  exit_code=EXIT_STRICT if args.strict and problems else 0)
+                    refused = nothing_identified(summary)
+                    if refused:
+                        entry.update(error=refused, exit_code=2)
+                        bus.log("ERROR", f"{entry['run']}: {refused}")
                 else:
                     entry.update(status="failed", error=result.error,
                                  exit_code=result.exit_code, worker_died=result.worker_died)
@@ -757,6 +766,19 @@ def strict_problems(summary: dict[str, Any]) -> list[str]:
     return list(dict.fromkeys(problems))
 
 
+def nothing_identified(summary: dict[str, Any]) -> str | None:
+    """Why nothing in an analysed record was identified, or None: every channel analysed has a
+    refused analysis and no component (a record of noise, or of no free decay), so the exit
+    code says so (2: a signal the analysis cannot handle) although its spectrum was stored."""
+    channels = summary.get("channels") or {}
+    reasons = []
+    for name, info in channels.items():
+        if info.get("components") or not info.get("errors"):
+            return None
+        reasons.append(f"channel {name}: {info['errors'][0]['message']}")
+    return "nothing was identified: " + "; ".join(reasons) if reasons else None
+
+
 def _strict_exit(summary: dict[str, Any], code: int) -> int:
     """``code``, or :data:`EXIT_STRICT` with the problems on stderr when there are any."""
     problems = strict_problems(summary)
@@ -970,6 +992,9 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     p.add_argument("--size", type=_window_size, metavar="WxH",
                    help="window size in pixels (default: what fits the screen, up to "
                         "1680x1050; 1366x768 for --screenshot)")
+    p.add_argument("--view", metavar="NAME",
+                   help="open the Analysis panel on the view titled NAME, or on the view "
+                        "drawing the analysis NAME (its generic view if it has none)")
     p.set_defaults(func=cmd_gui)
 
     p = sub.add_parser("profile", help="profile tools")

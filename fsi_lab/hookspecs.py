@@ -79,7 +79,9 @@ def fsi_lab_addviews(views: Any) -> None:
     """Register GUI views of analysis results in ``views`` (a
     :class:`fsi_lab.presentation.ViewSet`): ``views.add(AnalysisView(...))`` for a tab of the
     Analysis panel, ``views.add_curve(...)`` for curves the runs browser compares across runs,
-    ``views.add_column(...)`` for columns of the tables of identified values.
+    ``views.add_column(...)`` for columns of the tables of identified values,
+    ``views.add_aggregation_view(AggregationView(...))`` for a figure of the Sequence tab drawing
+    a sequence's aggregation.
 
     An analysis with no view of its own is drawn by the generic view (its datasets plotted with
     their units, and tabled): register one only to draw it better. Name the widget class with

@@ -1,4 +1,5 @@
-"""How plugins show analysis results: summary text, GUI views, compared curves, table columns.
+"""How plugins show analysis results: summary text, GUI views, compared curves, table columns,
+figures of a sequence's aggregation.
 
 The descriptors a plugin gives through the ``fsi_lab_summary_lines`` and ``fsi_lab_addviews``
 hooks (:mod:`fsi_lab.hookspecs`). This module imports no Qt: a view's widget is named by a
@@ -39,6 +40,14 @@ class SummaryText:
             raise TypeError("SummaryText: keys and lines are tuples of strings, not a string")
         object.__setattr__(self, "keys", tuple(self.keys))
         object.__setattr__(self, "lines", tuple(self.lines))
+        if not isinstance(self.inline, str):
+            raise TypeError(f"SummaryText: inline is a string; got "
+                            f"{type(self.inline).__name__}")
+        for what in ("keys", "lines"):
+            wrong = [item for item in getattr(self, what) if not isinstance(item, str)]
+            if wrong:
+                raise TypeError(f"SummaryText: {what} are strings; got {wrong[0]!r} "
+                                f"({type(wrong[0]).__name__})")
 
 
 @dataclass(frozen=True)
@@ -74,6 +83,34 @@ class AnalysisView:
             raise TypeError(f"AnalysisView {self.title!r}: view must be callable (a widget "
                             "class, or Deferred('package.module:Class'))")
         object.__setattr__(self, "analyses", tuple(self.analyses))
+
+
+@dataclass(frozen=True)
+class AggregationView:
+    """A figure of the GUI's Sequence tab that draws a sequence's aggregation (the record's
+    ``aggregate``: :mod:`fsi_lab.aggregate`, layout in docs/sequence-format.md, "Aggregation").
+
+    Attributes
+    ----------
+    title
+        Title of the figure (a tab of its own when several are registered).
+    view
+        Called with no argument, returns the widget: a QWidget with ``draw(aggregate)``
+        drawing the aggregation (a dict, or None when there is none yet) and returning whether
+        it drew something. Name it with ``Deferred("my_package.my_view:MyView")`` so that the
+        module implementing the hook imports no Qt.
+    order
+        Figures are sorted by it, then by title.
+    """
+
+    title: str
+    view: Callable[[], Any]
+    order: int = 100
+
+    def __post_init__(self) -> None:
+        if not callable(self.view):
+            raise TypeError(f"AggregationView {self.title!r}: view must be callable (a widget "
+                            "class, or Deferred('package.module:Class'))")
 
 
 @dataclass(frozen=True)
@@ -164,11 +201,12 @@ def lookup(entry: Any, key: str) -> Any:
 @dataclass
 class ViewSet:
     """What the ``fsi_lab_addviews(views)`` hook registers into: the GUI's views, the curves
-    the runs browser compares and the columns of the tables of identified values.
+    the runs browser compares, the columns of the tables of identified values and the figures
+    of a sequence's aggregation.
 
     Attributes
     ----------
-    views, curves, columns
+    views, curves, columns, aggregation_views
         What was added, in order.
     owners
         The plugin that added each title, curve name or column name (for messages).
@@ -179,6 +217,7 @@ class ViewSet:
     views: list[AnalysisView] = field(default_factory=list)
     curves: list[ComparisonCurve] = field(default_factory=list)
     columns: list[SummaryColumn] = field(default_factory=list)
+    aggregation_views: list[AggregationView] = field(default_factory=list)
     owners: dict[tuple[str, str], str] = field(default_factory=dict)
     current: str = ""
 
@@ -211,6 +250,14 @@ class ViewSet:
                             f"got {type(column).__name__}")
         self._claim("column", column.name)
         self.columns.append(column)
+
+    def add_aggregation_view(self, view: AggregationView) -> None:
+        """Add a figure of the Sequence tab drawing a sequence's aggregation."""
+        if not isinstance(view, AggregationView):
+            raise TypeError(f"views.add_aggregation_view() takes an "
+                            f"fsi_lab.presentation.AggregationView; got {type(view).__name__}")
+        self._claim("aggregation view", view.title)
+        self.aggregation_views.append(view)
 
     def drawn(self) -> set[str]:
         """Names of the analyses some registered view draws."""

@@ -16,6 +16,7 @@ import os
 import traceback
 from dataclasses import dataclass, field
 from importlib import metadata
+from pathlib import Path
 from typing import Any, Iterable
 
 import pluggy
@@ -26,6 +27,8 @@ from fsi_lab.errors import PluginError
 from fsi_lab.presentation import SummaryText, ViewSet
 
 ENTRY_POINT_GROUP = "fsi_lab"
+#: fsi-lab's own distribution: its plugins are registered first.
+OWN = "fsi-lab"
 #: The entry-point group of subcommands before the ``fsi_lab_addcommands`` hook: no longer read.
 LEGACY_COMMANDS_GROUP = "fsi_lab.commands"
 DISABLE_ENV = "FSI_LAB_DISABLE_PLUGIN_AUTOLOAD"
@@ -268,21 +271,43 @@ class Registry:
             elif answer.value is not None:
                 texts.append(SummaryText(lines=(
                     f"(plugin {answer.plugin}: fsi_lab_summary_lines() returned "
-                    f"{type(answer.value).__name__}, expected fsi_lab.presentation.SummaryText "
+                    f"{_describe(answer.value)}, expected fsi_lab.presentation.SummaryText "
                     "or None)",)))
         return texts
 
     def default_chain_names(self) -> list[str]:
         """The analyses the plugins put in the default chain (``fsi_lab_default_chain``), kept
         when installed, each once, in the order given; see :func:`fsi_lab.chain.default_chain`
-        for the chain's order."""
+        for the chain's order. A plugin whose hook fails or returns something other than a
+        list of names is left out and recorded as ``invalid`` with the reason (once)."""
         installed = tuple(self.names("analysis"))
         names: list[str] = []
         for answer in self.call_each("fsi_lab_default_chain", analyses=installed):
-            if answer.error or not isinstance(answer.value, (list, tuple)):
+            error = answer.error
+            value = answer.value
+            if error is None and (not isinstance(value, (list, tuple))
+                                  or not all(isinstance(n, str) for n in value)):
+                error = (f"fsi_lab_default_chain() returned {_describe(value)}, expected a "
+                         "list of analysis names")
+            if error is not None:
+                self._hook_failed(answer.plugin, error)
                 continue
-            names.extend(n for n in answer.value if n in installed and n not in names)
+            names.extend(n for n in value if n in installed and n not in names)
         return names
+
+    def _hook_failed(self, plugin: str, error: str) -> None:
+        """Record (once) that one of ``plugin``'s hooks failed: ``fsi-lab plugins`` and the
+        GUI's log list it as ``invalid`` with ``error``; its other contributions stay."""
+        if any(r.entry_point == plugin and r.error == error for r in self.records):
+            return
+        dist, version = self.sources.get(plugin, ("unknown", "unknown"))
+        self.records.append(PluginRecord(plugin, None, version, dist, plugin, "invalid", error))
+
+    def check_hooks(self) -> None:
+        """Call the hooks whose answers do not depend on a run (the default chain, the views),
+        so that a plugin whose hook fails is recorded now, with its name and the reason."""
+        self.default_chain_names()
+        self.views()
 
     def views(self) -> ViewSet:
         """The GUI views, compared curves and table columns the plugins register
@@ -296,9 +321,7 @@ class Registry:
                 views.current = name
                 for answer in self._call_one("fsi_lab_addviews", name, views=views):
                     if answer.error:
-                        dist, version = self.sources.get(name, ("unknown", "unknown"))
-                        self.records.append(PluginRecord(name, None, version, dist, name,
-                                                         "invalid", answer.error))
+                        self._hook_failed(name, answer.error)
             views.current = ""
             self._views = views
         return self._views
@@ -331,13 +354,36 @@ def _allowed(name: str) -> bool:
     return name in allow
 
 
+def _describe(value: Any) -> str:
+    """A value a hook returned, for a message: its type, and the value when short."""
+    text = repr(value)
+    return type(value).__name__ + (f" {text}" if len(text) <= 40 else "")
+
+
 def _short_error(exc: BaseException) -> str:
-    """The exception in one line, with the place it was raised outside this module (a plugin's
-    line, rather than the recorder that refused what it did)."""
+    """The exception in one line, with the place it was raised in the plugin's code (rather
+    than in fsi-lab's core, e.g. the recorder or the dataclass that refused what it did)."""
     frames = traceback.extract_tb(exc.__traceback__) if exc.__traceback__ else []
-    last = [f for f in frames if f.filename != __file__][-1:] or frames[-1:]
+    last = [f for f in frames if not _in_core(f.filename)][-1:] or frames[-1:]
     where = f" (at {last[0].filename}:{last[0].lineno})" if last else ""
     return f"{type(exc).__name__}: {exc}{where}"
+
+
+#: fsi-lab's core package folder; its plugins live in fsi_lab.plugins and fsi_lab.instruments.
+_CORE = Path(__file__).resolve().parent
+
+
+def _in_core(filename: str) -> bool:
+    """Whether ``filename`` is a module of fsi-lab's core (not of a plugin, built-in or not)."""
+    if filename.startswith("<"):  # code made at run time (a dataclass's __init__)
+        return True
+    path = Path(filename).resolve()
+    return path.parent == _CORE or (_CORE in path.parents and path.parts[len(_CORE.parts)]
+                                    not in ("plugins", "instruments"))
+
+
+def _distribution(ep: metadata.EntryPoint) -> str:
+    return ep.dist.name if ep.dist else "unknown"
 
 
 def load_registry() -> Registry:
@@ -349,13 +395,22 @@ def load_registry() -> Registry:
         Usable descriptors and a record (loaded / failed / invalid / disabled) per plugin.
     """
     registry = Registry()
-    seen: set[str] = set()
-    for ep in sorted(_entry_points(), key=lambda e: e.name):
-        if ep.name in seen:  # the same distribution seen twice on sys.path
-            continue
-        seen.add(ep.name)
-        dist = ep.dist.name if ep.dist else "unknown"
+    seen: dict[str, metadata.EntryPoint] = {}
+    # fsi-lab's own first, then the others by name: a plugin of another distribution that
+    # takes a built-in's name is the one refused, whatever its entry point is called
+    for ep in sorted(_entry_points(), key=lambda e: (_distribution(e) != OWN, e.name)):
+        dist = _distribution(ep)
         version = ep.dist.version if ep.dist else "unknown"
+        first = seen.get(ep.name)
+        if first is not None:
+            if _distribution(first) != dist or first.value != ep.value:
+                registry.records.append(PluginRecord(
+                    ep.name, None, version, dist, ep.name, "failed",
+                    f"entry point {ep.name!r} ({ep.value}) has the name of {_distribution(first)}"
+                    f"'s ({first.value}), and fsi-lab registers plugins by entry-point name: "
+                    f"rename it in {dist}'s [project.entry-points.fsi_lab]"))
+            continue  # else the same distribution seen twice on sys.path
+        seen[ep.name] = ep
         if not _allowed(ep.name):
             registry.records.append(PluginRecord(
                 ep.name, None, version, dist, ep.name, "disabled",
@@ -415,8 +470,12 @@ def add_plugin(registry: Registry, plugin: Any, name: str, distribution: str = "
                     record(descriptor_name, kind, "invalid", f"breaks the {kind} contract: {exc}")
                     continue
                 if descriptor_name in registry.descriptors[kind]:
+                    holder = next(r for r in registry.records if r.kind == kind
+                                  and r.name == descriptor_name and r.status == "loaded")
                     record(descriptor_name, kind, "invalid",
-                           f"another {kind} plugin is already named {descriptor_name!r}")
+                           f"another {kind} plugin is already named {descriptor_name!r} (entry "
+                           f"point {holder.entry_point!r} of {holder.distribution} "
+                           f"{holder.version}); this one is left out: rename it")
                     continue
                 registry.descriptors[kind][descriptor_name] = descriptor
                 record(descriptor_name, kind, "loaded")

@@ -484,7 +484,9 @@ def stop_mode(agg: dict[str, Any], stop) -> dict[str, Any] | None:
         return None
     if stop.frequency_hz:
         return min(modes, key=lambda m: abs(math.log(m["frequency_hz"] / stop.frequency_hz)))
-    return max(modes, key=lambda m: m.get("extrema", 0))
+    from fsi_lab.aggregate import main_mode
+
+    return main_mode({"modes": modes})
 
 
 def _describe_run(entry: dict[str, Any], total: int) -> str:

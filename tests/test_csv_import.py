@@ -1,5 +1,6 @@
 """`fsi-lab import`: CSV files recorded elsewhere become run files."""
 
+import h5py
 import numpy as np
 import pytest
 from support import cli, cli_json
@@ -98,3 +99,31 @@ def test_existing_output_is_never_overwritten(tmp_path):
     proc = cli("import", str(csv_path), "--rate", "10", "-o", str(out))
     assert proc.returncode == 2 and "already exists" in proc.stderr
     assert out.read_bytes() == b"precious"
+
+
+def test_a_record_with_nothing_to_identify_exits_2_and_keeps_its_analysis(tmp_path):
+    """White noise holds no free decay: every channel's identification is refused, so
+    `fsi-lab analyze` says so and exits 2 (one file and in a batch, next to a good file), and
+    what it could compute (the spectrum) is still stored in the file."""
+    rng = np.random.default_rng(3)
+    noise = _write(tmp_path / "noise.csv", ["tip [m/s]"], zip(1e-3 * rng.standard_normal(4000)))
+    t = np.arange(4000) / 1000.0
+    decay = _write(tmp_path / "decay.csv", ["tip [m/s]"],
+                   zip(0.01 * np.exp(-1.5 * t) * np.sin(2 * np.pi * 17 * t)
+                       + 1e-5 * rng.standard_normal(t.size)))
+    runs = []
+    for csv_path in (noise, decay):
+        out = csv_path.with_suffix(".h5")
+        assert cli("import", str(csv_path), "--rate", "1000", "-o", str(out)).returncode == 0
+        runs.append(out)
+    proc = cli("analyze", str(runs[0]), "--mass-per-length", "0.1")
+    assert proc.returncode == 2, proc.stderr
+    assert f"{runs[0]}: nothing was identified: channel tip: " in proc.stderr
+    with h5py.File(runs[0], "r") as stored:
+        assert stored["analysis/tip/spectrum/peak_frequencies"].size > 0
+    data, proc = cli_json("analyze", str(runs[0]), str(runs[1]), "--mass-per-length", "0.1")
+    assert proc.returncode == 2 and data["exit_code"] == 2
+    bad, good = data["files"]
+    assert (bad["exit_code"], good["exit_code"]) == (2, 0)
+    assert bad["error"].startswith("nothing was identified: channel tip: ")
+    assert good["analysis"]["channels"]["tip"]["components"]

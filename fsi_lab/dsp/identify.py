@@ -149,6 +149,8 @@ EDGE_EXTREMA = 3
 MODEL_LIMIT = 3.0
 #: Relative error scale (weight 1 / WILD_SCALE^2) of an extremum the correction cannot follow.
 WILD_SCALE = 10.0
+#: The preferred law's whitened residuals correlated more than this at lag 1 are warned.
+RESIDUAL_RHO = 0.6
 #: Seed of the simulated noise: the same record always gives the same numbers.
 NOISE_SEED = 20261123
 #: Confidence level of the intervals.
@@ -252,7 +254,8 @@ class ModeIdentification:
         (:func:`_one_law`); ``start_a``, ``start_beta``: the factors their standard errors
         were widened by for the start's sensitivity (:func:`_start_sensitivity`);
         ``noise_a``, ``noise_beta``: those for the noise's spread through the filters'
-        padding (:func:`_noise_spread`).
+        padding (:func:`_noise_spread`); ``residual_rho``: the lag-1 correlation of the
+        preferred law's whitened residuals (:func:`_residual_correlation`).
     warnings
         Sentences on how far to trust the numbers; empty when every check passed.
     """
@@ -447,10 +450,13 @@ def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
 
 def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                 components: Any, band: tuple[float, float] | None, f_dom: float
-                ) -> tuple[np.ndarray, np.ndarray, list[str]]:
+                ) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
     """Candidate mode frequencies (Hz) and spectral amplitudes from the windows' averaged
-    spectrum, and notes on the peaks left out."""
+    spectrum, notes on the peaks left out, and the frequencies (Hz) of those left out that
+    still stand out of the spectrum as modes do (undersampled, or too slow for the windows):
+    they keep bands of their own (guards), so no mode's band passes them."""
     notes = []
+    guards = []
     segs = [(a, c) for a, _, c in windows]
     freqs, amp = _decay_spectrum(x, fs, segs, f_dom)
     shortest = min(c - a for a, c in segs) / fs
@@ -461,7 +467,7 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                                     fmin=2.0 / shortest, _func="identify")
     high = peaks.amplitudes >= MODE_THRESHOLD * float(np.max(peaks.amplitudes, initial=0.0))
     f, a = peaks.frequencies[high], peaks.amplitudes[high]
-    level = float(np.median(amp[_away_from(freqs, f)]))
+    level = _spectrum_level(freqs, amp, f, a)
     keep = np.ones(f.size, dtype=bool)
     for i, fi in enumerate(f):
         col = _col(fi, float(a[i]), f[:i][keep[:i]], freqs, amp)
@@ -477,11 +483,13 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
             continue
         if fs / fi < MIN_SAMPLES_PER_CYCLE:
             keep[i] = False
+            guards.append(fi)
             notes.append(f"the spectral peak at {fi:.4g} Hz is undersampled ({fs / fi:.1f} "
                          f"samples per cycle at {fs:g} Hz; at least {MIN_SAMPLES_PER_CYCLE:g} "
                          "needed): left out")
         elif fi * longest < MIN_CYCLES:
             keep[i] = False
+            guards.append(fi)
             notes.append(f"the spectral peak at {fi:.4g} Hz completes fewer than {MIN_CYCLES} "
                          f"cycles in the longest free decay ({longest:.3g} s): left out"
                          + (f" ({_spacing_advice(fi)})" if len(segs) > 1 else ""))
@@ -500,7 +508,7 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                                f"free decays show {inside} usable spectral peak(s)"
                                + (f" ({', '.join(f'{v:.4g}' for v in f)} Hz)" if f.size
                                   else "") + "; ask for fewer or use components = 'auto'")
-    return f, a, notes
+    return f, a, notes, np.array(guards, dtype=np.float64)
 
 
 def _decay_spectrum(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f_dom: float
@@ -518,6 +526,26 @@ def _decay_spectrum(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f
         freqs, amp = amplitude_spectrum(x[a:c], fs, window="decay", nfft=nfft, _func="identify")
         power = power + amp * amp
     return freqs, np.sqrt(power / len(segments))
+
+
+def _spectrum_level(freqs: np.ndarray, amp: np.ndarray, peaks: np.ndarray,
+                    heights: np.ndarray) -> float:
+    """The noise level of a spectrum ``amp`` (the median of its bins away from its peaks, see
+    :func:`_away_from`), kept out of the octaves around only those of the ``peaks`` (Hz, by
+    decreasing ``heights``) that stand :data:`NOISE_MARGIN` times above that level: a long
+    record's noise shows peaks of its own above 1 % of a mode's, and an octave kept out around
+    each of them leaves no noise to measure (only the lowest bins, which hold the release's
+    step in displacement). Starts from the largest peak alone and repeats until the peaks kept
+    out settle."""
+    strong = peaks[:1]
+    level = float(np.median(amp[_away_from(freqs, strong)]))
+    for _ in range(4):
+        now = peaks[heights >= NOISE_MARGIN * level]
+        if now.size == 0 or np.array_equal(now, strong):
+            break
+        strong = now
+        level = float(np.median(amp[_away_from(freqs, strong)]))
+    return level
 
 
 def _away_from(freqs: np.ndarray, peaks: np.ndarray) -> np.ndarray:
@@ -819,11 +847,15 @@ def _data_stiffening(p_data: np.ndarray, x_amp: np.ndarray, weight: np.ndarray
     """Relative change of the measured frequency from zero to the largest amplitude, from a
     weighted straight line of frequency^2 against amplitude^2, and its standard error."""
     w2 = (math.pi / p_data) ** 2
-    design = np.stack((np.ones_like(x_amp), x_amp ** 2), axis=1) * weight[:, None]
+    # On the amplitude relative to the largest: in the record's own unit (1e-4 m, say) the
+    # amplitude^2 column is 1e-8 of the other, and the covariance's pseudo-inverse drops it
+    # (a standard error of 1e-20: any stiffening looked resolved).
+    u = x_amp / max(float(np.max(x_amp)), 1e-300)
+    design = np.stack((np.ones_like(u), u ** 2), axis=1) * weight[:, None]
     coef, *_ = np.linalg.lstsq(design, w2 * weight, rcond=None)
     resid = w2 * weight - design @ coef
     cov = np.linalg.pinv(design.T @ design) * float(resid @ resid) / max(w2.size - 2, 1)
-    top = float(np.max(x_amp)) ** 2 / max(float(coef[0]), 1e-300)
+    top = 1.0 / max(float(coef[0]), 1e-300)
     return 0.5 * float(coef[1]) * top, 0.5 * math.sqrt(max(float(cov[1, 1]), 0.0)) * top
 
 
@@ -842,7 +874,11 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
     x_amp = amp / mode.w0 if quantity == "velocity" else amp
     weight = x_amp / np.max(x_amp)          # a crossing's time error ~ 1 / amplitude
     r = (p_data - p_model) * weight
-    jac = np.stack((-p_model / mode.w0, -0.375 * p_model * x_amp ** 2 / mode.w0 ** 2), axis=1)
+    # The stiffness column on the amplitude relative to the largest (``top``): in the record's
+    # unit it can be 1e-11 of the other, and the covariance's pseudo-inverse would drop it.
+    top = max(float(np.max(x_amp)), 1e-300) ** 2
+    jac = np.stack((-p_model / mode.w0, -0.375 * p_model * (x_amp ** 2 / top) / mode.w0 ** 2),
+                   axis=1)
     jac *= weight[:, None]
     n = r.size
     use_alpha = n >= 8 and np.ptp(x_amp) > 0
@@ -852,8 +888,8 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
     s2 = float(resid @ resid) / max(n - cols, 1)
     cov = np.linalg.pinv(jac[:, :cols].T @ jac[:, :cols]) * s2
     if use_alpha:
-        alpha_new = mode.alpha + float(step[1])
-        se_alpha = math.sqrt(max(cov[1, 1], 0.0))
+        alpha_new = mode.alpha + float(step[1]) / top
+        se_alpha = math.sqrt(max(cov[1, 1], 0.0)) / top
         # Kept only when clearly resolved and large enough to matter: the frequency it moves
         # at the largest amplitude (harmonic balance) at least STIFFNESS_SHIFT.
         shift = 0.375 * alpha_new * float(np.max(x_amp)) ** 2 / mode.w0 ** 2
@@ -957,8 +993,10 @@ def _drift(mode: _Mode, decays: list[dict], follow: str) -> tuple[LawFit, dict[s
     for i, name in enumerate(full.names):
         allowed = max(float(unscaled_late[i, i] - unscaled_full[i, i]),
                       1e-3 * abs(float(unscaled_late[i, i])), 0.0)
-        spread = math.sqrt(max(s2, 0.0) * allowed + 1e-300)
-        z[name] = float(fit.params[i] - full.params[i]) / spread
+        spread = math.sqrt(max(s2, 0.0) * allowed)
+        # A fit that pins nothing (an undetermined or exact one) is no test of the start.
+        if math.isfinite(spread) and spread > 0.0:
+            z[name] = float(fit.params[i] - full.params[i]) / spread
     return full, z
 
 
@@ -1029,7 +1067,8 @@ def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
         allowed = np.maximum(np.diag(later.cov) - variance, 0.0)
         moved = (later.params - base.params) ** 2
         extra = np.maximum(extra, moved - START_Z ** 2 * allowed)
-    if not (np.all(np.isfinite(extra)) and np.all(variance > 0.0)):
+    if not (np.all(np.isfinite(extra)) and np.all(np.isfinite(variance))
+            and np.all(variance > 0.0)):
         return {}
     factor = np.sqrt((variance + extra) / variance)
     mode.fits["quadratic"] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
@@ -1059,7 +1098,8 @@ def _noise_spread(mode: _Mode) -> dict[str, float]:
         for r in range(count)])
     spread = np.var(moves, axis=0, ddof=1)
     variance = np.diag(base.cov)
-    if not (np.all(np.isfinite(spread)) and np.all(variance > 0.0)):
+    if not (np.all(np.isfinite(spread)) and np.all(np.isfinite(variance))
+            and np.all(variance > 0.0)):
         return {}
     factor = np.sqrt(np.maximum(spread / variance, 1.0))
     mode.fits["quadratic"] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
@@ -1110,11 +1150,55 @@ def _one_law(mode: _Mode, follow: str) -> dict[str, float]:
     return out
 
 
+def _residual_correlation(mode: _Mode, comparison: LawComparison) -> float:
+    """Lag-1 correlation of the preferred law's residuals after the fit's whitening (NaN for
+    fewer than 8 extrema). The extrema of a band signal err together as the band's noise does
+    (:meth:`.bands.ModeBands.correlation`: the narrower the band, the more); whitened, the
+    residuals of a law that describes the decay are white, and only what the law misses (a
+    beat with a close mode, a drifting frequency, a missing term) leaves them correlated."""
+    best = comparison.fits[comparison.preferred]
+    parts = []
+    for d, resid in zip(mode.decays, best.residuals):
+        whitener = Whitener(d["times"], np.sign(d["values"]), mode.correlation,
+                            d.get("scale", np.ones(d["amplitude"].size)))
+        parts.append(whitener.apply(np.asarray(resid, dtype=np.float64)))
+    r = np.concatenate(parts) if parts else np.empty(0)
+    if r.size < 8 or not np.all(np.isfinite(r)):
+        return math.nan
+    r = r - r.mean()
+    return float(r[1:] @ r[:-1]) / max(float(r @ r), 1e-300)
+
+
 def _relative_width(fit: LawFit, name: str) -> float:
     """Half-width of a coefficient's 95 % interval over its value (inf at zero)."""
     low, high = fit.interval(name, LEVEL)
     value = abs(fit.value(name))
     return 0.5 * (high - low) / value if value > 0.0 else math.inf
+
+
+def _off_peak(m: ModeIdentification) -> str:
+    """A sentence when the mode's frequency disagrees with the spectral peak it was found at,
+    else "". The damped frequencies of the identified oscillator over the record's amplitudes
+    (one value, or a range with a cubic stiffness) must reach the peak within the larger of
+    the frequency's 95 % half-interval, the peak's half-power half-width (decay rate / 2 pi)
+    and half the spectral resolution of the longest decay (1 / (2 T)): a frequency off by
+    more was pulled away by something else in the mode's band."""
+    ci = 0.5 * (m.frequency_ci[1] - m.frequency_ci[0])
+    a = max(m.laws.fits[m.laws.preferred].value("a"), 0.0)
+    span = max((float(d.times[-1] - d.times[0]) for d in m.decays), default=0.0)
+    tol = max(ci if math.isfinite(ci) else math.inf, a / (2.0 * math.pi),
+              0.5 / span if span > 0.0 else math.inf)
+    w0 = 2.0 * math.pi * m.frequency_hz
+    amp = m.backbone.amplitude[np.isfinite(m.backbone.amplitude)]
+    x2 = np.array([0.0, float(np.max(amp)) ** 2]) if amp.size and m.alpha else np.zeros(1)
+    damped = np.sqrt(np.maximum(w0 * w0 + 0.75 * m.alpha * x2 - a * a, 0.0)) / (2.0 * math.pi)
+    lo, hi = float(np.min(damped)) - tol, float(np.max(damped)) + tol
+    if lo <= m.spectral_peak_hz <= hi:
+        return ""
+    return (f"the damped natural frequency {m.damped_frequency_hz:.5g} Hz disagrees with the "
+            f"spectral peak the mode was found at ({m.spectral_peak_hz:.5g} Hz) by more than "
+            f"either's precision ({tol:.2g} Hz): something else in the mode's band (another "
+            "mode, a line, drift) pulls its zero crossings; the frequency is not to be trusted")
 
 
 def _warnings(m: ModeIdentification) -> list[str]:
@@ -1147,6 +1231,9 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.append(f"the natural frequency {m.frequency_hz:.4g} Hz lies outside the mode's band "
                    f"({low:.4g} to {high:.4g} Hz, spectral peak {m.spectral_peak_hz:.4g} Hz): "
                    "it is not determined by this record")
+    off = _off_peak(m)
+    if off:
+        out.append(off)
     cycles = m.extrema_count / 2.0
     if cycles < 5:
         out.append(f"only {cycles:.1f} cycles above the noise floor: too few for a reliable "
@@ -1184,12 +1271,9 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.append(f"the band filters smear this mode's first cycles by up to "
                    f"{100 * m.correction:.0f} % (modes close together or heavily damped); "
                    "corrected with the fitted model, so the result leans on that model")
-    best = cmp.fits[cmp.preferred]
-    resid = np.concatenate(best.residuals)
-    if resid.size >= 8:
-        r = resid - resid.mean()
-        rho = float(r[1:] @ r[:-1]) / max(float(r @ r), 1e-300)
-        if rho > 0.6:
+    rho = m.start_drift.get("residual_rho", math.nan)
+    if math.isfinite(rho):
+        if rho > RESIDUAL_RHO:
             out.append(f"the fitted law leaves correlated residuals (lag-1 correlation "
                        f"{rho:.2f}): the decay is not that of one mode with this law "
                        "(beating with a close mode, a drifting frequency or a missing term)")
@@ -1279,10 +1363,17 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     follow = "displacement" if quantity == "displacement" else "velocity"
     record = record - float(np.mean(record))
     # Dominant oscillation and the noise: the spectrum of the whole record.
+    # The dominant oscillation is one the sampling resolves: decays split on the half periods
+    # of a mode with 4 samples per cycle fall apart at every beat with the others.
     freqs, amp = averaged_spectrum(record, fs, [(0, record.size)])
-    top = find_peaks_interpolated(freqs, amp, min_relative=0.05, max_peaks=1,
-                                  smoothing=PEAK_SMOOTHING, fmin=2.0 * fs / record.size,
-                                  _func=func)
+    resolved = freqs <= fs / MIN_SAMPLES_PER_CYCLE
+    top = find_peaks_interpolated(freqs[resolved], amp[resolved], min_relative=0.05,
+                                  max_peaks=1, smoothing=PEAK_SMOOTHING,
+                                  fmin=2.0 * fs / record.size, _func=func)
+    if top.frequencies.size == 0:
+        top = find_peaks_interpolated(freqs, amp, min_relative=0.05, max_peaks=1,
+                                      smoothing=PEAK_SMOOTHING, fmin=2.0 * fs / record.size,
+                                      _func=func)
     if top.frequencies.size == 0:
         raise fail(func, "found no spectral peak: the record holds no oscillation above "
                          f"{2.0 * fs / record.size:.3g} Hz")
@@ -1293,8 +1384,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, "found no free decay of at least 32 samples")
     if reference is not None:
         windows = _unforced(windows, reference, fs, f_dom)
-    cand_f, cand_a, notes = _candidates(record, fs, windows, int(components)
-                                        if components != "auto" else "auto", band_t, f_dom)
+    cand_f, cand_a, notes, guards = _candidates(record, fs, windows, int(components)
+                                                if components != "auto" else "auto", band_t,
+                                                f_dom)
     if len(windows) == 1:
         _refuse_comb(cand_f, f_dom)
     if cand_f.size == 0:
@@ -1302,12 +1394,17 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, f"found no usable spectral peak{where}; "
                          + ("; ".join(notes) if notes else "the record holds no free decay"))
     sigma = _noise_rms(record, fs, cand_f)
-    order = np.argsort(cand_f)
-    bands = ModeBands.around(cand_f[order], fs)
+    # Peaks left out but standing out as modes do keep bands of their own (not analysed), so
+    # that no mode's band passes them (their crossings would pull its frequency away).
+    guards = guards[(guards < 0.9 * 0.5 * fs)
+                    & (np.min(np.abs(guards[:, None] / cand_f[None, :] - 1.0), axis=1) > 0.1)]
+    bands = ModeBands.around(np.concatenate((cand_f, guards)), fs)
     integrate = quantity == "acceleration"
     modes = []
     for k in range(bands.count):
         f_k = float(bands.centres[k])
+        if not np.any(cand_f == f_k):
+            continue
         noise_k = sigma * math.sqrt(bands.noise_fraction(k, fs, integrate))
         # An extremum of signal + band-limited noise is found where the noise's slope moves
         # it: on average noise^2 <w_n^2> / (2 A w^2) too large (<w_n^2>: the noise's mean
@@ -1392,6 +1489,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])
+        mode.drift["residual_rho"] = _residual_correlation(mode, comparison)
         decays = [DecayExtrema(window=(windows[d["w"]][0], windows[d["w"]][2]),
                                times=d["times"], values=d["values"], amplitude=d["amplitude"],
                                crossings=d["crossings"][(d["crossings"] >= d["times"][0])

@@ -578,6 +578,12 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     except np.linalg.LinAlgError:
         normal_inv = np.linalg.pinv(jac.T @ jac)
     cov_all = normal_inv * s2
+    # A model driven where its extrema explode (a negative damping that makes the decay grow)
+    # has derivatives so large that the covariance underflows to zero: nothing is pinned down,
+    # and a zero-width interval would pass for certainty. Its coefficients are undetermined.
+    variances = np.diag(cov_all)[:p]
+    if not (np.all(np.isfinite(variances)) and np.all(variances > 0.0)):
+        cov_all = np.diag(np.full(p + k, math.inf))
     # Gauss-Newton: the whitened residuals move by e / scale when the whitened errors move
     # by e, the parameters by -(J^T J)^-1 J^T (e / scale) with J = res.jac = jac / scale.
     influence = -(normal_inv @ res.jac.T)[:p] * scale

@@ -63,7 +63,11 @@ class AnalysisJob(QObject):
             answer = json.loads(out) if out.strip() else {}
         except ValueError:
             answer = {}
-        if code == 0 and status == QProcess.ExitStatus.NormalExit and "error" not in answer:
+        # Exit 2 with a summary: nothing was identified, but what was computed (the spectrum)
+        # is stored and shown, with each refusal in its view.
+        summary = "channels" in answer and code in (0, 2)
+        if (status == QProcess.ExitStatus.NormalExit and "error" not in answer
+                and (code == 0 or summary)):
             self._report(self.succeeded, self.path, answer)
             return
         message = answer.get("error") or _last_lines(err) or f"fsi-lab analyze ended with {code}"

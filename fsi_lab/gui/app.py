@@ -120,10 +120,11 @@ class MainWindow(QMainWindow):
         self.live = LivePlots()
         self.analysis = AnalysisViews(self.registry, self.pool)
         self.runs = RunsBrowser(self.registry, self.pool)
-        self.sequence = SequenceTab()
+        self.sequence = SequenceTab(self.registry)
         self._build_layout()
         self._build_menu()
         self._connect()
+        self.registry.check_hooks()
         for record in self.registry.records:
             if record.status in ("failed", "invalid"):
                 self.log.add(LogRecord("WARNING", f"plugin {record.name} ({record.distribution}) "
@@ -470,7 +471,8 @@ def fitting_size(app: QApplication) -> tuple[int, int]:
 
 
 def main(args: Any) -> int:
-    """``fsi-lab gui [PROFILE | RUN.h5 ...] [--screenshot OUT.png] [--size WxH]``."""
+    """``fsi-lab gui [PROFILE | RUN.h5 ...] [--screenshot OUT.png] [--size WxH] [--view
+    NAME]``."""
     screenshot = getattr(args, "screenshot", None)
     if QApplication.instance() is None:
         if screenshot is not None:
@@ -492,11 +494,19 @@ def main(args: Any) -> int:
     window.show()
     freeze_startup_objects()
     window.open_paths(paths)
+    view = getattr(args, "view", None)
+    idle = True
+    if view is not None:  # the run files' tabs exist once they are loaded
+        idle = wait_until_idle(window)
+        if not window.analysis.show_view(view):
+            window.notify("ERROR", f"--view {view}: no view of that title or drawing that "
+                                   "analysis for the run shown; its views: "
+                                   f"{', '.join(window.analysis.view_titles()) or 'none'}")
     if screenshot is None:
         code = app.exec()
         _dispose(window)
         return code
-    idle = wait_until_idle(window)
+    idle = idle and wait_until_idle(window)
     saved = take_screenshot(window, Path(screenshot))
     errors = [text for level, text in window.messages.messages if level == "ERROR"]
     _dispose(window)

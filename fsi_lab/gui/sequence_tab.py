@@ -6,8 +6,8 @@ settle time), choose the directory of its run files, and start it. The sequence 
 run checked before the first is driven, the bench safe between runs, the record
 (``DIR/sequence.h5``) rewritten as it goes. The tab reads that record whenever it changes: each
 run's status in the table, the progress bar (runs done of the plan's), and the aggregation of
-the completed runs (C_i and C_f with their intervals; the backbone, damping and C_q curves of
-every run on one amplitude axis, with their medians and the fitted C_q line).
+the completed runs (C_i and C_f with their intervals, and the figures the plugins register for
+it through ``fsi_lab_addviews``: fsi-lab's own draw every run's curves on one amplitude axis).
 
 Stop sends the child SIGTERM: the run in progress ends as ``fsi-lab run`` ends it (safe state,
 its file finalised) and the sequence is recorded as interrupted. Resume continues it with
@@ -16,12 +16,10 @@ its file finalised) and the sequence is recorded as interrupted. Resume continue
 
 from __future__ import annotations
 
-import math
 import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import QProcess, QTimer, Signal
 from PySide6.QtWidgets import (
@@ -39,19 +37,40 @@ from PySide6.QtWidgets import (
     QSplitter,
     QTableWidget,
     QTableWidgetItem,
+    QTabWidget,
     QVBoxLayout,
     QWidget,
 )
 
-from fsi_lab.gui.figure import Figure
+from fsi_lab.registry import Registry
 
 #: How often the record is looked at while the sequence runs, ms (it is read when it changed).
 POLL_MS = 500
 #: How long a stopped sequence may take to end its run safely before it is killed, ms.
 STOP_GRACE_MS = 60000
 COLUMNS = ("run", "step", "point", "status", "run file", "C_i kg/(m s)", "C_f kg/m^2")
-PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
-           "#7f7f7f", "#bcbd22", "#17becf")
+
+
+def aggregation_figures(registry: Registry, report) -> list[QWidget]:
+    """The widgets of the figures of a sequence's aggregation the plugins register
+    (``fsi_lab_addviews``: ``views.add_aggregation_view``), in their order; one that cannot be
+    made is left out and ``report(text)`` says why."""
+    figures = []
+    for descriptor in sorted(registry.views().aggregation_views,
+                             key=lambda v: (v.order, v.title)):
+        try:
+            widget = descriptor.view()
+            if not isinstance(widget, QWidget) or not callable(getattr(widget, "draw", None)):
+                raise TypeError(f"made a {type(widget).__name__}, not a QWidget with "
+                                "draw(aggregate)")
+        except Exception as exc:  # noqa: BLE001 - a broken figure must not take the window down
+            owner = registry.views().owners.get(("aggregation view", descriptor.title), "?")
+            report(f"aggregation figure {descriptor.title!r} of plugin {owner} left out: "
+                   f"{type(exc).__name__}: {exc}")
+            continue
+        widget.title = descriptor.title
+        figures.append(widget)
+    return figures
 
 
 def plan_text(profile: str | Path, parameter: str, values: list[str], repeats: int = 1,
@@ -132,8 +151,12 @@ class SequenceTab(QWidget):
     message = Signal(str, str)
     finished = Signal(int)
 
-    def __init__(self, parent: QWidget | None = None) -> None:
+    def __init__(self, registry: Registry | None = None, parent: QWidget | None = None) -> None:
         super().__init__(parent)
+        if registry is None:
+            from fsi_lab.registry import load_registry
+
+            registry = load_registry()
         self.process: QProcess | None = None
         self.record = None
         self._mtime: float | None = None
@@ -163,20 +186,20 @@ class SequenceTab(QWidget):
         self.table = QTableWidget(0, len(COLUMNS))
         self.table.setHorizontalHeaderLabels(COLUMNS)
         self.table.verticalHeader().setVisible(False)
-        self.figure = Figure()
-        self.plots = {}
-        for col, (key, y_label) in enumerate((("backbone", "frequency (Hz)"),
-                                              ("damping", "damping ratio"),
-                                              ("c_q", "C_q (kg/(m s))"))):
-            plot = self.figure.addPlot(row=0, col=col)
-            plot.setLabel("bottom", "amplitude (m)")
-            plot.setLabel("left", y_label)
-            plot.setLogMode(x=True, y=False)
-            plot.showGrid(x=True, y=True, alpha=0.3)
-            self.plots[key] = plot
-        self.plots["backbone"].setTitle("backbone")
-        self.plots["damping"].setTitle("damping")
-        self.plots["c_q"].setTitle("C_q and its fit")
+        #: why a figure was left out or failed to draw (shown below the figures)
+        self.notes: list[str] = []
+        self.figures = aggregation_figures(registry, self.notes.append)
+        self.figure_note = QLabel("")
+        self.figure_note.setWordWrap(True)
+        self.figure_note.setStyleSheet("color: #b00020;")
+        if not self.figures:
+            self.notes.append("no plugin draws a sequence's aggregation (fsi_lab_addviews: "
+                              "views.add_aggregation_view)")
+        self.figure_area = QTabWidget()
+        for figure in self.figures:
+            self.figure_area.addTab(figure, figure.title)
+        self.figure_area.tabBar().setVisible(len(self.figures) > 1)
+        self._show_notes()
 
         files = QHBoxLayout()
         files.addWidget(QLabel("Plan"))
@@ -200,7 +223,12 @@ class SequenceTab(QWidget):
         split = QSplitter()
         split.setOrientation(pg.QtCore.Qt.Orientation.Vertical)
         split.addWidget(top)
-        split.addWidget(self.figure)
+        bottom = QWidget()
+        below = QVBoxLayout(bottom)
+        below.setContentsMargins(0, 0, 0, 0)
+        below.addWidget(self.figure_area, 1)
+        below.addWidget(self.figure_note)
+        split.addWidget(bottom)
         layout = QVBoxLayout(self)
         layout.addWidget(split)
         self.timer = QTimer(self)
@@ -390,55 +418,41 @@ class SequenceTab(QWidget):
         self._draw(record.aggregate)
 
     def _draw(self, agg: dict[str, Any] | None) -> None:
-        for plot in self.plots.values():
-            plot.clear()
-        if not agg or not agg.get("modes"):
+        from fsi_lab.aggregate import main_mode
+
+        mode = main_mode(agg)
+        if mode is None:
             self.summary.setText("")
-            return
-        mode = max(agg["modes"], key=lambda m: m.get("extrema", 0))
-        lines = []
-        for m in agg["modes"]:
-            if "c_i" in m:
-                lines.append(f"{m['frequency_hz']:.4g} Hz ({m['runs']} runs): C_i = "
-                             f"{m['c_i']:.4g} kg/(m s) (95 %: {m['c_i_ci95'][0]:.4g} to "
-                             f"{m['c_i_ci95'][1]:.4g}), C_f = {m['c_f']:.4g} kg/m^2 (95 %: "
-                             f"{m['c_f_ci95'][0]:.4g} to {m['c_f_ci95'][1]:.4g})")
-        self.summary.setText("aggregate: " + "; ".join(lines) + f" — plotted: "
-                             f"{mode['frequency_hz']:.4g} Hz" if lines else "")
-        curves, axis = mode["curves"], mode["axis"]
-        for key, curve, y in (("backbone", "backbone", "frequency_hz"),
-                              ("damping", "damping", "zeta"), ("c_q", "damping", "c_q")):
-            x = np.asarray(curves[curve]["amplitude_m"], dtype=float)
-            values = np.asarray(curves[curve][y], dtype=float)
-            runs = np.asarray(curves[curve]["run"], dtype=int)
-            keep = (x > 0) & np.isfinite(values)
-            for run in np.unique(runs[keep]):
-                sel = keep & (runs == run)
-                self.plots[key].plot(x[sel], values[sel], pen=None, symbol="o", symbolSize=4,
-                                     symbolPen=None,
-                                     symbolBrush=PALETTE[int(run) % len(PALETTE)])
-        centres = np.asarray(axis["amplitude_m"], dtype=float)
-        for key, name in (("backbone", "backbone_frequency_hz"), ("c_q", "c_q")):
-            medians = np.array([math.nan if v is None else v for v in axis[name]], dtype=float)
-            ok = np.isfinite(medians)
-            if ok.any():
-                self.plots[key].plot(centres[ok], medians[ok], pen=pg.mkPen("k", width=2))
-        fit = np.array([math.nan if v is None else v for v in axis["c_q_fit"]], dtype=float)
-        if np.isfinite(fit).any():
-            self.plots["c_q"].plot(centres, fit, pen=pg.mkPen("r", width=2,
-                                                              style=pg.QtCore.Qt.PenStyle.DashLine))
+        else:
+            lines = []
+            for m in agg["modes"]:
+                if "c_i" in m:
+                    lines.append(f"{m['frequency_hz']:.4g} Hz ({m['runs']} runs): C_i = "
+                                 f"{m['c_i']:.4g} kg/(m s) (95 %: {m['c_i_ci95'][0]:.4g} to "
+                                 f"{m['c_i_ci95'][1]:.4g}), C_f = {m['c_f']:.4g} kg/m^2 (95 %: "
+                                 f"{m['c_f_ci95'][0]:.4g} to {m['c_f_ci95'][1]:.4g})")
+            self.summary.setText("aggregate: " + "; ".join(lines) + f" — plotted: "
+                                 f"{mode['frequency_hz']:.4g} Hz" if lines else "")
+        failed = []
+        for figure in self.figures:
+            try:
+                figure.draw(agg)
+            except Exception as exc:  # noqa: BLE001 - a plugin's figure must not take the tab down
+                failed.append(f"cannot draw {figure.title!r}: {type(exc).__name__}: {exc}")
+        self._show_notes(failed)
 
-    def points(self, key: str) -> int:
-        """Points drawn in plot ``backbone``, ``damping`` or ``c_q`` (for tests)."""
-        return sum(len(item.xData) for item in self.plots[key].listDataItems()
-                   if item.xData is not None)
-
+    def _show_notes(self, more: list[str] = ()) -> None:
+        text = "; ".join([*self.notes, *more])
+        self.figure_note.setText(text)
+        self.figure_note.setVisible(bool(text))
 
 def _run_results(agg: dict[str, Any] | None) -> dict[int, dict[str, Any]]:
     """Each run's own C_i and C_f of the aggregation's largest mode, by run index."""
-    if not agg or not agg.get("modes"):
+    from fsi_lab.aggregate import main_mode
+
+    mode = main_mode(agg)
+    if mode is None:
         return {}
-    mode = max(agg["modes"], key=lambda m: m.get("extrema", 0))
     indices = agg.get("sequence_runs") or []
     return {indices[r["run"]]: r for r in mode.get("per_run", []) if r["run"] < len(indices)}
 

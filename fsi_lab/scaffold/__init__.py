@@ -4,8 +4,8 @@ It writes ``DIR/fsi-lab-NAME/``: a ``pyproject.toml`` declaring the plugin's ent
 ``fsi_lab`` group, the package ``fsi_lab_NAME`` (the module that declares the plugin, kept
 light, and the module doing the work), a test file that runs fsi-lab's conformance kit
 (:mod:`fsi_lab.testing`) on it, and a README saying how to install, test and use it. As
-written, it installs with ``pip install -e DIR/fsi-lab-NAME`` and passes its tests; the author
-then changes what it computes, sends or talks to.
+written, it installs with ``pip install -e 'DIR/fsi-lab-NAME[test]'`` and passes its tests;
+the author then changes what it computes, sends or talks to.
 
 This module is a built-in plugin (the ``scaffold`` entry point) adding the command through the
 ``fsi_lab_addcommands`` hook; it imports the templates only when the command runs.
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     package = "fsi_lab_" + args.name.replace("-", "_")
     print(f"wrote {root}/ (pyproject.toml, {package}/, tests/, README.md)")
     print("next:")
-    print(f"  pip install -e {root}        # fsi-lab plugins then lists {args.name}")
+    print(f"  pip install -e '{root}[test]'   # fsi-lab plugins then lists {args.name}")
     print(f"  cd {root} && python -m pytest   # fsi-lab's conformance kit on it")
     print(f"  edit {package}/ (its README says what to change)")
     return 0

@@ -37,13 +37,14 @@ README = '''\
 
 $summary
 
-A $kind plugin for [fsi-lab](https://github.com/), written from `fsi-lab plugin new $kind $name`.
+$article $kind plugin for fsi-lab, written from `fsi-lab plugin new $kind $name`.
 
 ## Install
 
-    pip install -e .
+    pip install -e '.[test]'
 
-`fsi-lab plugins` then lists `$name` as `loaded` (or says why it is not).
+into the environment where fsi-lab is installed (`test` brings pytest). `fsi-lab plugins` then
+lists `$name` as `loaded` (or says why it is not).
 
 ## Test
 
@@ -69,8 +70,8 @@ Name it in a profile's chain (`[analysis] chain = ["$name"]`, its parameters in
     fsi-lab analyze RUN.h5 --set analysis.chain=$name --set analysis.$name.window=0.2
 
 Its values are in the JSON summary (`fsi-lab analyze RUN.h5 --json`: `channels.<channel>.$under`)
-and in the text summary; `fsi-lab gui RUN.h5` draws its datasets (`rms` against `time`, with
-their units) in a tab of its own.'''
+and in the text summary; `fsi-lab gui RUN.h5 --view $name` draws its datasets (`rms` against
+`time`, with their units) in a tab of its own.'''
 
 ANALYSIS_CHANGE = '''\
 - `$package/plugin.py` declares the analysis: its name, its parameters (each with its unit,
@@ -448,7 +449,7 @@ def files(kind: str, name: str) -> dict[str, str]:
     spec = KINDS[kind]
     values = {"name": name, "under": under, "package": package, "kind": kind,
               "cls": "".join(part.title() for part in name.split("-")) + "Amplifier",
-              "summary": spec["summary"]}
+              "summary": spec["summary"], "article": "An" if kind[0] in "aeiou" else "A"}
 
     def fill(text: str) -> str:
         return Template(text).substitute(values)

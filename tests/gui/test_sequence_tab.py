@@ -51,7 +51,8 @@ def test_build_start_stop_resume_and_watch_the_aggregation(qtbot, make_window, t
     # run 1 completes, and the sequence waits 600 s before run 2: stop it there
     qtbot.waitUntil(lambda: status_of(tab, 0) == "completed", timeout=RUN_TIMEOUT_MS)
     assert status_of(tab, 1) == "pending" and tab.progress.value() == 1
-    assert tab.points("backbone") > 10 and tab.points("c_q") > 10
+    (figure,) = tab.figures  # the built-in views' figure of the aggregation
+    assert figure.points("backbone") > 10 and figure.points("c_q") > 10
     assert tab.summary.text().startswith("aggregate: 17.06 Hz (1 runs): C_i = ")
     with qtbot.waitSignal(tab.finished, timeout=UI_TIMEOUT_MS * 4) as ended:
         tab.stop()
@@ -72,5 +73,5 @@ def test_build_start_stop_resume_and_watch_the_aggregation(qtbot, make_window, t
     # each run's own C_i and C_f in the table, from the aggregation
     assert all(tab.table.item(row, 5).text() for row in range(2))
     # the runs' points and the medians and fitted line on the common amplitude axis
-    assert len(tab.plots["c_q"].listDataItems()) == 2 + 2  # two runs, median, fit
+    assert len(figure.plots["c_q"].listDataItems()) == 2 + 2  # two runs, median, fit
     assert len(list(Path(out).glob("2*.h5"))) == 2

@@ -6,7 +6,7 @@ import time
 
 import numpy as np
 import pytest
-from benchkit import (
+from benchkit import (  # sim_bench: benchkit's fixture, named by the tests below
     ACCELEROMETER,
     bench_profile,
     bench_threads,

@@ -145,6 +145,25 @@ class AnalysisViews(QWidget):
             return next(v for v in self.views if v.title == cls)
         return next(v for v in self.views if isinstance(v, cls))
 
+    def show_view(self, name: str) -> bool:
+        """Show the tab titled ``name``, or else the first that draws the analysis ``name``
+        (its own view, or its generic one); False when the run shown has none."""
+        shown = [(index, view) for index, view in enumerate(self.views)
+                 if self.tabs.isTabVisible(index)]
+        found = next((index for index, view in shown if view.title == name), None)
+        if found is None:
+            found = next((index for index, view in shown
+                          if name in getattr(view, "analyses", ())), None)
+        if found is None:
+            return False
+        self.tabs.setCurrentIndex(found)
+        return True
+
+    def view_titles(self) -> list[str]:
+        """Titles of the tabs shown for the run."""
+        return [view.title for index, view in enumerate(self.views)
+                if self.tabs.isTabVisible(index)]
+
     def _show_a_view_with_results(self, results: RunResults) -> None:
         """When the tab shown draws analyses the run does not have, the first tab that draws
         one it has (a run of a third-party analysis opens on its view, not on an empty

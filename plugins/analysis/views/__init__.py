@@ -14,16 +14,17 @@ when the GUI builds its tabs. The figures are drawn as the paper draws them:
 - the modal model overlaid on the measurement (:mod:`.modal_model_view`);
 - spectra and FRF (:mod:`.spectrum_view`).
 
-It also gives the curves the runs browser compares across runs (backbone, damping, C_q) and the
-columns of the tables of identified values (C_i, C_f and R^2). The dataset names the views read
-are in :mod:`.names`.
+It also gives the curves the runs browser compares across runs (backbone, damping, C_q), the
+columns of the tables of identified values (C_i, C_f and R^2) and the Sequence tab's figure of a
+sequence's aggregation (every run's backbone, damping and C_q on one amplitude axis:
+:mod:`.aggregation_view`). The dataset names the views read are in :mod:`.names`.
 """
 
 from __future__ import annotations
 
 from fsi_lab.contract import Deferred
 from fsi_lab.hookspecs import hookimpl
-from fsi_lab.presentation import AnalysisView, ComparisonCurve, SummaryColumn
+from fsi_lab.presentation import AggregationView, AnalysisView, ComparisonCurve, SummaryColumn
 
 _HERE = "fsi_lab.plugins.analysis.views"
 
@@ -69,3 +70,6 @@ def fsi_lab_addviews(views):
         views.add_curve(curve)
     for column in COLUMNS:
         views.add_column(column)
+    views.add_aggregation_view(AggregationView(
+        "Backbone, damping and C_q", Deferred(f"{_HERE}.aggregation_view:AggregationCurvesView"),
+        order=0))
