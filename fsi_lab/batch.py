@@ -115,7 +115,7 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     from fsi_lab.runfile import read_run, require_analysable
 
     registry = registry if registry is not None else worker_registry()
-    run = read_run(task.path)
+    run = read_run(task.path, load_data=False, lazy=True)  # a channel is read when used
     require_analysable(run)
     profile = analysis_profile(run, registry, task.sets)
     require_mass_per_length(task.mass_per_length)

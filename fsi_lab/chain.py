@@ -12,7 +12,6 @@ span (:mod:`fsi_lab.tails`).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import traceback
 from pathlib import Path
@@ -29,6 +28,7 @@ from fsi_lab.contract import (
 from fsi_lab.errors import FsiLabError, ParameterError
 from fsi_lab.events import EventBus, Progress
 from fsi_lab.registry import Registry
+from fsi_lab.sources import head_of, samples_of
 from fsi_lab.summary import json_safe
 from fsi_lab.tails import QuietTail, analysed_end
 
@@ -189,15 +189,17 @@ def cut_quiet_tail(channels: Mapping[str, ChannelData], used: list[str]
                    ) -> tuple[dict[str, ChannelData], QuietTail]:
     """The channels up to where the analysis of the record stops (:func:`fsi_lab.tails.
     analysed_end`, judged on the ``used`` channels: those analysed and the reference), and
-    that judgement. Channels of one sample rate keep one length."""
-    tail = analysed_end((channels[n].data, channels[n].sample_rate) for n in used
+    that judgement. Channels of one sample rate keep one length. Channels read lazily
+    (:class:`~fsi_lab.sources.LazyChannelData`) are judged a chunk at a time and stay unread."""
+    tail = analysed_end((samples_of(channels[n]), channels[n].sample_rate) for n in used
                         if n in channels)
     if not tail.cut:
         return dict(channels), tail
     cut = {}
     for name, channel in channels.items():
-        keep = min(channel.data.size, int(math.ceil(tail.analysed_s * channel.sample_rate)))
-        cut[name] = dataclasses.replace(channel, data=channel.data[:keep])
+        keep = min(len(samples_of(channel)), int(math.ceil(tail.analysed_s
+                                                           * channel.sample_rate)))
+        cut[name] = head_of(channel, keep)
     return cut, tail
 
 

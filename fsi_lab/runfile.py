@@ -23,6 +23,8 @@ from fsi_lab.isolation import crash_or_hang, in_child
 from fsi_lab.runcheck import CHANNEL_RATES_HZ, H5_ERRORS, MAX_T0_S, RunFileReader, decode_attr
 from fsi_lab.runcheck import EXPECTED as RUN_FILE
 from fsi_lab.signals import INTERRUPTED  # noqa: F401 - the error recorded for Ctrl+C
+from fsi_lab.sources import DatasetSource, LazyChannelData, samples_of
+from fsi_lab.sources import chunks as sample_chunks
 from fsi_lab.units import QUANTITIES
 
 FORMAT = "fsi-lab run"
@@ -32,6 +34,8 @@ EXIT_STATUSES = ("running", "completed", "aborted", "failed")
 #: flushed before the samples not yet flushed, with the next block, would exceed it.
 FLUSH_SPAN_S = 0.5
 CHUNK_SAMPLES = 16384
+#: Samples read at a time when a file's channels are checked without keeping them.
+SCAN_CHUNK = 64 * CHUNK_SAMPLES
 
 
 def software_version() -> str:
@@ -248,13 +252,14 @@ _SURVIVED: set[tuple[int, int, int, int, bool]] = set()
 
 def _read_safely(path: Path, read, load_data: bool = False):
     """``read(path)``, once a forked child has read the file (its nodes and analysis summary,
-    its data too with ``load_data``) without crashing or hanging the HDF5 library
-    (:func:`~fsi_lab.isolation.crash_or_hang`)."""
+    its data too with ``load_data``, a chunk at a time without keeping it) without crashing or
+    hanging the HDF5 library (:func:`~fsi_lab.isolation.crash_or_hang`)."""
     require_regular_file(path, "a run file (.h5)")
     info = path.stat()
     key = (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns)
     if (*key, True) not in _SURVIVED and (*key, load_data) not in _SURVIVED:
-        problem = crash_or_hang(lambda: (_read_run(path, load_data), _read_summary(path)),
+        problem = crash_or_hang(lambda: (_read_run(path, False), _scan_channels(path)
+                                         if load_data else None, _read_summary(path)),
                                 info.st_size, hold=h5py._objects.phil)
         if problem:
             raise InputFileError(f"{path}: damaged: {problem}; expected {RUN_FILE}")
@@ -262,8 +267,9 @@ def _read_safely(path: Path, read, load_data: bool = False):
     return read(path)
 
 
-def read_run(path: str | Path, load_data: bool = True) -> RunData:
-    """Read a run file (channels fully loaded unless ``load_data`` is False).
+def read_run(path: str | Path, load_data: bool = True, lazy: bool = False) -> RunData:
+    """Read a run file (channels fully loaded unless ``load_data`` is False; with ``lazy``,
+    channels read from the file when first used: :class:`~fsi_lab.sources.LazyChannelData`).
 
     Raises
     ------
@@ -271,10 +277,23 @@ def read_run(path: str | Path, load_data: bool = True) -> RunData:
         Missing file, not HDF5, not an fsi-lab run file, or a node or attribute that is not as
         fsi-lab writes it (named in the message), including damage that would crash HDF5.
     """
-    return _read_safely(Path(path), lambda p: _read_run(p, load_data), load_data)
+    return _read_safely(Path(path), lambda p: _read_run(p, load_data and not lazy, lazy),
+                        load_data or lazy)
 
 
-def _read_run(path: Path, load_data: bool) -> RunData:
+def _scan_channels(path: Path) -> None:
+    """Read every channel of run file ``path`` a chunk at a time, keeping nothing (the crash
+    check of a file whose channels are read later, lazily)."""
+    with h5py.File(path, "r") as handle:
+        group = handle.get("channels")
+        for name in group if isinstance(group, h5py.Group) else []:
+            dataset = group[name]
+            if isinstance(dataset, h5py.Dataset) and dataset.ndim == 1:
+                for start in range(0, dataset.shape[0], SCAN_CHUNK):
+                    dataset[start:start + SCAN_CHUNK]
+
+
+def _read_run(path: Path, load_data: bool, lazy: bool = False) -> RunData:
     with _open_checked(path, "r") as handle:
         reader = RunFileReader(path)
         attrs = reader.attrs(handle)
@@ -298,7 +317,10 @@ def _read_run(path: Path, load_data: bool) -> RunData:
             t0 = reader.number(meta, "t0", where, default=0.0, bounds=(-MAX_T0_S, MAX_T0_S))
             samples[name], data = reader.samples(dataset, load_data)
             channel_attrs[name] = meta
-            channels[name] = ChannelData(name, data, rate, quantity, unit, t0)
+            if lazy:
+                data = DatasetSource(path, where, samples[name])
+            kind = LazyChannelData if lazy else ChannelData
+            channels[name] = kind(name, data, rate, quantity, unit, t0)
         if reference and reference not in channels:
             raise reader.refuse("/ attribute 'reference'", f"names {reference!r}, which is not "
                                 "a channel of the file",
@@ -320,13 +342,14 @@ def _read_run(path: Path, load_data: bool) -> RunData:
             params = reader.child(group, "params", h5py.Group)
             excitation["params"] = reader.attrs(params) if params is not None else {}
             waveform = reader.child(group, "waveform", h5py.Dataset, required=True)
-            excitation["waveform"] = reader.samples(waveform, load_data)[1]
+            excitation["waveform"] = reader.samples(waveform, load_data or lazy)[1]
     return RunData(path, attrs, channels, channel_attrs, instruments, excitation, samples)
 
 
 def require_analysable(run: RunData, minimum: int = 2) -> None:
-    """Raise InputFileError unless ``run`` (read with its data) has channels of at least
-    ``minimum`` finite samples each (what ``fsi-lab analyze`` needs)."""
+    """Raise InputFileError unless ``run`` (read with its data, or lazily: then read a chunk at
+    a time) has channels of at least ``minimum`` finite samples each (what ``fsi-lab analyze``
+    needs)."""
     if not run.channels:
         raise InputFileError(f"{run.path}: /channels holds no channel; expected recorded "
                              "channels to analyse")
@@ -336,11 +359,21 @@ def require_analysable(run: RunData, minimum: int = 2) -> None:
             raise InputFileError(
                 f"{run.path}: /channels/{name} holds {count} sample{'s' if count != 1 else ''}; "
                 f"expected at least {minimum} to analyse")
-        bad = np.flatnonzero(~np.isfinite(channel.data))
-        if bad.size:
+        count, first = 0, -1
+        try:
+            for start, chunk in sample_chunks(samples_of(channel)):
+                bad = np.flatnonzero(~np.isfinite(chunk))
+                if bad.size and first < 0:
+                    first = start + int(bad[0])
+                count += bad.size
+        except H5_ERRORS as exc:
+            raise RunFileReader(run.path).refuse(
+                f"/channels/{name}", f"its samples cannot be read ({exc})",
+                "a 1-D dataset of real numbers") from None
+        if count:
             raise InputFileError(
-                f"{run.path}: /channels/{name} holds {bad.size} NaN or infinite samples (the "
-                f"first at index {bad[0]}); expected finite samples to analyse")
+                f"{run.path}: /channels/{name} holds {count} NaN or infinite samples (the "
+                f"first at index {first}); expected finite samples to analyse")
 
 
 def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],

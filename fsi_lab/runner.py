@@ -474,7 +474,7 @@ class Runner:
 
     def _analyse(self, path: Path) -> dict[str, Any]:
         self.bus.emit(StateChanged("analyzing"))
-        run = read_run(path)
+        run = read_run(path, load_data=False, lazy=True)  # a channel is read when used
         return analyse_and_store(path, run.channels, self.profile.analysis,
                                  self.profile.analysis_params, self.registry,
                                  specimen=self.profile.specimen, bus=self.bus)

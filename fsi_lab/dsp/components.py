@@ -109,32 +109,53 @@ class BandComponents:
 
 def _analytic(rows: np.ndarray) -> np.ndarray:
     """Analytic signals of the rows (FFT, zero-padded to a fast length)."""
-    n = rows.shape[1]
+    return np.stack([_analytic_row(row) for row in rows]) if rows.shape[0] else \
+        np.empty(rows.shape, dtype=complex)
+
+
+def _analytic_row(row: np.ndarray) -> np.ndarray:
+    """The analytic signal of one row (FFT zero-padded to a fast length of twice it; the
+    same numbers, to the bit, as the rows transformed together)."""
+    n = row.size
     m = sfft.next_fast_len(2 * n)
-    spec = sfft.fft(rows, n=m, axis=1, workers=FFT_WORKERS)
+    spec = sfft.fft(row, n=m, workers=FFT_WORKERS)
     h = np.zeros(m)
     h[0] = 1.0
     h[1:(m + 1) // 2] = 2.0
     if m % 2 == 0:
         h[m // 2] = 1.0
-    return sfft.ifft(spec * h, axis=1, workers=FFT_WORKERS)[:, :n]
+    spec *= h
+    del h
+    return sfft.ifft(spec, workers=FFT_WORKERS, overwrite_x=True)[:n]
+
+
+def _envelopes_and_frequencies(rows: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """Envelope and instantaneous frequency (Hz) of each row, from its analytic signal, a row
+    at a time (so only one row's transform is held)."""
+    env = np.empty(rows.shape)
+    freq = np.empty(rows.shape)
+    for k, row in enumerate(rows):
+        z = _analytic_row(row)
+        np.abs(z, out=env[k])
+        angle = np.angle(z)
+        del z
+        freq[k] = np.gradient(np.unwrap(angle)) * (fs / (2.0 * math.pi))
+    return env, freq
 
 
 def _assemble(x: np.ndarray, fs: float, bands: ModeBands, band_of: tuple[int, ...],
               windows: tuple[tuple[int, int, int], ...], ident: Identification | None,
               integrate: int) -> BandComponents:
     whole = split(x, fs, bands, integrate=integrate)
-    rows = whole[list(band_of)].copy()
+    residual = x - whole.sum(axis=0) if not integrate else np.zeros(x.size)
+    rows = whole[list(band_of)]  # (a copy)
+    del whole
     mask = np.ones(rows.shape, dtype=bool)
     for start, free, stop in windows:
         part = split(x[start:stop], fs, bands, integrate=integrate)
         rows[:, start:stop] = part[list(band_of)]
         mask[:, free:stop] = False
-    z = _analytic(rows)
-    env = np.abs(z)
-    phase = np.unwrap(np.angle(z), axis=1)
-    freq = np.gradient(phase, axis=1) * (fs / (2.0 * math.pi))
-    residual = x - whole.sum(axis=0) if not integrate else np.zeros(x.size)
+    env, freq = _envelopes_and_frequencies(rows, fs)
     return BandComponents(components=rows, envelopes=env, frequencies=freq, residual=residual,
                           edge_mask=mask, bands=bands, band_of=tuple(band_of),
                           windows=tuple(windows), sample_rate=float(fs), identification=ident,

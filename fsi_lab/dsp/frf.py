@@ -35,6 +35,7 @@ from fsi_lab.dsp.modal_fit import (
     modal_fit,
 )
 from fsi_lab.dsp.spectrum import cross_spectra, find_peaks_interpolated
+from fsi_lab.sources import check_source, is_source
 
 
 @dataclass(frozen=True)
@@ -100,9 +101,10 @@ def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float
     Parameters
     ----------
     x
-        Reference (input) record, e.g. base acceleration, unit X.
+        Reference (input) record, e.g. base acceleration, unit X: an array, or a source read a
+        chunk at a time (:class:`fsi_lab.sources.DatasetSource`; the same numbers to the bit).
     y
-        Response record of the same length, e.g. tip velocity, unit Y.
+        Response record of the same length, e.g. tip velocity, unit Y (likewise).
     fs
         Sample rate, Hz.
     segment
@@ -147,14 +149,20 @@ def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float
     """
     func = "frf"
     fs = check_rate(fs, func)
-    xa = as_record(x, func, min_samples=64, name="reference record", check_clipping=True)
-    ya = as_record(y, func, min_samples=64, name="response record", check_clipping=True)
-    if xa.size != ya.size:
-        raise fail(func, f"reference ({xa.size} samples) and response ({ya.size} samples) "
+    if is_source(x) or is_source(y):  # read a chunk at a time, never held whole
+        xa, ya = x, y
+        nx = check_source(x, func, min_samples=64, name="reference record")
+        ny = check_source(y, func, min_samples=64, name="response record")
+    else:
+        xa = as_record(x, func, min_samples=64, name="reference record", check_clipping=True)
+        ya = as_record(y, func, min_samples=64, name="response record", check_clipping=True)
+        nx, ny = xa.size, ya.size
+    if nx != ny:
+        raise fail(func, f"reference ({nx} samples) and response ({ny} samples) "
                          "have different lengths; expected two records of the same length")
     if not (0.0 <= overlap < 1.0):
         raise fail(func, f"overlap = {overlap!r}; expected a fraction in [0, 1)")
-    n = xa.size
+    n = nx
     if segment is None:
         segment = int(min(2 ** 16, max(64, n // 8)))
     if isinstance(segment, bool) or not isinstance(segment, (int, np.integer)) \

@@ -743,11 +743,7 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
         model = _model_record(modes, window, fs, follow, quantity, w,
                               MODEL_LIMIT * float(np.max(np.abs(record[window[0]:window[2]]))))
         clean = split(model, fs, bands, integrate=integrate)
-        noisy = []
-        for _ in range(NOISE_REALIZATIONS // 2 if noise > 0 else 0):
-            extra = rng.normal(0.0, noise, model.size)
-            noisy += [split(model + extra, fs, bands, integrate=integrate),
-                      split(model - extra, fs, bands, integrate=integrate)]
+        noisy = _noisy_errors(modes, w, window, model, bands, fs, integrate, noise, rng)
         for mode in modes:
             fit = _preferred(mode)
             for j, d in enumerate(mode.decays):
@@ -761,9 +757,7 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
                 idx = _match(t_model, d["times"])
                 exact = fit.model[j]
                 if noisy:
-                    errors = np.array([_errors(parts[mode.band], fs, mode.frequency,
-                                               window[0], d["times"], exact)
-                                       for parts in noisy])
+                    errors = np.array(noisy[id(mode), j])
                     smear = errors.mean(axis=0)
                     spread = errors.std(axis=0, ddof=1) / max(mode.noise, 1e-300)
                     scale = np.ones(measured.size)
@@ -795,6 +789,29 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
                 d["anchor"] = anchor - (float(t_model[idx[0]]) - float(d["times"][0]))
     for mode in modes:
         _frequency_step(mode, follow)
+
+
+def _noisy_errors(modes: list[_Mode], w: int, window: tuple[int, int, int], model: np.ndarray,
+                  bands: ModeBands, fs: float, integrate: bool, noise: float,
+                  rng: np.random.Generator) -> dict[tuple[int, int], list[np.ndarray]]:
+    """The :func:`_errors` of each mode's decay ``j`` in window ``w`` (keyed ``(id(mode),
+    j)``) on each of the :data:`NOISE_REALIZATIONS` noisy model records (in antithetic pairs,
+    in the order drawn); empty without ``noise``. One noisy record's bands are held at a time."""
+    out: dict[tuple[int, int], list[np.ndarray]] = {}
+    for _ in range(NOISE_REALIZATIONS // 2 if noise > 0 else 0):
+        extra = rng.normal(0.0, noise, model.size)
+        for sign in (1.0, -1.0):
+            parts = split(model + extra if sign > 0 else model - extra, fs, bands,
+                          integrate=integrate)
+            for mode in modes:
+                fit = _preferred(mode)
+                for j, d in enumerate(mode.decays):
+                    if d["w"] == w:
+                        out.setdefault((id(mode), j), []).append(
+                            _errors(parts[mode.band], fs, mode.frequency, window[0],
+                                    d["times"], fit.model[j]))
+            del parts
+    return out
 
 
 def _errors(band_signal: np.ndarray, fs: float, frequency: float, start: int,

@@ -35,6 +35,8 @@ PAD_PERIODS = 4.0
 #: letting it (instead of mirroring) avoids an envelope kink at the record start, whose low
 #: frequency content the high-pass would otherwise distort.
 PAD_GROWTH = 100.0
+#: Frequency bins the integrating high-pass is computed for at a time.
+FACTOR_BLOCK = 1 << 16
 
 
 def lowest_mode(x: np.ndarray, fs: float, func: str) -> tuple[float, np.ndarray]:
@@ -95,10 +97,16 @@ def integrate(x: Any, fs: float, *, order: int = 1, highpass: float | None = Non
     m = sfft.next_fast_len(n + 2 * pad, real=True)
     yp = predict_pad(y, fs, peaks, pad, m - n - pad, PAD_GROWTH)
     spec = sfft.rfft(yp, workers=FFT_WORKERS)
-    f = np.arange(spec.size) * (fs / m)
-    gain = highpass_gain(f, highpass)
-    gain[0] = 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        factor = np.where(f > 0, gain / (2j * np.pi * np.where(f > 0, f, 1.0)) ** order, 0.0)
-    out = sfft.irfft(spec * factor, n=m, workers=FFT_WORKERS)
+    del yp
+    # The integrating high-pass, applied a block of bins at a time (its temporaries stay
+    # small; every bin gets the same numbers as from the whole spectrum at once).
+    for lo in range(0, spec.size, FACTOR_BLOCK):
+        f = np.arange(lo, min(spec.size, lo + FACTOR_BLOCK)) * (fs / m)
+        gain = highpass_gain(f, highpass)
+        if lo == 0:
+            gain[0] = 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            factor = np.where(f > 0, gain / (2j * np.pi * np.where(f > 0, f, 1.0)) ** order, 0.0)
+        spec[lo:lo + f.size] *= factor
+    out = sfft.irfft(spec, n=m, workers=FFT_WORKERS, overwrite_x=True)
     return out[pad:pad + n].copy()

@@ -38,11 +38,24 @@ from fsi_lab.dsp.decays import decay_segments
 MIN_SEGMENT = 64
 
 
-@functools.lru_cache(maxsize=8)
+#: Windows and ramps up to this many samples are cached (a run's records share their lengths);
+#: longer ones, of long records, are made for each use rather than held for the process.
+CACHED_SAMPLES = 1 << 18
+
+
 def _window(name: str, n: int) -> np.ndarray:
-    """Window samples (cached, read-only); ``"decay"`` is flat over the first half and a
-    half-Hann over the second, which keeps the early, large part of a free decay (and
-    fast-decaying modes) at full weight."""
+    """Window samples (read-only; cached up to :data:`CACHED_SAMPLES`); ``"decay"`` is flat
+    over the first half and a half-Hann over the second, which keeps the early, large part of a
+    free decay (and fast-decaying modes) at full weight."""
+    return _cached_window(name, n) if n <= CACHED_SAMPLES else _make_window(name, n)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_window(name: str, n: int) -> np.ndarray:
+    return _make_window(name, n)
+
+
+def _make_window(name: str, n: int) -> np.ndarray:
     if name == "boxcar":
         w = np.ones(n)
     elif name == "decay":
@@ -55,9 +68,17 @@ def _window(name: str, n: int) -> np.ndarray:
     return w
 
 
-@functools.lru_cache(maxsize=8)
 def _ramp(n: int) -> np.ndarray:
-    """Centred ramp i - (n - 1) / 2 (cached: records of one run share their length)."""
+    """Centred ramp i - (n - 1) / 2 (read-only; cached up to :data:`CACHED_SAMPLES`)."""
+    return _cached_ramp(n) if n <= CACHED_SAMPLES else _make_ramp(n)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_ramp(n: int) -> np.ndarray:
+    return _make_ramp(n)
+
+
+def _make_ramp(n: int) -> np.ndarray:
     t = np.arange(n, dtype=np.float64) - 0.5 * (n - 1)
     t.setflags(write=False)
     return t
@@ -429,7 +450,8 @@ def cross_spectra(x: Any, y: Any, fs: float, *, segment: int, step: int, window:
     ----------
     x, y
         Reference and response records of the same length, units U_x and U_y (1-D, finite,
-        checked by the caller).
+        checked by the caller): arrays, or sources read a chunk of segments at a time
+        (:class:`fsi_lab.sources.DatasetSource`: the same numbers, to the bit).
     fs
         Sample rate, Hz.
     segment
@@ -460,9 +482,11 @@ def cross_spectra(x: Any, y: Any, fs: float, *, segment: int, step: int, window:
     >>> bool(np.allclose(sxy[1:] / sxx[1:], 2.0))
     True
     """
-    xa = np.asarray(x, dtype=np.float64)
-    ya = np.asarray(y, dtype=np.float64)
-    n_seg = 1 + (xa.size - segment) // step if xa.size >= segment else 0
+    streamed = hasattr(x, "read") or hasattr(y, "read")
+    xa = x if streamed else np.asarray(x, dtype=np.float64)
+    ya = y if streamed else np.asarray(y, dtype=np.float64)
+    size = int(len(xa))
+    n_seg = 1 + (size - segment) // step if size >= segment else 0
     if not 1 <= groups <= n_seg:
         raise fail(_func, f"{n_seg} segment(s) of {segment} samples cannot make {groups} "
                           "group(s); expected at least one segment per group")
@@ -482,8 +506,14 @@ def cross_spectra(x: Any, y: Any, fs: float, *, segment: int, step: int, window:
     for first in range(0, n_seg, per_chunk):
         seg = np.arange(first, min(n_seg, first + per_chunk))
         idx = seg[:, None] * step + offsets[None, :]
-        xs = xa[idx]
-        ys = ya[idx]
+        if streamed:  # this chunk's stretch of each record, read from its source
+            lo, hi = int(seg[0]) * step, int(seg[-1]) * step + segment
+            idx -= lo
+            xs = np.asarray(xa[lo:hi], dtype=np.float64)[idx]
+            ys = np.asarray(ya[lo:hi], dtype=np.float64)[idx]
+        else:
+            xs = xa[idx]
+            ys = ya[idx]
         xs -= xs.mean(axis=1, keepdims=True)
         ys -= ys.mean(axis=1, keepdims=True)
         fx = rfft(xs * w)

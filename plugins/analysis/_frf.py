@@ -1,5 +1,6 @@
 """The work of the ``frf`` analysis plugin (declared in :mod:`.frf`): an adapter around
-:mod:`fsi_lab.dsp.frf`."""
+:mod:`fsi_lab.dsp.frf`; channels read from the run file are read a chunk at a time
+(:func:`fsi_lab.sources.samples_of`), never held whole."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from fsi_lab.contract import AnalysisContext, AnalysisResult
 from fsi_lab.dsp.frf import frf
 from fsi_lab.errors import AnalysisError
 from fsi_lab.plugins.analysis._chain import guarded, jsonable, where
+from fsi_lab.sources import samples_of
 
 
 def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
@@ -30,7 +32,7 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
         raise AnalysisError(f"{where('frf', context)}: reference sampled at {ref.sample_rate:g} "
                             f"Hz, response at {ch.sample_rate:g} Hz; expected the same rate")
     with guarded("frf", context):
-        res = frf(ref.data, ch.data, ch.sample_rate, segment=params["segment"],
+        res = frf(samples_of(ref), samples_of(ch), ch.sample_rate, segment=params["segment"],
                   overlap=params["overlap"], window=params["window"],
                   min_relative=params["min_relative"], max_peaks=params["max_peaks"],
                   min_coherence=params["min_coherence"])
