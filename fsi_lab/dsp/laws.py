@@ -581,8 +581,10 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     # A model driven where its extrema explode (a negative damping that makes the decay grow)
     # has derivatives so large that the covariance underflows to zero: nothing is pinned down,
     # and a zero-width interval would pass for certainty. Its coefficients are undetermined.
-    variances = np.diag(cov_all)[:p]
-    if not (np.all(np.isfinite(variances)) and np.all(variances > 0.0)):
+    # (An exact fit, with no residual at all, keeps its zero covariance.)
+    unscaled, variances = np.diag(normal_inv)[:p], np.diag(cov_all)[:p]
+    if not (np.all(np.isfinite(unscaled)) and np.all(unscaled > 0.0)
+            and (s2 == 0.0 or np.all(variances > 0.0))):
         cov_all = np.diag(np.full(p + k, math.inf))
     # Gauss-Newton: the whitened residuals move by e / scale when the whitened errors move
     # by e, the parameters by -(J^T J)^-1 J^T (e / scale) with J = res.jac = jac / scale.

@@ -92,6 +92,12 @@ def amplitude_convention(context: AnalysisContext, params: dict[str, Any], f_hz:
 def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, Any]:
     """C_i, C_f and the law comparison of one identified mode (method ``law``)."""
     quad = mode.quadratic
+    if not np.all(np.isfinite(quad.se)):
+        # A fit driven where its model decay explodes pins nothing down (fsi_lab.dsp.laws).
+        raise AnalysisError(
+            f"component {mode.index} at {mode.frequency_hz:.4g} Hz: the linear + quadratic "
+            "law does not determine C_i and C_f on this record (its fit diverges: the decay "
+            "grows under it); no coefficients are reported")
     a, beta = quad.value("a"), quad.value("beta")
     (a_lo, a_hi), (b_lo, b_hi) = quad.interval("a", level), quad.interval("beta", level)
     amp = np.concatenate([d.amplitude for d in mode.decays])
@@ -102,7 +108,8 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
     for name, fit in mode.laws.fits.items():
         laws[name] = {"delta_aicc": float(mode.laws.delta[name]),
                       **{p: float(v) for p, v in zip(fit.names, fit.params)},
-                      **{f"{p}_se": float(s) for p, s in zip(fit.names, fit.se)}}
+                      **{f"{p}_se": float(s) if math.isfinite(s) else None
+                         for p, s in zip(fit.names, fit.se)}}
     entry = {"c_i": 2.0 * mass * a, "c_f": mass * beta * scale,
              "c_i_ci95": [2.0 * mass * a_lo, 2.0 * mass * a_hi],
              "c_f_ci95": [mass * scale * b_lo, mass * scale * b_hi],
