@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 import warnings
 from dataclasses import dataclass, field
 
@@ -118,6 +119,12 @@ def _matched(values: np.ndarray, reference: float) -> int | None:
     return k if abs(values[k] / reference - 1.0) <= MATCH else None
 
 
+def _names(note: str, reference: float) -> bool:
+    """Whether ``note`` names a frequency (``... Hz``) within :data:`MATCH` of ``reference``."""
+    return any(abs(float(hz) / reference - 1.0) <= MATCH
+               for hz in re.findall(r"(\d+(?:\.\d+)?) Hz", note))
+
+
 def fsi_lab_modes(record: Record) -> list[list[Ours]]:
     """fsi-lab's estimate of each reference mode (outer list) on each channel (inner)."""
     from fsi_lab.dsp.identify import identify
@@ -135,8 +142,7 @@ def fsi_lab_modes(record: Record) -> list[list[Ours]]:
         for i, ref in enumerate(record.reference_hz):
             k = _matched(damped, ref)
             if k is None:
-                note = next((n for n in found.notes if f"{ref:.0f}" in n
-                             or f"{ref:.3g}" in n), "not found")
+                note = next((n for n in found.notes if _names(n, ref)), "not found")
                 out[i].append(Ours(ch, refused=note))
                 continue
             mode = found.modes[k]
