@@ -344,7 +344,8 @@ def spectral_peaks(x: Any, fs: float, *, window: str = "hann", min_relative: flo
 
 
 def free_decay_peaks(x: Any, fs: float, *, min_relative: float = 0.01,
-                     smoothing: float = 0.05) -> SpectralPeaks:
+                     smoothing: float = 0.05,
+                     spectrum: tuple[np.ndarray, np.ndarray] | None = None) -> SpectralPeaks:
     """Peaks of the spectrum of a record's free decays, for automatic choices (HVD's
     frequencies and cut-offs, the integration's high-pass).
 
@@ -363,6 +364,10 @@ def free_decay_peaks(x: Any, fs: float, *, min_relative: float = 0.01,
         Sample rate, Hz.
     min_relative, smoothing
         As in :func:`find_peaks_interpolated`.
+    spectrum
+        The whole record's ``"decay"``-window amplitude spectrum, ``(frequency Hz, amplitude
+        U)``, when it is already at hand (a spectrum shared by several analyses); computed
+        otherwise.
 
     Returns
     -------
@@ -372,8 +377,12 @@ def free_decay_peaks(x: Any, fs: float, *, min_relative: float = 0.01,
     """
     x = as_record(x, "free_decay_peaks", min_samples=16, check_clipping=False)
     fmin = 2.0 * fs / x.size
-    peaks = spectral_peaks(x, fs, window="decay", min_relative=min_relative,
-                           smoothing=smoothing, fmin=fmin)
+    if spectrum is None:
+        peaks = spectral_peaks(x, fs, window="decay", min_relative=min_relative,
+                               smoothing=smoothing, fmin=fmin)
+    else:
+        peaks = find_peaks_interpolated(*spectrum, min_relative=min_relative,
+                                        smoothing=smoothing, fmin=fmin, _func="free_decay_peaks")
     if peaks.frequencies.size == 0:
         return peaks
     segments = decay_segments(x, fs, 1.0 / float(peaks.frequencies[0]))

@@ -43,13 +43,8 @@ import numpy as np
 
 from fsi_lab.contract import AnalysisContext, RecordSpectrum, record_spectrum
 from fsi_lab.dsp.components import BandComponents
-from fsi_lab.dsp.decays import FreeDecays, decay_segments, split_decays
-from fsi_lab.dsp.spectrum import (
-    MIN_SEGMENT,
-    SpectralPeaks,
-    averaged_spectrum,
-    find_peaks_interpolated,
-)
+from fsi_lab.dsp.decays import FreeDecays, split_decays
+from fsi_lab.dsp.spectrum import SpectralPeaks, find_peaks_interpolated, free_decay_peaks
 from fsi_lab.errors import AnalysisError
 from fsi_lab.plugins.analysis.results import (  # noqa: F401 - the plugins import them from here
     Components,
@@ -193,21 +188,8 @@ def free_decay_peaks_of(context: AnalysisContext, x: np.ndarray | None = None,
         spectrum = context.spectrum("decay")
     else:
         spectrum = record_spectrum(x, fs, "decay")
-    fmin = 2.0 * fs / x.size
-    peaks = find_peaks_interpolated(spectrum.frequency, spectrum.amplitude,
-                                    min_relative=min_relative, smoothing=smoothing, fmin=fmin,
-                                    _func="free_decay_peaks")
-    if peaks.frequencies.size == 0:
-        return peaks
-    segments = decay_segments(x, fs, 1.0 / float(peaks.frequencies[0]))
-    shortest = min(stop - start for start, stop in segments)
-    if len(segments) < 2 or shortest < MIN_SEGMENT:
-        return peaks
-    f, a = averaged_spectrum(x, fs, segments, window="decay")
-    merged = find_peaks_interpolated(f, a, min_relative=min_relative, smoothing=smoothing,
-                                     fmin=max(fmin, 2.0 * fs / shortest),
-                                     _func="free_decay_peaks")
-    return merged if merged.frequencies.size else peaks
+    return free_decay_peaks(x, fs, min_relative=min_relative, smoothing=smoothing,
+                            spectrum=(spectrum.frequency, spectrum.amplitude))
 
 
 def _floor(sigma: float, fs: float, f_k: float, band: float, order: int) -> float | None:
