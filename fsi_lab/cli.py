@@ -111,9 +111,8 @@ def _registry():
     registry = _loaded_plugins()
     registry.check_hooks()  # a failing default-chain or views hook is named with the others
     for record in registry.records:
-        if record.status in ("failed", "invalid"):
-            print(f"[warning] plugin {record.name} ({record.distribution}) skipped: "
-                  f"{record.error}", file=sys.stderr)
+        if record.warning():
+            print(f"[warning] {record.warning()}", file=sys.stderr)
     return registry
 
 

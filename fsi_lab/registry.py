@@ -50,6 +50,17 @@ class PluginRecord:
     #: the hooks the entry point's module implements
     hooks: tuple[str, ...] = ()
 
+    def warning(self) -> str | None:
+        """The sentence a user is shown for a plugin that did not load whole (``None`` when it
+        did): a failed entry point is left out entirely; an invalid hook or descriptor is left
+        out alone, the plugin's other contributions stay."""
+        where = f"plugin {self.name} ({self.distribution})"
+        if self.status == "failed":
+            return f"{where} not loaded: {self.error}"
+        if self.status == "invalid":
+            return f"{where}: {self.error}; left out, its other contributions are loaded"
+        return None
+
     def as_dict(self) -> dict[str, Any]:
         return {
             "name": self.name,

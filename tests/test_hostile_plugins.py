@@ -185,8 +185,9 @@ def test_each_broken_hook_is_named_with_its_plugin_and_the_rest_load(hostile):
                             "fsi_lab.presentation.AnalysisView; got str (at ")
     assert "fsi_lab_hostile/__init__.py:" in views  # the plugin's line, not fsi-lab's
     # the warnings on stderr name each plugin, and every built-in still loads
-    assert "[warning] plugin aaa-raising (fsi-lab-hostile) skipped: fsi_lab_analyses() " \
+    assert "[warning] plugin aaa-raising (fsi-lab-hostile): fsi_lab_analyses() " \
            "failed: RuntimeError: descriptors exploded" in proc.stderr
+    assert "left out, its other contributions are loaded" in proc.stderr
     assert "[warning] commands of plugin aaa-raising (fsi-lab-hostile) skipped: " \
            "fsi_lab_addcommands() failed: RuntimeError: commands exploded" in proc.stderr
     own = {p["name"] for p in plugins if p["distribution"] == "fsi-lab" and

@@ -126,9 +126,8 @@ class MainWindow(QMainWindow):
         self._connect()
         self.registry.check_hooks()
         for record in self.registry.records:
-            if record.status in ("failed", "invalid"):
-                self.log.add(LogRecord("WARNING", f"plugin {record.name} ({record.distribution}) "
-                                                  f"skipped: {record.error}"))
+            if record.warning():
+                self.log.add(LogRecord("WARNING", record.warning()))
         for problem in self.analysis.problems:
             self.log.add(LogRecord("WARNING", problem))
 
