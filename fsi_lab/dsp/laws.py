@@ -220,8 +220,9 @@ def _accel_tangent(x, v, s, xd, vd, j, w0sq, alpha, a2, beta):
 
 @numba.njit(cache=True)
 def _rk4_tangent(x, v, s, h, dirs, xd, vd, hd, w0sq, alpha, a2, beta, gamma, xo, vo):
-    """Tangent of :func:`_rk4` (state tangents ``xd``, ``vd`` and step tangent ``hd`` along
-    each of the directions ``dirs``) into ``xo``, ``vo``."""
+    """:func:`_rk4`'s step (returned, the same to the bit) and its tangent (state tangents
+    ``xd``, ``vd`` and step tangent ``hd`` along each of the directions ``dirs``) into
+    ``xo``, ``vo``."""
     k1x = v
     k1v = _accel(x, v, s, w0sq, alpha, a2, beta, gamma)
     x2 = x + 0.5 * h * k1x
@@ -256,6 +257,8 @@ def _rk4_tangent(x, v, s, h, dirs, xd, vd, hd, w0sq, alpha, a2, beta, gamma, xo,
             + hd[j] / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x)
         vo[j] = vd[j] + h / 6.0 * (d1v + 2.0 * d2v + 2.0 * d3v + d4v) \
             + hd[j] / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
+    return (x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+            v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v))
 
 
 @numba.njit(cache=True)
@@ -310,8 +313,8 @@ def _sequence_tangent(x, v, dirs, xd0, vd0, w0, alpha, a2, beta, gamma, count, s
             # Without friction s does not enter the motion; it is the direction the friction
             # term's derivative pushes against (that of gamma -> 0+).
             s = 1.0 if v > 0.0 else -1.0
-        xn, vn = _rk4(x, v, s, h, w0sq, alpha, a2, beta, gamma)
-        _rk4_tangent(x, v, s, h, dirs, xd, vd, hz, w0sq, alpha, a2, beta, gamma, xnd, vnd)
+        xn, vn = _rk4_tangent(x, v, s, h, dirs, xd, vd, hz, w0sq, alpha, a2, beta, gamma, xnd,
+                              vnd)
         hh = h
         if gamma > 0.0 and vn * s < 0.0:
             an = _accel(xn, vn, s, w0sq, alpha, a2, beta, gamma)
@@ -331,8 +334,8 @@ def _sequence_tangent(x, v, dirs, xd0, vd0, w0, alpha, a2, beta, gamma, count, s
                     hd[j] = -h * dh / slope
                 else:
                     hd[j] = 0.0
-            xn, vn = _rk4(x, v, s, hh, w0sq, alpha, a2, beta, gamma)
-            _rk4_tangent(x, v, s, hh, dirs, xd, vd, hd, w0sq, alpha, a2, beta, gamma, xnd, vnd)
+            xn, vn = _rk4_tangent(x, v, s, hh, dirs, xd, vd, hd, w0sq, alpha, a2, beta, gamma,
+                                  xnd, vnd)
             if not follow_velocity:
                 out_amp[k] = abs(xn)
                 out_time[k] = t + hh
