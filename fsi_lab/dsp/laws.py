@@ -29,8 +29,11 @@ parameters, one start amplitude per decay) by generalised least squares: the err
 extrema measured on a band-limited signal are correlated over about one over the bandwidth,
 and a ``correlation`` function of the time lag (:func:`fsi_lab.dsp.filters.noise_correlation`)
 whitens them; the covariance of the parameters, their standard errors and the information
-criteria follow from the whitened residuals. :func:`compare_laws` ranks fits of several laws
-by the corrected Akaike criterion.
+criteria follow from the whitened residuals. The fit's Jacobian is exact, not a finite
+difference: :func:`extremum_derivatives` carries the derivatives of the state along the same
+Runge-Kutta steps (the tangent of the discrete model, extremum interpolation and friction stops
+included), for about the cost of one integration. :func:`compare_laws` ranks fits of several
+laws by the corrected Akaike criterion.
 """
 
 from __future__ import annotations
