@@ -159,6 +159,32 @@ def envelope_law(t: np.ndarray, a: float, b: float, a0: float) -> np.ndarray:
     return a * a0 * e / (a + b * a0 * (1.0 - e))
 
 
+def envelope_law_derivatives(t: np.ndarray, a: float, b: float, a0: Any) -> np.ndarray:
+    """Derivatives of :func:`envelope_law` at times ``t`` (s) with respect to ``a`` (U s),
+    ``b`` (U^2 s) and ``a0`` (dimensionless), as the columns of a ``(t.size, 3)`` array;
+    ``a0`` (U) one value or one per time. Where the law takes its ``a = 0`` form, the
+    derivative in ``a`` is its limit at ``a -> 0``."""
+    t = np.asarray(t, dtype=np.float64)
+    if abs(a) < 1e-12:
+        g = 1.0 + b * a0 * t
+        return np.stack((-a0 * (t + 0.5 * b * a0 * t * t) / (g * g), -a0 * a0 * t / (g * g),
+                         1.0 / (g * g)), axis=1)
+    u = a * t
+    e = np.exp(-u)
+    one_e = -np.expm1(-u)
+    # 1 - e^-u - u without cancellation at small u (the derivative in a is of order a^2 / a^2).
+    small = np.abs(u) < 1e-3
+    us = np.where(small, u, 0.0)
+    rest = np.where(small, -us * us * (0.5 - us * (1.0 / 6.0 - us * (1.0 / 24.0 - us / 120.0))),
+                    one_e - u)
+    d = a + b * a0 * one_e
+    d2 = d * d
+    da = a0 * e * (b * a0 * rest - a * u) / d2
+    db = -a * a0 * a0 * e * one_e / d2
+    d0 = a * a * e / d2
+    return np.stack((da, db, d0), axis=1)
+
+
 #: Fewest peaks of a free decay for the envelope-law fit to use it: each decay brings its own
 #: start amplitude, so a decay of one peak says nothing of the decay rate and one of two peaks
 #: (often the smear of the excitation) little.
@@ -247,7 +273,16 @@ def _fit_law(tt: np.ndarray, amp: np.ndarray, runs: list[slice]
     def resid(p):
         return (envelope_law(tt, p[0], p[1], np.exp(p[2:][which])) - amp) / scale
 
-    res = sopt.least_squares(resid, x0, bounds=([0.0, 0.0] + [-np.inf] * k, [np.inf] * (2 + k)),
+    def jac(p):
+        a0 = np.exp(p[2:][which])
+        d = envelope_law_derivatives(tt, p[0], p[1], a0)
+        out = np.zeros((tt.size, 2 + k))
+        out[:, :2] = d[:, :2]
+        out[np.arange(tt.size), 2 + which] = d[:, 2] * a0
+        return out / scale
+
+    res = sopt.least_squares(resid, x0, jac=jac,
+                             bounds=([0.0, 0.0] + [-np.inf] * k, [np.inf] * (2 + k)),
                              x_scale="jac", xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=2000)
     dof = tt.size - 2 - k
     s2 = float(res.fun @ res.fun) / dof

@@ -29,8 +29,11 @@ parameters, one start amplitude per decay) by generalised least squares: the err
 extrema measured on a band-limited signal are correlated over about one over the bandwidth,
 and a ``correlation`` function of the time lag (:func:`fsi_lab.dsp.filters.noise_correlation`)
 whitens them; the covariance of the parameters, their standard errors and the information
-criteria follow from the whitened residuals. :func:`compare_laws` ranks fits of several laws
-by the corrected Akaike criterion.
+criteria follow from the whitened residuals. The fit's Jacobian is exact, not a finite
+difference: :func:`extremum_derivatives` carries the derivatives of the state along the same
+Runge-Kutta steps (the tangent of the discrete model, extremum interpolation and friction stops
+included), for about the cost of one integration. :func:`compare_laws` ranks fits of several
+laws by the corrected Akaike criterion.
 """
 
 from __future__ import annotations
@@ -198,6 +201,205 @@ def _sequence(x, v, w0, alpha, a2, beta, gamma, count, steps, follow_velocity,
     return k
 
 
+# Tangent of the kernel: the derivatives of the extrema :func:`_sequence` finds with respect to
+# the law's terms and the start, carried through the same Runge-Kutta steps (the exact
+# derivative of the discrete model, not of the ODE). Directions (columns): ``a``, ``beta``,
+# ``gamma`` and the start state's own direction (given as its tangent ``X0, V0``).
+DIRECTIONS = 4
+
+
+@numba.njit(cache=True)
+def _accel_tangent(x, v, s, xd, vd, j, w0sq, alpha, a2, beta):
+    """Derivative of :func:`_accel` along direction ``j`` for a state tangent ``(xd, vd)``."""
+    out = -(w0sq + 3.0 * alpha * x * x) * xd - (a2 + 2.0 * beta * abs(v)) * vd
+    if j == 0:
+        out -= 2.0 * v
+    elif j == 1:
+        out -= abs(v) * v
+    elif j == 2:
+        out -= s
+    return out
+
+
+@numba.njit(cache=True)
+def _rk4_tangent(x, v, s, h, dirs, xd, vd, hd, w0sq, alpha, a2, beta, gamma, xo, vo):
+    """:func:`_rk4`'s step (returned, the same to the bit) and its tangent (state tangents
+    ``xd``, ``vd`` and step tangent ``hd`` along each of the directions ``dirs``) into
+    ``xo``, ``vo``."""
+    k1x = v
+    k1v = _accel(x, v, s, w0sq, alpha, a2, beta, gamma)
+    x2 = x + 0.5 * h * k1x
+    v2 = v + 0.5 * h * k1v
+    k2x = v2
+    k2v = _accel(x2, v2, s, w0sq, alpha, a2, beta, gamma)
+    x3 = x + 0.5 * h * k2x
+    v3 = v + 0.5 * h * k2v
+    k3x = v3
+    k3v = _accel(x3, v3, s, w0sq, alpha, a2, beta, gamma)
+    x4 = x + h * k3x
+    v4 = v + h * k3v
+    k4x = v4
+    k4v = _accel(x4, v4, s, w0sq, alpha, a2, beta, gamma)
+    for j in range(xd.shape[0]):
+        dj = dirs[j]
+        d1x = vd[j]
+        d1v = _accel_tangent(x, v, s, xd[j], vd[j], dj, w0sq, alpha, a2, beta)
+        d2x_ = xd[j] + 0.5 * (h * d1x + hd[j] * k1x)
+        d2v_ = vd[j] + 0.5 * (h * d1v + hd[j] * k1v)
+        d2x = d2v_
+        d2v = _accel_tangent(x2, v2, s, d2x_, d2v_, dj, w0sq, alpha, a2, beta)
+        d3x_ = xd[j] + 0.5 * (h * d2x + hd[j] * k2x)
+        d3v_ = vd[j] + 0.5 * (h * d2v + hd[j] * k2v)
+        d3x = d3v_
+        d3v = _accel_tangent(x3, v3, s, d3x_, d3v_, dj, w0sq, alpha, a2, beta)
+        d4x_ = xd[j] + h * d3x + hd[j] * k3x
+        d4v_ = vd[j] + h * d3v + hd[j] * k3v
+        d4x = d4v_
+        d4v = _accel_tangent(x4, v4, s, d4x_, d4v_, dj, w0sq, alpha, a2, beta)
+        xo[j] = xd[j] + h / 6.0 * (d1x + 2.0 * d2x + 2.0 * d3x + d4x) \
+            + hd[j] / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x)
+        vo[j] = vd[j] + h / 6.0 * (d1v + 2.0 * d2v + 2.0 * d3v + d4v) \
+            + hd[j] / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
+    return (x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+            v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v))
+
+
+@numba.njit(cache=True)
+def _hermite_weights(s):
+    """Weights of (p0, p1, m0, m1) in the cubic Hermite's value at s."""
+    s2 = s * s
+    s3 = s2 * s
+    return 2.0 * s3 - 3.0 * s2 + 1.0, -2.0 * s3 + 3.0 * s2, s3 - 2.0 * s2 + s, s3 - s2
+
+
+@numba.njit(cache=True)
+def _sequence_tangent(x, v, dirs, xd0, vd0, w0, alpha, a2, beta, gamma, count, steps,
+                      follow_velocity, out_amp, out_time, out_d):
+    """:func:`_sequence` (the same extrema, to the bit) with ``out_d[k, j]``, the derivative of
+    the k-th ``|extremum|`` along direction ``dirs[j]`` (0: ``a``, 1: ``beta``, 2: ``gamma``,
+    3: the start), from the start state's tangents ``xd0``, ``vd0`` (per direction)."""
+    m = xd0.shape[0]
+    friction = -1
+    for j in range(m):
+        if dirs[j] == 2:
+            friction = j
+    xd = xd0.copy()
+    vd = vd0.copy()
+    xnd = np.zeros(m)
+    vnd = np.zeros(m)
+    hz = np.zeros(m)
+    hd = np.zeros(m)
+    w0sq = w0 * w0
+    h = math.pi / w0 / steps
+    s = 1.0 if v > 0.0 else -1.0 if v < 0.0 else (-1.0 if x > 0.0 else 1.0)
+    if gamma > 0.0 and v == 0.0 and abs(w0sq * x + alpha * x * x * x) <= gamma:
+        out_amp[0] = abs(x)
+        out_time[0] = 0.0
+        sg = 1.0 if x >= 0.0 else -1.0
+        for j in range(m):
+            out_d[0, j] = sg * xd[j]
+        return 1
+    start = abs(v) if follow_velocity else abs(x)
+    out_amp[0] = start
+    out_time[0] = 0.0
+    for j in range(m):
+        out_d[0, j] = (1.0 if v >= 0.0 else -1.0) * vd[j] if follow_velocity \
+            else (1.0 if x >= 0.0 else -1.0) * xd[j]
+    k = 1
+    t = 0.0
+    acc = _accel(x, v, s, w0sq, alpha, a2, beta, gamma)
+    limit = (count + 4) * steps * 8
+    n = 0
+    while k < count and n < limit:
+        n += 1
+        if gamma <= 0.0 and v != 0.0:
+            # Without friction s does not enter the motion; it is the direction the friction
+            # term's derivative pushes against (that of gamma -> 0+).
+            s = 1.0 if v > 0.0 else -1.0
+        xn, vn = _rk4_tangent(x, v, s, h, dirs, xd, vd, hz, w0sq, alpha, a2, beta, gamma, xnd,
+                              vnd)
+        hh = h
+        if gamma > 0.0 and vn * s < 0.0:
+            an = _accel(xn, vn, s, w0sq, alpha, a2, beta, gamma)
+            frac = _hermite_root(v, vn, acc * h, an * h)
+            hh = max(frac * h, 1e-12 * h)
+            # d frac from H(frac) = 0 (none when the root sits on a bound of the step).
+            c3 = 2.0 * v - 2.0 * vn + acc * h + an * h
+            c2 = -3.0 * v + 3.0 * vn - 2.0 * acc * h - an * h
+            slope = (3.0 * c3 * frac + 2.0 * c2) * frac + acc * h
+            w00, w01, w10, w11 = _hermite_weights(frac)
+            free = 0.0 < frac < 1.0 and frac * h > 1e-12 * h and slope != 0.0
+            for j in range(m):
+                if free:
+                    dacc = _accel_tangent(x, v, s, xd[j], vd[j], dirs[j], w0sq, alpha, a2, beta)
+                    dan = _accel_tangent(xn, vn, s, xnd[j], vnd[j], dirs[j], w0sq, alpha, a2, beta)
+                    dh = w00 * vd[j] + w01 * vnd[j] + h * (w10 * dacc + w11 * dan)
+                    hd[j] = -h * dh / slope
+                else:
+                    hd[j] = 0.0
+            xn, vn = _rk4_tangent(x, v, s, hh, dirs, xd, vd, hd, w0sq, alpha, a2, beta, gamma,
+                                  xnd, vnd)
+            if not follow_velocity:
+                out_amp[k] = abs(xn)
+                out_time[k] = t + hh
+                sg = 1.0 if xn >= 0.0 else -1.0
+                for j in range(m):
+                    out_d[k, j] = sg * xnd[j]
+                k += 1
+            s = -s
+            vn = 0.0
+            if abs(w0sq * xn + alpha * xn * xn * xn) <= gamma:
+                return k
+            t += hh
+            x, v = xn, vn
+            for j in range(m):
+                xd[j] = xnd[j]
+                vd[j] = 0.0
+            acc = _accel(x, v, s, w0sq, alpha, a2, beta, gamma)
+            continue
+        an = _accel(xn, vn, s, w0sq, alpha, a2, beta, gamma)
+        if gamma <= 0.0 and v * vn < 0.0 and friction >= 0:
+            # The friction term reverses where v does, inside the step: its derivative pushes
+            # the other way for the rest of the step.
+            rest = (1.0 - _hermite_root(v, vn, acc * h, an * h)) * h
+            vnd[friction] += 2.0 * s * rest
+            xnd[friction] += s * rest * rest
+        if follow_velocity:
+            if n > 1 and (acc * an < 0.0 or (acc != 0.0 and an == 0.0)):
+                frac, value = _hermite_root_of_derivative(v, vn, acc * h, an * h)
+                out_amp[k] = abs(value)
+                out_time[k] = t + frac * h
+                w00, w01, w10, w11 = _hermite_weights(frac)
+                sg = 1.0 if value >= 0.0 else -1.0
+                for j in range(m):
+                    dacc = _accel_tangent(x, v, s, xd[j], vd[j], dirs[j], w0sq, alpha, a2, beta)
+                    dan = _accel_tangent(xn, vn, s, xnd[j], vnd[j], dirs[j], w0sq, alpha, a2, beta)
+                    out_d[k, j] = sg * (w00 * vd[j] + w01 * vnd[j]
+                                        + h * (w10 * dacc + w11 * dan))
+                k += 1
+                if abs(value) > MAX_GROWTH * start:
+                    return k
+        else:
+            if gamma <= 0.0 and v * vn < 0.0:
+                frac, value = _hermite_root_of_derivative(x, xn, v * h, vn * h)
+                out_amp[k] = abs(value)
+                out_time[k] = t + frac * h
+                w00, w01, w10, w11 = _hermite_weights(frac)
+                sg = 1.0 if value >= 0.0 else -1.0
+                for j in range(m):
+                    out_d[k, j] = sg * (w00 * xd[j] + w01 * xnd[j]
+                                        + h * (w10 * vd[j] + w11 * vnd[j]))
+                k += 1
+                if abs(value) > MAX_GROWTH * start:
+                    return k
+        t += hh
+        x, v, acc = xn, vn, an
+        for j in range(m):
+            xd[j] = xnd[j]
+            vd[j] = vnd[j]
+    return k
+
+
 def _start_state(value: float, quantity: str, w0: float, alpha: float, a: float, beta: float,
                  gamma: float) -> tuple[float, float]:
     """State (x, v) at an extremum of ``quantity`` whose value is ``value``."""
@@ -217,6 +419,23 @@ def _start_state(value: float, quantity: str, w0: float, alpha: float, a: float,
         if abs(step) <= 1e-15 * (abs(x) + 1e-300):
             break
     return x, v
+
+
+def _start_tangent(x: float, v: float, quantity: str, w0: float, alpha: float, a: float,
+                   beta: float) -> tuple[np.ndarray, np.ndarray]:
+    """Derivatives of :func:`_start_state`'s (x, v) along the :data:`DIRECTIONS` (``a``,
+    ``beta``, ``gamma``, the start value)."""
+    xd, vd = np.zeros(DIRECTIONS), np.zeros(DIRECTIONS)
+    if quantity == "displacement":
+        xd[3] = 1.0
+        return xd, vd
+    vd[3] = 1.0
+    stiff = w0 * w0 + 3.0 * alpha * x * x
+    if stiff > 0.0:
+        s = math.copysign(1.0, v) if v != 0.0 else 0.0
+        xd[:] = (-2.0 * v, -abs(v) * v, -s, -(2.0 * a + 2.0 * beta * abs(v)))
+        xd /= stiff
+    return xd, vd
 
 
 def _law_terms(law: str, params: Sequence[float]) -> tuple[float, float, float]:
@@ -299,6 +518,73 @@ def extremum_sequence(law: str, params: Sequence[float], w0: float, start: float
     found = _sequence(x, v, float(w0), float(alpha), 2.0 * a, beta, gamma, int(count),
                       int(steps), quantity == "velocity", amp, times)
     return amp[:found], times[:found]
+
+
+def extremum_derivatives(law: str, params: Sequence[float], w0: float, start: float,
+                         count: int, *, alpha: float = 0.0, quantity: str = "velocity",
+                         steps: int = STEPS_PER_HALF_CYCLE
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`extremum_sequence` with the derivatives of its amplitudes.
+
+    The derivatives are those of the Runge-Kutta model itself (its steps differentiated
+    exactly, the extremum's interpolation included), so they equal the limit of finite
+    differences of :func:`extremum_sequence`, for about the cost of one more integration
+    instead of one per parameter.
+
+    Parameters
+    ----------
+    law, params, w0, start, count, alpha, quantity, steps
+        As in :func:`extremum_sequence`.
+
+    Returns
+    -------
+    amplitude, time : numpy.ndarray
+        As :func:`extremum_sequence` returns them (the same values).
+    derivative : numpy.ndarray
+        Shape ``(amplitude.size, len(params) + 1)``: the derivative of each amplitude with
+        respect to each law parameter (in the order of :data:`LAWS`; U per unit of the
+        parameter) and, last, to ``|start|`` (dimensionless).
+
+    Raises
+    ------
+    AnalysisError
+        As :func:`extremum_sequence`.
+    """
+    func = "extremum_derivatives"
+    _check_law(law, params, func)
+    if quantity not in QUANTITIES:
+        raise fail(func, f"quantity = {quantity!r}; expected one of {', '.join(QUANTITIES)}")
+    if not (math.isfinite(w0) and w0 > 0):
+        raise fail(func, f"w0 = {w0!r}; expected a finite angular frequency > 0 rad/s")
+    if count < 1:
+        raise fail(func, f"count = {count!r}; expected at least 1 extremum")
+    a, beta, gamma = _law_terms(law, params)
+    amp, times, deriv = _tangent_run(law, a, beta, gamma, float(start), quantity, float(w0),
+                                     float(alpha), int(count), int(steps))
+    deriv[:, -1] *= math.copysign(1.0, float(start))
+    return amp, times, deriv
+
+
+#: The tangent's directions of each law: its parameters' (0: ``a``, 1: ``beta``, 2: ``gamma``),
+#: then the start's (3).
+_DIRECTIONS = {law: np.array([{"a": 0, "beta": 1, "gamma": 2}[name] for name in names] + [3])
+               for law, names in LAWS.items()}
+
+
+def _tangent_run(law: str, a: float, beta: float, gamma: float, start: float, quantity: str,
+                 w0: float, alpha: float, count: int, steps: int
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Extrema, times and derivatives from a signed ``start``: columns the law's parameters
+    (in the order of :data:`LAWS`), then the start value."""
+    x, v = _start_state(start, quantity, w0, alpha, a, beta, gamma)
+    dirs = _DIRECTIONS[law]
+    xd, vd = _start_tangent(x, v, quantity, w0, alpha, a, beta)
+    amp = np.zeros(count)
+    times = np.zeros(count)
+    deriv = np.zeros((count, dirs.size))
+    found = _sequence_tangent(x, v, dirs, xd[dirs], vd[dirs], w0, alpha, 2.0 * a, beta, gamma,
+                              count, steps, quantity == "velocity", amp, times, deriv)
+    return amp[:found], times[:found], deriv[:found]
 
 
 def decay_rate(law: str, params: Sequence[float], amplitude: np.ndarray, w0: float,
@@ -435,10 +721,30 @@ class Whitener:
             self.lower = np.sqrt(diagonal)[None, :]
 
     def apply(self, r: np.ndarray) -> np.ndarray:
-        """``L^-1 r``."""
+        """``L^-1 r`` (``r`` a vector or a matrix of columns)."""
         if self.band == 0:
-            return r / self.lower[0]
-        return scipy.linalg.solve_banded((self.band, 0), self.lower, r, check_finite=False)
+            return r / (self.lower[0] if np.ndim(r) == 1 else self.lower[0][:, None])
+        r = np.asarray(r, dtype=np.float64)
+        out = np.array(r if r.ndim == 2 else r[:, None], dtype=np.float64, order="C")
+        _forward_banded(self.lower, out)
+        return out if r.ndim == 2 else out[:, 0]
+
+
+@numba.njit(cache=True)
+def _forward_banded(lower, y):
+    """Solve ``L z = y`` in place (``y`` of shape (n, m)) for the lower-triangular band ``L``
+    stored as ``lower[i, j] = L[j + i, j]``, by forward substitution."""
+    band = lower.shape[0] - 1
+    n, m = y.shape
+    for i in range(n):
+        for k in range(1, min(band, i) + 1):
+            c = lower[k, i - k]
+            if c != 0.0:
+                for j in range(m):
+                    y[i, j] -= c * y[i - k, j]
+        d = lower[0, i]
+        for j in range(m):
+            y[i, j] /= d
 
 
 def _start_values(law: str, decays: Sequence[np.ndarray], w0: float) -> np.ndarray:
@@ -533,28 +839,54 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
                      for j in range(len(decays))]
     whiten = whiteners
 
-    def model(q: np.ndarray) -> list[np.ndarray]:
+    rows = np.cumsum([0] + [d.size for d in decays])
+    cache: dict[str, np.ndarray] = {}
+
+    def model(q: np.ndarray, deriv: list | None = None) -> list[np.ndarray]:
+        """Model extrema at ``q``; with ``deriv`` (a list), each decay's derivatives (columns:
+        the law's parameters, then its own log start) are appended to it."""
         out = []
         a, beta, gamma = _law_terms(law, q[:p])
         for j, d in enumerate(decays):
             v0 = float(np.exp(q[p + j]))
-            x, v = _start_state(v0, quantity, w0, alpha, a, beta, gamma)
-            amp = np.zeros(d.size)
-            tt = np.zeros(d.size)
-            got = _sequence(x, v, float(w0), float(alpha), 2.0 * a, beta, gamma, d.size,
-                            STEPS_PER_HALF_CYCLE, quantity == "velocity", amp, tt)
+            amp, _, dm = _tangent_run(law, a, beta, gamma, v0, quantity, float(w0),
+                                      float(alpha), d.size, STEPS_PER_HALF_CYCLE)
+            got = amp.size
             if got < d.size:                  # stopped (friction) or blew up: hold there
-                amp[got:] = 0.0 if got and amp[got - 1] < v0 else amp[max(got - 1, 0)]
+                stopped = got and amp[got - 1] < v0
+                held = np.zeros(p + 1) if stopped else dm[max(got - 1, 0)]
+                amp = np.concatenate((amp, np.full(d.size - got, 0.0 if stopped
+                                                   else amp[max(got - 1, 0)])))
+                dm = np.concatenate((dm, np.repeat(held[None, :], d.size - got, axis=0)))
+            if deriv is not None:
+                dm[:, p] *= v0
+                deriv.append(dm)
             out.append(amp)
         return out
 
     def residuals(q: np.ndarray) -> np.ndarray:
+        # The Jacobian comes with the residuals (one integration with its tangent), kept for
+        # the call of ``jacobian`` at the same point that follows.
+        derivs: list[np.ndarray] = []
+        jac = np.zeros((n, p + k))
         parts = []
-        for d, m, w in zip(decays, model(q), whiten):
-            r = (d - m) / scale
-            parts.append(r if w is None else w.apply(r))
+        for j, (d, m, dm, w) in enumerate(zip(decays, model(q, derivs), derivs, whiten)):
+            both = np.column_stack(((d - m) / scale, -dm / scale))
+            if w is not None:
+                both = w.apply(both)
+            parts.append(both[:, 0])
+            jac[rows[j]:rows[j + 1], :p] = both[:, 1:p + 1]
+            jac[rows[j]:rows[j + 1], p + j] = both[:, p + 1]
         out = np.concatenate(parts)
-        return np.where(np.isfinite(out), out, 1e6)
+        bad = ~np.isfinite(out)
+        jac[bad | ~np.all(np.isfinite(jac), axis=1)] = 0.0
+        cache["x"], cache["jac"] = q.copy(), jac
+        return np.where(bad, 1e6, out)
+
+    def jacobian(q: np.ndarray) -> np.ndarray:
+        if "x" not in cache or not np.array_equal(cache["x"], q):
+            residuals(q)
+        return cache["jac"]
 
     law_start = np.asarray(start, dtype=np.float64) if start is not None \
         else _start_values(law, decays, w0)
@@ -566,7 +898,7 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     law_start = np.maximum(law_start, np.where(np.isfinite(law_lower), 1e-12, -np.inf))
     lower = np.concatenate((law_lower, log_starts - 3.0))
     upper = np.concatenate((np.full(p, np.inf), log_starts + 3.0))
-    res = sopt.least_squares(residuals, x0, x_scale="jac", method="trf", diff_step=1e-7,
+    res = sopt.least_squares(residuals, x0, jac=jacobian, x_scale="jac", method="trf",
                              bounds=(lower, upper), xtol=1e-12, ftol=1e-12, gtol=1e-12,
                              max_nfev=200 * (p + k))
     jac = res.jac * scale
