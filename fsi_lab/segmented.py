@@ -395,5 +395,12 @@ def _pooled_component(index: int, mode: Mapping[str, Any]) -> dict[str, Any]:
     """A pooled mode as a component of the channel's summary."""
     keys = ("frequency_hz", "frequency_range_hz", "segments", "decays", "extrema", "c_i",
             "c_i_ci95", "c_f", "c_f_ci95", "preferred_law", "fit_error")
-    return {"index": index, **{k: mode[k] for k in keys if k in mode}}
+    out = {"index": index, **{k: mode[k] for k in keys if k in mode}}
+    if mode.get("c_i") is not None and mode.get("c_f") is not None:
+        (a, b), (c, d) = mode["c_i_ci95"], mode["c_f_ci95"]
+        out["pooled"] = (f"C_i = {mode['c_i']:.4g} kg/(m s) (95 %: {a:.4g} to {b:.4g}), "
+                         f"C_f = {mode['c_f']:.4g} kg/m^2 (95 %: {c:.4g} to {d:.4g}) from "
+                         f"{mode['decays']} decays in {mode['segments']} segment"
+                         f"{'s' * (mode['segments'] != 1)}")
+    return out
 

@@ -52,7 +52,8 @@ RANGE = 30.0
 #: Quiet kept after a segment's last burst: this many times that burst's length ...
 TAIL_FACTOR = 2.0
 #: ... and at least this many seconds (the noise the identification measures), and quiet kept
-#: before a segment's first burst (s, at most half the gap to the burst before).
+#: before a segment's first burst (s, at most half the gap to the burst before; the record's
+#: first segment starts with the record when its first burst is closer to the start).
 MIN_TAIL_S = 0.5
 LEAD_S = 0.25
 
@@ -116,11 +117,12 @@ class SegmentPlan:
                     "has no quiet stretch between free decays (random excitation?): analysed "
                     f"in {len(self.segments)} segments cut at fixed lengths of "
                     f"{self.budget_s:.4g} s; a decay may be cut at their edges")
+        count = len(self.segments)
         return (f"the record ({self.record_s:.4g} s) is longer than the analysis budget "
                 f"({self.budget} samples of the used channels, {self.budget_s:.4g} s): "
-                f"analysed in {len(self.segments)} segments cut in quiet stretches between "
-                f"its {self.bursts} free decays ({covered:.4g} s analysed; the quiet between "
-                "segments is not)")
+                f"analysed in {count} segment{'s' * (count != 1)} cut in quiet stretches "
+                f"between its {self.bursts} free decay{'s' * (self.bursts != 1)} "
+                f"({covered:.4g} s analysed; the quiet between segments is not)")
 
 
 def noise_floor(envelope: np.ndarray) -> float:
@@ -190,7 +192,7 @@ def plan_segments(channels: Iterable[tuple[Any, float]], budget: int) -> Segment
     previous_end = 0.0
     while i < len(spans):
         first = spans[i]
-        lead = min(LEAD_S, 0.5 * (first[0] - previous_end))
+        lead = min(LEAD_S, 0.5 * (first[0] - previous_end)) if segments else LEAD_S
         start = max(previous_end, first[0] - max(0.0, lead))
         if first[1] - start > budget_s:
             raise AnalysisError(
