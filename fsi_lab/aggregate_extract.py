@@ -219,9 +219,9 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
     FsiLabError
         The run file cannot be read or analysed at all (naming it; exit code 2 for bad input).
     """
-    from fsi_lab.batch import analysis_profile, require_something_to_analyse, worker_registry
     from fsi_lab.chain import channels_to_analyse
     from fsi_lab.contract import AnalysisContext
+    from fsi_lab.run_profile import analysis_profile, require_something_to_analyse, worker_registry
     from fsi_lab.runfile import read_run, require_analysable
 
     registry = registry if registry is not None else worker_registry()

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 import traceback
-from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from fsi_lab.contract import (
@@ -323,27 +322,3 @@ def _missing(kind: str, unavailable: Mapping[str, str], failed: Mapping[str, str
         return (f"the {kind!r} result, which {provider} failed to give on this channel "
                 f"({failed.get(provider, 'failed')})")
     return f"the {kind!r} result earlier in the chain on this channel, which did not run"
-
-
-def analyse_and_store(path: Path, channels: Mapping[str, ChannelData],
-                      analysis: Mapping[str, Any], params: Mapping[str, Mapping[str, Any]],
-                      registry: Registry, specimen: Any = None,
-                      mass_per_length: float | None = None,
-                      bus: EventBus | None = None) -> dict[str, Any]:
-    """Run the chain and store it in the run file; returns the ``analyze --json`` object.
-
-    A record whose used channels hold more samples than the analysis's budget
-    (``segment_samples``) is analysed in segments (:mod:`fsi_lab.segmented`)."""
-    from fsi_lab.runfile import write_analysis  # (h5py: not needed to check a chain)
-    from fsi_lab.segmented import analyse_in_segments, segment_plan
-
-    plan = segment_plan(channels, analysis)
-    if plan is not None:
-        return analyse_in_segments(path, channels, analysis, params, registry, plan, specimen,
-                                   mass_per_length, bus)
-
-    groups, channel_summaries = run_chain(channels, analysis, params, registry, specimen,
-                                          mass_per_length, bus)
-    summary = {"run": str(path), "channels": channel_summaries}
-    write_analysis(path, groups, summary)
-    return summary

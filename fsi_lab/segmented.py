@@ -3,7 +3,7 @@
 When a record's used channels (those analysed and the reference) hold more samples than the
 analysis's budget (:func:`budget_of`: the profile's ``[analysis] segment_samples``, default
 :data:`fsi_lab.segments.SEGMENT_SAMPLES`) even after its quiet tail is cut, ``fsi-lab analyze``
-and the runner's analysis (:func:`fsi_lab.chain.analyse_and_store`) take it in segments:
+and the runner's analysis (:func:`fsi_lab.store.analyse_and_store`) take it in segments:
 
 - the record is cut between its free decays (:func:`fsi_lab.segments.plan_segments`, from the
   channels' decimated envelopes read a chunk at a time), or at fixed lengths when it has no
