@@ -103,7 +103,7 @@ ANALYSIS_PARAMS: tuple[Param, ...] = (
     Param("segment_samples", "int", "", default=None, minimum=1000, maximum=10_000_000_000,
           help="Memory budget of the analysis, in samples of the used channels (analysed and "
                "reference) together: a record holding more is analysed in segments cut "
-               "between its free decays, each within the budget (default 2000000: about 1.1 GB "
+               "between its free decays, each within the budget (default 2000000: about 1.3 GB "
                "for the whole process; docs/streaming-analysis.md)."),
 )
 

@@ -38,8 +38,8 @@ from fsi_lab.tails import BLOCK_S
 
 #: Default budget of one segment: samples of all used channels together (2 used channels at
 #: 204.8 kS/s: 4.9 s). The chain's peak memory grows by about 270 bytes per sample of the used
-#: channels on top of about 0.4 GB (``bench/bench_long.py``: 1.48 GB at 3e6), so a segment of
-#: this size keeps the whole process near 1.1 GB.
+#: channels on top of about 0.4 GB (``bench/bench_long.py``: 1.48 GB at 3e6); at this size the
+#: whole process peaked at 1.27 GB on the bench's 1 min record.
 SEGMENT_SAMPLES = 2_000_000
 #: Active runs of blocks closer than this (s) are one burst.
 MERGE_S = 0.25
