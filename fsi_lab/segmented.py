@@ -224,29 +224,29 @@ def _identification(typed: Mapping[str, Result]) -> Any:
     return None
 
 
-def _pooled(name: str, identified: list[tuple[int, Any, Any]], plan: SegmentPlan,
-            analysis_params: Mapping[str, Mapping[str, Any]], registry: Registry,
-            specimen: Any, mass_per_length: float | None) -> tuple[list[dict], list[str]]:
-    """The channel's modes pooled over its segments: one entry per mode (the aggregation's
-    summary of a group of modes, its runs being the segments), and notes."""
-    from fsi_lab.aggregate import group_modes, group_summary, plain
+def _segment_extract(name: str, index: int, segment: Segment, ident: Any, context: Any,
+                     analysis_params: Mapping[str, Mapping[str, Any]], registry: Registry,
+                     specimen: Any, mass_per_length: float | None) -> Any:
+    """What the pooling keeps of one segment's identification (the aggregation's extract of a
+    run: each mode's decays' extrema, its own law and curves; kilobytes), made at once so that
+    the segment's samples are not kept. Raises FsiLabError when C_i and C_f cannot be given
+    (no specimen and no mass per length)."""
     from fsi_lab.aggregate_extract import extract_modes
 
-    extracts, labels, notes = [], [], []
-    for index, ident, context in identified:
-        segment = plan.segments[index]
-        label = f"segment {index + 1} ({segment.start_s:.4g}-{segment.stop_s:.4g} s)"
-        try:
-            extract = extract_modes(label, {name: (ident, context)}, analysis_params,
-                                    specimen, mass_per_length, registry)
-        except FsiLabError as exc:
-            return [], [f"the segments' modes are not pooled: {exc}"]
-        extract.path = str(index)
-        extracts.append(extract)
-        labels.append(label)
-        notes.extend(f"{label}: {e}" for e in extract.errors)
-    if not extracts:
-        return [], notes
+    label = f"segment {index + 1} ({segment.start_s:.4g}-{segment.stop_s:.4g} s)"
+    extract = extract_modes(label, {name: (ident, context)}, analysis_params, specimen,
+                            mass_per_length, registry)
+    extract.path = str(index)
+    return extract
+
+
+def _pooled(extracts: list[Any]) -> tuple[list[dict], list[str]]:
+    """The channel's modes pooled over its segments' extracts: one entry per mode (the
+    aggregation's summary of a group of modes, its runs being the segments), and notes."""
+    from fsi_lab.aggregate import group_modes, group_summary, plain
+
+    labels = [extract.label for extract in extracts]
+    notes = [f"{extract.label}: {e}" for extract in extracts for e in extract.errors]
     modes = []
     for members in group_modes(extracts):
         entry = group_summary(members, labels)
@@ -297,7 +297,8 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
     present = [n for n in names if n in cut]
     count = len(plan.segments)
     table: dict[str, list[dict[str, Any]]] = {n: [] for n in present}
-    identified: dict[str, list[tuple[int, Any, Any]]] = {n: [] for n in present}
+    extracts: dict[str, list[Any]] = {n: [] for n in present}
+    unpooled: dict[str, str] = {}
     errors: dict[str, list[dict[str, Any]]] = {n: [] for n in present}
     statuses: dict[str, list[str]] = {}
     summary: dict[str, Any] = {"run": str(path), "channels": {}}
@@ -333,12 +334,20 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                                         for e in info["errors"])
                 table[name].append(entry)
                 ident = _identification(typed.get(name, {}))
-                if ident is not None and getattr(ident, "modes", None):
+                if ident is not None and getattr(ident, "modes", None) \
+                        and name not in unpooled:
                     context = AnalysisContext(channel=own[name], channels=own, results={},
                                               specimen=specimen,
                                               mass_per_length=mass_per_length,
                                               reference=analysis.get("reference"))
-                    identified[name].append((index, ident, context))
+                    try:
+                        extracts[name].append(_segment_extract(
+                            name, index, segment, ident, context, params, registry, specimen,
+                            mass_per_length))
+                    except FsiLabError as exc:
+                        unpooled[name] = f"the segments' modes are not pooled: {exc}"
+                    del context
+                del ident
             del own, groups, typed
         for key, found in statuses.items():
             ok = found.count("ok")
@@ -354,8 +363,8 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
             starts = [s.samples(cut[name].sample_rate, len(samples_of(cut[name])))[0]
                       for s in plan.segments]
             welch = _welch(root, name, cut[name], plan, starts)
-            modes, notes = _pooled(name, identified[name], plan, params, registry, specimen,
-                                   mass_per_length)
+            modes, notes = ([], [unpooled[name]]) if name in unpooled else \
+                _pooled(extracts[name])
             info: dict[str, Any] = {
                 "components": [_pooled_component(i, m) for i, m in enumerate(modes)],
                 "notes": [plan.note(), *([tail.note()] if tail.cut else []), *notes],
