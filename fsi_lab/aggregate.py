@@ -143,8 +143,12 @@ def _curves(members: list[tuple[int, ModeExtract]], c_i: float | None, c_f: floa
     return curves, axis, lo_hi
 
 
-def _group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
-                   ) -> dict[str, Any]:
+def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
+                  ) -> dict[str, Any]:
+    """One group of modes (:func:`group_modes`) as its JSON-ready entry: C_i and C_f fitted to
+    the union of its runs' decays with intervals, each run's own numbers (``per_run``), the
+    spread between runs and the curves (layout in docs/sequence-format.md, "Aggregation";
+    ``labels`` name the runs by position)."""
     first = members[0][1]
     modes = [m for _, m in members]
     frequency = float(np.median([m.frequency_hz for m in modes]))
@@ -221,7 +225,7 @@ def aggregate_extracts(extracts: Sequence[RunExtract]) -> dict[str, Any]:
     labels = [extract.label for extract in extracts]
     runs = [{"label": e.label, "run": e.path, "modes": len(e.modes), "errors": list(e.errors),
              "exit_code": e.exit_code, "start_time": e.start_time} for e in extracts]
-    modes = [_group_summary(group, labels) for group in group_modes(extracts)]
+    modes = [group_summary(group, labels) for group in group_modes(extracts)]
     ranges = [m["amplitude_range_m"] for m in modes]
     failed = [e.exit_code for e in extracts if e.exit_code]
     code = (2 if all(c == 2 for c in failed) else 1) if failed else 0

@@ -219,9 +219,9 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
     FsiLabError
         The run file cannot be read or analysed at all (naming it; exit code 2 for bad input).
     """
-    from fsi_lab.batch import analysis_profile, require_something_to_analyse, worker_registry
     from fsi_lab.chain import channels_to_analyse
     from fsi_lab.contract import AnalysisContext
+    from fsi_lab.run_profile import analysis_profile, require_something_to_analyse, worker_registry
     from fsi_lab.runfile import read_run, require_analysable
 
     registry = registry if registry is not None else worker_registry()
@@ -282,9 +282,46 @@ def extract_identified(task: ExtractTask, identified: dict[str, tuple[Any, Any]]
     from fsi_lab.runfile import read_run
 
     run = read_run(task.path, load_data=False)
-    out = RunExtract(path=str(task.path), label=task.label or Path(task.path).name,
-                     start_time=str(run.attrs.get("start_time", "")),
-                     overrides=list(run.attrs.get("overrides", [])))
+    out = extract_modes(task.label or Path(task.path).name, identified,
+                        profile.analysis_params, profile.specimen, task.mass_per_length,
+                        registry, path=str(task.path))
+    out.start_time = str(run.attrs.get("start_time", ""))
+    out.overrides = list(run.attrs.get("overrides", []))
+    return out
+
+
+def extract_modes(label: str, identified: dict[str, tuple[Any, Any]],
+                  analysis_params: dict[str, dict[str, Any]], specimen: Any,
+                  mass_per_length: float | None, registry, path: str = "") -> RunExtract:
+    """The extract of identifications already made (a run's, or a segment's of a long record:
+    :mod:`fsi_lab.segmented`).
+
+    Parameters
+    ----------
+    label
+        Names the run or segment.
+    identified
+        Per channel, the :class:`~fsi_lab.dsp.identify.Identification` and the analysis
+        context it was given.
+    analysis_params
+        The analysis plugins' parameters (the profile's).
+    specimen
+        The run's specimen, or None.
+    mass_per_length
+        mu + M (kg/m) for data without a specimen, or None.
+    registry
+        Loaded plugins.
+
+    Raises
+    ------
+    InputFileError
+        Neither a specimen nor ``mass_per_length``: C_i and C_f cannot be given.
+    """
+    from types import SimpleNamespace
+
+    out = RunExtract(path=path, label=label)
+    task = ExtractTask(path or label, mass_per_length=mass_per_length)
+    profile = SimpleNamespace(specimen=specimen, analysis_params=analysis_params)
     mass = _mass_per_length(task, profile)
     eq_params = _plugin_params(registry, profile, "equivalent-damping")
     for name, (ident, context) in identified.items():

@@ -9,7 +9,6 @@ batch runs (:mod:`fsi_lab.executor`): it analyses one file, stores the results i
 
 from __future__ import annotations
 
-import json
 import os
 import resource
 import sys
@@ -18,48 +17,12 @@ from pathlib import Path
 from typing import Any
 
 from fsi_lab.errors import InputFileError
-
-#: The sections of a run's profile the analysis reads.
-ANALYSIS_SECTIONS = ("analysis", "specimen")
-
-
-def analysis_profile(run, registry, sets: list[str] | tuple[str, ...] = ()):
-    """The profile ``fsi-lab analyze`` analyses ``run`` (a :class:`~fsi_lab.runfile.RunData`)
-    with: its ``[analysis]`` and ``[specimen]``, its recorded overrides of them, then ``sets``.
-
-    Imported data (no profile) gets the default chain and the reference given on import.
-
-    Raises
-    ------
-    ProfileError
-        The profile, or an override, is refused (naming the run file and the key).
-    """
-    from fsi_lab.chain import default_chain
-    from fsi_lab.profile import parse_profile
-
-    text = run.profile_text
-    if not text.strip():  # imported data: the default chain, and the reference given on import
-        chain = default_chain(registry)
-        text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
-        if run.reference:
-            text += "reference = " + json.dumps(run.reference) + "\n"
-    # The run's own --set overrides of what analysis reads come first, the new ones after.
-    recorded = [item for item in run.attrs.get("overrides", [])
-                if item.partition(".")[0].strip() in ANALYSIS_SECTIONS]
-    return parse_profile(text, f"{run.path}:/profile", registry, recorded + list(sets),
-                         sections=ANALYSIS_SECTIONS)
-
-
-def require_something_to_analyse(run, profile) -> None:
-    """InputFileError unless the run has a channel the chain analyses (named or by quantity)."""
-    from fsi_lab.chain import channels_to_analyse
-
-    if not channels_to_analyse(run.channels, profile.analysis.get("channels", [])):
-        listed = ", ".join(f"{n} ({c.quantity}, {c.unit})" for n, c in run.channels.items())
-        raise InputFileError(
-            f"{run.path}: nothing to analyse: no velocity or displacement channel (channels: "
-            f"{listed or 'none'}); an acceleration or voltage channel is analysed when named, "
-            "e.g. --set analysis.channels=NAME")
+from fsi_lab.run_profile import (  # noqa: F401 - where they were first found
+    ANALYSIS_SECTIONS,
+    analysis_profile,
+    require_something_to_analyse,
+    worker_registry,
+)
 
 
 def require_mass_per_length(value: float | None) -> None:
@@ -76,19 +39,6 @@ class AnalyseTask:
     path: str
     sets: tuple[str, ...] = ()
     mass_per_length: float | None = None
-
-
-_REGISTRY = None
-
-
-def worker_registry():
-    """The plugins, loaded once per worker process."""
-    global _REGISTRY
-    if _REGISTRY is None:
-        from fsi_lab.registry import load_registry
-
-        _REGISTRY = load_registry()
-    return _REGISTRY
 
 
 def peak_rss_mib() -> float:
@@ -111,8 +61,8 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     FsiLabError
         The file cannot be read or analysed (naming it), exit code 2 for bad input.
     """
-    from fsi_lab.chain import analyse_and_store
     from fsi_lab.runfile import read_run, require_analysable
+    from fsi_lab.store import analyse_and_store
 
     registry = registry if registry is not None else worker_registry()
     run = read_run(task.path, load_data=False, lazy=True)  # a channel is read when used

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 import traceback
-from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from fsi_lab.contract import (
@@ -206,7 +205,9 @@ def cut_quiet_tail(channels: Mapping[str, ChannelData], used: list[str]
 def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
               params: Mapping[str, Mapping[str, Any]], registry: Registry,
               specimen: Any = None, mass_per_length: float | None = None,
-              bus: EventBus | None = None) -> tuple[dict[str, dict], dict[str, Any]]:
+              bus: EventBus | None = None,
+              keep_typed: dict[str, dict[str, Result]] | None = None
+              ) -> tuple[dict[str, dict], dict[str, Any]]:
     """Run every analysis of ``analysis["chain"]`` on each analysed channel.
 
     Parameters
@@ -225,6 +226,9 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
         mu + M, kg/m, for data without a specimen, or None.
     bus
         Receives progress and log events.
+    keep_typed
+        When given, receives each analysed channel's typed results (by kind) once its chain
+        has run (:mod:`fsi_lab.segmented` pools the segments' identifications from them).
 
     Returns
     -------
@@ -305,6 +309,8 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
         if tail.cut:
             channel_summary["notes"] = [tail.note(), *channel_summary.get("notes", [])]
         summary[channel_name] = channel_summary
+        if keep_typed is not None:
+            keep_typed[channel_name] = provided
     bus.emit(Progress("analysis", 1.0, "analysis done"))
     return groups, summary
 
@@ -316,18 +322,3 @@ def _missing(kind: str, unavailable: Mapping[str, str], failed: Mapping[str, str
         return (f"the {kind!r} result, which {provider} failed to give on this channel "
                 f"({failed.get(provider, 'failed')})")
     return f"the {kind!r} result earlier in the chain on this channel, which did not run"
-
-
-def analyse_and_store(path: Path, channels: Mapping[str, ChannelData],
-                      analysis: Mapping[str, Any], params: Mapping[str, Mapping[str, Any]],
-                      registry: Registry, specimen: Any = None,
-                      mass_per_length: float | None = None,
-                      bus: EventBus | None = None) -> dict[str, Any]:
-    """Run the chain and store it in the run file; returns the ``analyze --json`` object."""
-    from fsi_lab.runfile import write_analysis  # (h5py: not needed to check a chain)
-
-    groups, channel_summaries = run_chain(channels, analysis, params, registry, specimen,
-                                          mass_per_length, bus)
-    summary = {"run": str(path), "channels": channel_summaries}
-    write_analysis(path, groups, summary)
-    return summary

@@ -100,6 +100,11 @@ ANALYSIS_PARAMS: tuple[Param, ...] = (
           help="Channels to analyse; empty means every velocity or displacement channel."),
     Param("reference", "str", "", default=None,
           help="Base-acceleration channel used by transfer functions and the modal model."),
+    Param("segment_samples", "int", "", default=None, minimum=1000, maximum=10_000_000_000,
+          help="Memory budget of the analysis, in samples of the used channels (analysed and "
+               "reference) together: a record holding more is analysed in segments cut "
+               "between its free decays, each within the budget (default 2000000: about 1.3 GB "
+               "for the whole process; docs/streaming-analysis.md)."),
 )
 
 SECTIONS = ("run", "safety", "shaker", "specimen", "model", "bench", "channels", "excitation",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import itertools
 import json
@@ -11,7 +12,7 @@ import uuid as _uuid
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterator, Mapping
 
 import h5py
 import numpy as np
@@ -399,6 +400,22 @@ def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
         The run file cannot be read whole, or is read-only, or its folder does not allow the
         temporary file; the run file is unchanged.
     """
+    with rewrite_analysis(path) as handle:
+        _write_results(handle, path, groups, summary)
+
+
+@contextlib.contextmanager
+def rewrite_analysis(path: str | Path) -> Iterator[h5py.File]:
+    """The rewrite of :func:`write_analysis`, for results written a part at a time: yields
+    the open temporary copy of the run file (everything but ``/analysis``, and an empty
+    ``/analysis`` group) to write into; when the block ends without an exception, the copy
+    replaces the run file in one rename, else it is removed and the run file is unchanged.
+
+    Raises
+    ------
+    AnalysisError, InputFileError
+        As :func:`write_analysis`.
+    """
     path = Path(path)
     with _open_checked(path, "r"):  # an fsi-lab run file, or refused
         pass
@@ -411,7 +428,7 @@ def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
     try:
         _copy_record(path, temp)
         with h5py.File(temp, "r+") as handle:
-            _write_results(handle, path, groups, summary)
+            yield handle
         try:
             _replace(target, temp)
         except OSError as exc:  # e.g. a full disk while syncing

@@ -30,7 +30,6 @@ import numpy as np
 
 from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close, unsafe_roles
 from fsi_lab.bench_lock import BenchLock
-from fsi_lab.chain import analyse_and_store
 from fsi_lab.contract import ROLE_INTERFACES, BenchContext, Instrument
 from fsi_lab.errors import FsiLabError, InstrumentError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
@@ -47,6 +46,7 @@ from fsi_lab.runfile import (
 )
 from fsi_lab.safety import SafetyReport, require_safe
 from fsi_lab.signals import RunSignals
+from fsi_lab.store import analyse_and_store
 
 INTERLOCK_POLL_S = 0.2
 

@@ -235,8 +235,8 @@ def test_stored_in_the_run_file_like_any_analysis(tmp_path):
 
     import h5py
 
-    from fsi_lab.chain import analyse_and_store
     from fsi_lab.runfile import RunFileWriter, read_analysis_summary, read_run
+    from fsi_lab.store import analyse_and_store
 
     path = tmp_path / "run.h5"
     writer = RunFileWriter(path, {"kind": "simulated"})

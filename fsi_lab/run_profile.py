@@ -1,0 +1,69 @@
+"""What a run file is analysed with: its profile's analysis settings and the plugins.
+
+:func:`analysis_profile` builds what ``fsi-lab analyze`` analyses a run file with: the run's own
+profile's ``[analysis]`` and ``[specimen]`` (or the default chain for imported data), the run's
+recorded overrides of them, then the new ones (:mod:`fsi_lab.batch` and the aggregation's
+extraction, :mod:`fsi_lab.aggregate_extract`, use them).
+"""
+
+from __future__ import annotations
+
+import json
+
+from fsi_lab.errors import InputFileError
+
+#: The sections of a run's profile the analysis reads.
+ANALYSIS_SECTIONS = ("analysis", "specimen")
+
+
+def analysis_profile(run, registry, sets: list[str] | tuple[str, ...] = ()):
+    """The profile ``fsi-lab analyze`` analyses ``run`` (a :class:`~fsi_lab.runfile.RunData`)
+    with: its ``[analysis]`` and ``[specimen]``, its recorded overrides of them, then ``sets``.
+
+    Imported data (no profile) gets the default chain and the reference given on import.
+
+    Raises
+    ------
+    ProfileError
+        The profile, or an override, is refused (naming the run file and the key).
+    """
+    from fsi_lab.chain import default_chain
+    from fsi_lab.profile import parse_profile
+
+    text = run.profile_text
+    if not text.strip():  # imported data: the default chain, and the reference given on import
+        chain = default_chain(registry)
+        text = "[analysis]\nchain = " + json.dumps(chain) + "\n"
+        if run.reference:
+            text += "reference = " + json.dumps(run.reference) + "\n"
+    # The run's own --set overrides of what analysis reads come first, the new ones after.
+    recorded = [item for item in run.attrs.get("overrides", [])
+                if item.partition(".")[0].strip() in ANALYSIS_SECTIONS]
+    return parse_profile(text, f"{run.path}:/profile", registry, recorded + list(sets),
+                         sections=ANALYSIS_SECTIONS)
+
+
+def require_something_to_analyse(run, profile) -> None:
+    """InputFileError unless the run has a channel the chain analyses (named or by quantity)."""
+    from fsi_lab.chain import channels_to_analyse
+
+    if not channels_to_analyse(run.channels, profile.analysis.get("channels", [])):
+        listed = ", ".join(f"{n} ({c.quantity}, {c.unit})" for n, c in run.channels.items())
+        raise InputFileError(
+            f"{run.path}: nothing to analyse: no velocity or displacement channel (channels: "
+            f"{listed or 'none'}); an acceleration or voltage channel is analysed when named, "
+            "e.g. --set analysis.channels=NAME")
+
+
+
+_REGISTRY = None
+
+
+def worker_registry():
+    """The plugins, loaded once per worker process."""
+    global _REGISTRY
+    if _REGISTRY is None:
+        from fsi_lab.registry import load_registry
+
+        _REGISTRY = load_registry()
+    return _REGISTRY

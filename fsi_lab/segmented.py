@@ -1,0 +1,415 @@
+"""Long records analysed in segments, in bounded memory (issue 16; docs/streaming-analysis.md).
+
+When a record's used channels (those analysed and the reference) hold more samples than the
+analysis's budget (:func:`budget_of`: the profile's ``[analysis] segment_samples``, default
+:data:`fsi_lab.segments.SEGMENT_SAMPLES`) even after its quiet tail is cut, ``fsi-lab analyze``
+and the runner's analysis (:func:`fsi_lab.store.analyse_and_store`) take it in segments:
+
+- the record is cut between its free decays (:func:`fsi_lab.segments.plan_segments`, from the
+  channels' decimated envelopes read a chunk at a time), or at fixed lengths when it has no
+  quiet stretch (random excitation), each segment within the budget;
+- each segment is analysed by the profile's chain (:func:`fsi_lab.chain.run_chain`) as a
+  record of its own, its channels read from the run file when the chain first uses them;
+- its results are written into the rewrite of the run file as they come
+  (:func:`fsi_lab.runfile.rewrite_analysis`): a dataset whose last axis runs along the samples
+  is made once at the record's full length (chunked, NaN where no segment was analysed) and
+  filled at the segment's offset; any other dataset (spectra, tables of extrema, curves) and
+  the segment's attributes go to a group ``segment_NNNN`` of the analysis's group, their
+  times from the segment's start;
+- the identification is pooled over the segments: the modes of the segments are grouped by
+  frequency (:func:`fsi_lab.aggregate.group_modes`) and the damping law is fitted to the union
+  of their free decays (:func:`fsi_lab.aggregate_fit.fit_union`, through the aggregation's
+  summary of a group), so the summary gives one C_i and C_f per mode with intervals, how many
+  segments and decays went into it, and each segment's own numbers;
+- each analysed channel's spectrum over the whole record is Welch's (segments of
+  :data:`WELCH_S` s, Hann, half overlapping, read a chunk at a time), stored as the group
+  ``<channel>/segments`` with the table of the segments; no whole-record FFT is taken.
+
+Memory is bounded by the budget (the chain's peak on one segment) plus the envelopes and the
+summaries: kilobytes per segment.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from fsi_lab.contract import AnalysisContext, ChannelData, Result
+from fsi_lab.errors import FsiLabError
+from fsi_lab.events import EventBus, Progress
+from fsi_lab.registry import Registry
+from fsi_lab.segments import SEGMENT_SAMPLES, Segment, SegmentPlan, plan_segments
+from fsi_lab.sources import LazyChannelData, samples_of
+from fsi_lab.summary import json_safe
+
+#: Length of the Welch segments of a segmented record's spectrum, s.
+WELCH_S = 8.0
+#: Samples along the record in one HDF5 chunk of a per-sample result.
+ROW_CHUNK = 1 << 16
+
+
+def budget_of(analysis: Mapping[str, Any]) -> int:
+    """The analysis's budget: samples of the used channels together in one segment."""
+    value = analysis.get("segment_samples")
+    return int(value) if value else SEGMENT_SAMPLES
+
+
+def used_channels(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any]
+                  ) -> list[str]:
+    """The channels the chain uses: those analysed and the reference, as far as present."""
+    from fsi_lab.chain import channels_to_analyse
+
+    names = channels_to_analyse(channels, analysis.get("channels", []))
+    reference = analysis.get("reference")
+    return [n for n in dict.fromkeys(names + ([reference] if reference else []))
+            if n in channels]
+
+
+def segment_plan(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any]
+                 ) -> SegmentPlan | None:
+    """How the record is cut, or None when its used channels fit the budget (the analysis in
+    memory, unchanged). Judged on the record up to its quiet tail's cut
+    (:func:`fsi_lab.chain.cut_quiet_tail`)."""
+    from fsi_lab.chain import cut_quiet_tail
+
+    budget = budget_of(analysis)
+    used = used_channels(channels, analysis)
+    if sum(len(samples_of(channels[n])) for n in used) <= budget:
+        return None
+    cut, _ = cut_quiet_tail(channels, used)
+    if sum(len(samples_of(cut[n])) for n in used) <= budget:
+        return None
+    return plan_segments(((samples_of(cut[n]), cut[n].sample_rate) for n in used), budget)
+
+
+class _Window:
+    """Samples ``[start, stop)`` of an array or a source, read by slices as a source."""
+
+    def __init__(self, data: Any, start: int, stop: int) -> None:
+        self.data, self.start, self.length = data, int(start), max(0, int(stop) - int(start))
+
+    def __len__(self) -> int:
+        return self.length
+
+    def read(self, start: int, stop: int) -> np.ndarray:
+        start, stop = max(0, int(start)), min(self.length, int(stop))
+        if stop <= start:
+            return np.empty(0)
+        return np.asarray(self.data[self.start + start:self.start + stop], dtype=np.float64)
+
+    def __getitem__(self, index: slice) -> np.ndarray:
+        if not isinstance(index, slice) or index.step not in (None, 1):
+            raise TypeError(f"a segment is read by slices of step 1, not {index!r}")
+        start, stop, _ = index.indices(self.length)
+        return self.read(start, stop)
+
+    def head(self, length: int) -> _Window:
+        return _Window(self.data, self.start, self.start + min(int(length), self.length))
+
+
+def _segment_channel(channel: ChannelData, segment: Segment) -> LazyChannelData:
+    """``channel`` over ``segment``, read when first used."""
+    data = samples_of(channel)
+    start, stop = segment.samples(channel.sample_rate, len(data))
+    return LazyChannelData(channel.name, _Window(data, start, stop), channel.sample_rate,
+                           channel.quantity, channel.unit, channel.t0)
+
+
+class _SegmentBus(EventBus):
+    """Passes the chain's events of segment ``index`` of ``count`` on to ``bus``, its progress
+    as a share of the whole analysis."""
+
+    def __init__(self, bus: EventBus, index: int, count: int, segment: Segment) -> None:
+        super().__init__()
+        self.bus, self.index, self.count, self.segment = bus, index, count, segment
+
+    def emit(self, event: Any) -> None:
+        if isinstance(event, Progress):
+            if event.fraction >= 1.0 and self.index + 1 < self.count:
+                return
+            event = Progress(event.stage, (self.index + min(1.0, event.fraction)) / self.count,
+                             f"segment {self.index + 1} of {self.count} "
+                             f"({self.segment.start_s:.4g}-{self.segment.stop_s:.4g} s): "
+                             f"{event.message}")
+        self.bus.emit(event)
+
+
+# --------------------------------------------------------------------------- storing
+def _per_sample(array: np.ndarray, lengths: set[int]) -> bool:
+    return array.ndim >= 1 and array.shape[-1] in lengths and array.shape[-1] > 1
+
+
+def _store(root: Any, key: str, content: Mapping[str, Any], index: int, offset: int,
+           total: int, lengths: set[int]) -> None:
+    """One segment's result ``content`` of ``key`` into ``root`` (``/analysis`` of the
+    rewrite): per-sample datasets at ``offset`` of their full-length dataset (``total``
+    samples), the rest in the group ``segment_NNNN``."""
+    from fsi_lab.runfile import write_attrs
+
+    group = root.require_group(key)
+    own = group.create_group(f"segment_{index:04d}")
+    for name, value in content.get("datasets", {}).items():
+        array = np.asarray(value)
+        unit = content.get("units", {}).get(name)
+        axis = content.get("axes", {}).get(name)
+        if _per_sample(array, lengths):
+            dataset = group.get(name)
+            rows = array.shape[:-1]
+            if dataset is None:
+                dataset = group.create_dataset(
+                    name, shape=rows + (total,), maxshape=(None,) * len(rows) + (total,),
+                    dtype=np.float64 if array.dtype.kind == "f" else np.float32,
+                    chunks=(1,) * len(rows) + (min(total, ROW_CHUNK),), fillvalue=np.nan)
+                dataset.attrs["filled"] = ("segment by segment at each segment's offset along "
+                                           "the record; NaN where no segment was analysed")
+            elif any(r > d for r, d in zip(rows, dataset.shape[:-1])):
+                dataset.resize(tuple(max(r, d) for r, d in zip(rows, dataset.shape[:-1]))
+                               + (total,))
+            where = tuple(slice(0, r) for r in rows) + (slice(offset, offset + array.shape[-1]),)
+            dataset[where] = array
+        else:
+            dataset = own.create_dataset(name, data=array)
+        if unit is not None:
+            dataset.attrs["units"] = unit
+        if axis is not None:
+            dataset.attrs["axis"] = axis
+    write_attrs(own, content.get("attrs", {}))
+    if "params" in content and "params" not in group:
+        write_attrs(group.create_group("params"), content["params"])
+
+
+def _welch(root: Any, name: str, channel: ChannelData, plan: SegmentPlan,
+           starts: list[int]) -> dict[str, Any]:
+    """The channel's Welch spectrum over the whole record (read a chunk at a time) and the
+    table of the segments, as ``<channel>/segments``; its summary."""
+    from fsi_lab.dsp.spectrum import cross_spectra
+
+    data = samples_of(channel)
+    fs = float(channel.sample_rate)
+    segment = int(min(len(data), 2 ** round(math.log2(max(16.0, WELCH_S * fs)))))
+    spectra = cross_spectra(data, data, fs, segment=segment, step=segment // 2)
+    psd = spectra.total()[0]
+    group = root.require_group(f"{name}/segments")
+    group.create_dataset("start_s", data=np.array([s.start_s for s in plan.segments]))
+    group.create_dataset("stop_s", data=np.array([s.stop_s for s in plan.segments]))
+    group.create_dataset("start_sample", data=np.array(starts, dtype=np.int64))
+    group.create_dataset("welch_frequency", data=spectra.frequency).attrs["units"] = "Hz"
+    group.create_dataset("welch_psd", data=psd).attrs["units"] = f"({channel.unit})^2/Hz"
+    resolution = fs / segment
+    attrs = {"status": "ok", "budget_samples": plan.budget, "budget_s": plan.budget_s,
+             "cut": "fixed lengths" if plan.fixed else "quiet stretches between free decays",
+             "welch": f"Hann segments of {segment} samples ({segment / fs:.4g} s), half "
+                      f"overlapping, {int(spectra.counts.sum())} averaged; resolution "
+                      f"{resolution:.4g} Hz",
+             "resolution_hz": resolution}
+    from fsi_lab.runfile import write_attrs
+
+    write_attrs(group, attrs)
+    top = int(np.argmax(psd[1:])) + 1 if psd.size > 1 else 0
+    return {"welch_resolution_hz": resolution, "welch_segments": int(spectra.counts.sum()),
+            "welch_peak_hz": float(spectra.frequency[top])}
+
+
+# --------------------------------------------------------------------------- pooling
+def _identification(typed: Mapping[str, Result]) -> Any:
+    from fsi_lab.aggregate_extract import identification_of
+
+    for result in typed.values():
+        ident = identification_of(result)
+        if ident is not None:
+            return ident
+    return None
+
+
+def _segment_extract(name: str, index: int, segment: Segment, ident: Any, context: Any,
+                     analysis_params: Mapping[str, Mapping[str, Any]], registry: Registry,
+                     specimen: Any, mass_per_length: float | None) -> Any:
+    """What the pooling keeps of one segment's identification (the aggregation's extract of a
+    run: each mode's decays' extrema, its own law and curves; kilobytes), made at once so that
+    the segment's samples are not kept. Raises FsiLabError when C_i and C_f cannot be given
+    (no specimen and no mass per length)."""
+    from fsi_lab.aggregate_extract import extract_modes
+
+    label = f"segment {index + 1} ({segment.start_s:.4g}-{segment.stop_s:.4g} s)"
+    extract = extract_modes(label, {name: (ident, context)}, analysis_params, specimen,
+                            mass_per_length, registry)
+    extract.path = str(index)
+    return extract
+
+
+def _pooled(extracts: list[Any]) -> tuple[list[dict], list[str]]:
+    """The channel's modes pooled over its segments' extracts: one entry per mode (the
+    aggregation's summary of a group of modes, its runs being the segments), and notes."""
+    from fsi_lab.aggregate import group_modes, group_summary, plain
+
+    labels = [extract.label for extract in extracts]
+    notes = [f"{extract.label}: {e}" for extract in extracts for e in extract.errors]
+    modes = []
+    for members in group_modes(extracts):
+        entry = group_summary(members, labels)
+        entry.pop("curves", None)
+        entry["segments"] = entry.pop("runs")
+        entry["between_segments"] = entry.pop("between_runs")
+        per_run = entry.pop("per_run")
+        entry["per_segment"] = [{"segment": int(extracts[p].path) + 1,
+                                 **{k: v for k, v in r.items() if k != "run"}}
+                                for (p, _), r in zip(members, per_run)]
+        modes.append(plain(json_safe(entry)))
+    return modes, notes
+
+
+# --------------------------------------------------------------------------- the analysis
+def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
+                        analysis: Mapping[str, Any],
+                        params: Mapping[str, Mapping[str, Any]], registry: Registry,
+                        plan: SegmentPlan, specimen: Any = None,
+                        mass_per_length: float | None = None,
+                        bus: EventBus | None = None) -> dict[str, Any]:
+    """Analyse the record of run file ``path`` in the segments of ``plan`` and store the
+    results in it (module notes); returns the ``analyze --json`` object.
+
+    Parameters
+    ----------
+    path
+        The run file (its ``/analysis`` is replaced).
+    channels, analysis, params, registry, specimen, mass_per_length, bus
+        As :func:`fsi_lab.chain.run_chain`.
+    plan
+        The segments (:func:`segment_plan`).
+
+    Returns
+    -------
+    dict
+        ``run`` and ``channels``: each analysed channel's summary, with ``segmented`` (the
+        segments, the pooled modes, each segment's numbers; docs/json-output.md) and
+        ``components`` (the pooled modes).
+    """
+    from fsi_lab.chain import channels_to_analyse, cut_quiet_tail, run_chain
+    from fsi_lab.runfile import rewrite_analysis, utc_now, write_attrs
+
+    bus = bus or EventBus()
+    used = used_channels(channels, analysis)
+    cut, tail = cut_quiet_tail(channels, used)
+    names = channels_to_analyse(channels, analysis.get("channels", []))
+    present = [n for n in names if n in cut]
+    count = len(plan.segments)
+    table: dict[str, list[dict[str, Any]]] = {n: [] for n in present}
+    extracts: dict[str, list[Any]] = {n: [] for n in present}
+    unpooled: dict[str, str] = {}
+    errors: dict[str, list[dict[str, Any]]] = {n: [] for n in present}
+    statuses: dict[str, list[str]] = {}
+    summary: dict[str, Any] = {"run": str(path), "channels": {}}
+    with rewrite_analysis(path) as handle:
+        root = handle["analysis"]
+        for index, segment in enumerate(plan.segments):
+            own = {n: _segment_channel(c, segment) for n, c in cut.items()}
+            typed: dict[str, dict[str, Result]] = {}
+            groups, seg_summary = run_chain(own, analysis, params, registry, specimen,
+                                            mass_per_length,
+                                            _SegmentBus(bus, index, count, segment), typed)
+            for key, content in groups.items():
+                channel = cut[key.partition("/")[0]]
+                start, stop = segment.samples(channel.sample_rate,
+                                              len(samples_of(channel)))
+                analysed = content.get("attrs", {}).get("analysed_s")
+                lengths = {stop - start} | ({int(math.ceil(analysed * channel.sample_rate))}
+                                            if analysed else set())
+                _store(root, key, content, index, start, len(samples_of(channel)), lengths)
+                statuses.setdefault(key, []).append(content["attrs"].get("status", "ok"))
+            for name in present:
+                info = seg_summary.get(name, {})
+                entry = {"segment": index + 1, "start_s": segment.start_s,
+                         "stop_s": segment.stop_s, "free_decays": segment.bursts,
+                         "components": [_component_numbers(c) for c in info.get("components",
+                                                                                 [])]}
+                if info.get("errors"):
+                    entry["errors"] = [e["message"] for e in info["errors"]]
+                    errors[name].extend({"plugin": e.get("plugin"),
+                                         "message": f"segment {index + 1} "
+                                                    f"({segment.start_s:.4g}-"
+                                                    f"{segment.stop_s:.4g} s): {e['message']}"}
+                                        for e in info["errors"])
+                table[name].append(entry)
+                ident = _identification(typed.get(name, {}))
+                if ident is not None and getattr(ident, "modes", None) \
+                        and name not in unpooled:
+                    context = AnalysisContext(channel=own[name], channels=own, results={},
+                                              specimen=specimen,
+                                              mass_per_length=mass_per_length,
+                                              reference=analysis.get("reference"))
+                    try:
+                        extracts[name].append(_segment_extract(
+                            name, index, segment, ident, context, params, registry, specimen,
+                            mass_per_length))
+                    except FsiLabError as exc:
+                        unpooled[name] = f"the segments' modes are not pooled: {exc}"
+                    del context
+                del ident
+            del own, groups, typed
+        for key, found in statuses.items():
+            ok = found.count("ok")
+            write_attrs(root[key], {
+                "status": "ok" if ok else "failed", "segmented": True, "segments": len(found),
+                "segments_ok": ok,
+                "layout": "per-sample datasets at the record's full length, filled at each "
+                          "segment's offset (NaN where no segment was analysed); the rest, and "
+                          "each segment's attributes, in segment_NNNN (times from the "
+                          "segment's start: <channel>/segments/start_s)"})
+        bus.emit(Progress("analysis", 1.0, "pooling the segments' free decays"))
+        for name in present:
+            starts = [s.samples(cut[name].sample_rate, len(samples_of(cut[name])))[0]
+                      for s in plan.segments]
+            welch = _welch(root, name, cut[name], plan, starts)
+            modes, notes = ([], [unpooled[name]]) if name in unpooled else \
+                _pooled(extracts[name])
+            info: dict[str, Any] = {
+                "components": [_pooled_component(i, m) for i, m in enumerate(modes)],
+                "notes": [plan.note(), *([tail.note()] if tail.cut else []), *notes],
+                "segmented": {"segments": count, "budget_samples": plan.budget,
+                              "budget_s": plan.budget_s,
+                              "cut": "fixed" if plan.fixed else "quiet",
+                              "free_decays": plan.bursts,
+                              "analysed_s": sum(s.stop_s - s.start_s for s in plan.segments),
+                              "record_s": plan.record_s, **welch,
+                              "modes": modes, "table": table[name]}}
+            if errors[name]:
+                info["errors"] = errors[name]
+            summary["channels"][name] = json_safe(info)
+        for name in names:
+            if name not in cut:
+                summary["channels"][name] = {"errors": [{
+                    "plugin": None, "message": f"channel {name!r} is not in the run; channels "
+                                               f"are {', '.join(cut) or 'none'}"}]}
+        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
+    bus.emit(Progress("analysis", 1.0, "analysis done"))
+    return summary
+
+
+def _component_numbers(component: Mapping[str, Any]) -> dict[str, Any]:
+    """What the segment table keeps of one of a segment's components: its frequency and any
+    C_i and C_f with their intervals, wherever an analysis put them."""
+    out: dict[str, Any] = {"index": component.get("index"),
+                           "frequency_hz": component.get("frequency_hz")}
+    for value in component.values():
+        if isinstance(value, dict) and "c_i_ci95" in value:
+            out.update({k: value.get(k) for k in ("c_i", "c_i_ci95", "c_f", "c_f_ci95")})
+            break
+    return out
+
+
+def _pooled_component(index: int, mode: Mapping[str, Any]) -> dict[str, Any]:
+    """A pooled mode as a component of the channel's summary."""
+    keys = ("frequency_hz", "frequency_range_hz", "segments", "decays", "extrema", "c_i",
+            "c_i_ci95", "c_f", "c_f_ci95", "preferred_law", "fit_error")
+    out = {"index": index, **{k: mode[k] for k in keys if k in mode}}
+    if mode.get("c_i") is not None and mode.get("c_f") is not None:
+        (a, b), (c, d) = mode["c_i_ci95"], mode["c_f_ci95"]
+        out["pooled"] = (f"C_i = {mode['c_i']:.4g} kg/(m s) (95 %: {a:.4g} to {b:.4g}), "
+                         f"C_f = {mode['c_f']:.4g} kg/m^2 (95 %: {c:.4g} to {d:.4g}) from "
+                         f"{mode['decays']} decays in {mode['segments']} segment"
+                         f"{'s' * (mode['segments'] != 1)}")
+    return out
+

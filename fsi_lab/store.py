@@ -1,0 +1,42 @@
+"""Runs the analysis chain over a run file's channels and stores the results in it.
+
+Below the analysis's budget (``[analysis] segment_samples``) the record is analysed in memory
+(:func:`fsi_lab.chain.run_chain`) and its results written in one rewrite of the run file
+(:func:`fsi_lab.runfile.write_analysis`); above it, in segments (:mod:`fsi_lab.segmented`).
+``fsi-lab analyze`` (:func:`fsi_lab.batch.analyse_file`) and the runner's analysis call
+:func:`analyse_and_store`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping
+
+from fsi_lab.contract import ChannelData
+from fsi_lab.events import EventBus
+from fsi_lab.registry import Registry
+
+
+def analyse_and_store(path: Path, channels: Mapping[str, ChannelData],
+                      analysis: Mapping[str, Any], params: Mapping[str, Mapping[str, Any]],
+                      registry: Registry, specimen: Any = None,
+                      mass_per_length: float | None = None,
+                      bus: EventBus | None = None) -> dict[str, Any]:
+    """Run the chain and store it in the run file; returns the ``analyze --json`` object.
+
+    A record whose used channels hold more samples than the analysis's budget
+    (``segment_samples``) is analysed in segments (:mod:`fsi_lab.segmented`)."""
+    from fsi_lab.chain import run_chain
+    from fsi_lab.runfile import write_analysis
+    from fsi_lab.segmented import analyse_in_segments, segment_plan
+
+    plan = segment_plan(channels, analysis)
+    if plan is not None:
+        return analyse_in_segments(path, channels, analysis, params, registry, plan, specimen,
+                                   mass_per_length, bus)
+
+    groups, channel_summaries = run_chain(channels, analysis, params, registry, specimen,
+                                          mass_per_length, bus)
+    summary = {"run": str(path), "channels": channel_summaries}
+    write_analysis(path, groups, summary)
+    return summary
