@@ -38,9 +38,11 @@ number. The steps:
    where the fit's own covariance falls short (:func:`_noise_spread`).
 7. **Backbone.** Frequency ``1 / (t[i+1] - t[i-1])`` at each zero crossing against the
    displacement amplitude (the geometric mean of the two neighbouring extrema). The natural
-   frequency is the backbone's small-amplitude limit: the damping's share of each period is
-   taken off (with the fitted law), and ``w^2 = w0^2 + 3 alpha X^2 / 4`` (harmonic balance of
-   a cubic stiffness, kept only when the record resolves it) is fitted.
+   frequency is the backbone's small-amplitude limit: the fitted model (its damping law, and
+   ``w^2 = w0^2 + 3 alpha X^2 / 4``, harmonic balance of a cubic stiffness, kept only when the
+   record resolves it) is fitted to the crossing times themselves, each weighted by its
+   amplitude (:func:`_frequency_step`), not to the periods between them (whose weighted mean
+   telescopes to a decay's first and last crossings).
 8. **Start and range.** The first extrema of each decay are left out while the quadratic law's
    coefficients still move when more are (:func:`_stable_start`); how far they still move with
    later starts, beyond what the extrema left out explain, widens their intervals
