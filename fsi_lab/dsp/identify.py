@@ -38,9 +38,11 @@ number. The steps:
    where the fit's own covariance falls short (:func:`_noise_spread`).
 7. **Backbone.** Frequency ``1 / (t[i+1] - t[i-1])`` at each zero crossing against the
    displacement amplitude (the geometric mean of the two neighbouring extrema). The natural
-   frequency is the backbone's small-amplitude limit: the damping's share of each period is
-   taken off (with the fitted law), and ``w^2 = w0^2 + 3 alpha X^2 / 4`` (harmonic balance of
-   a cubic stiffness, kept only when the record resolves it) is fitted.
+   frequency is the backbone's small-amplitude limit: the fitted model (its damping law, and
+   ``w^2 = w0^2 + 3 alpha X^2 / 4``, harmonic balance of a cubic stiffness, kept only when the
+   record resolves it) is fitted to the crossing times themselves, each weighted by its
+   amplitude (:func:`_frequency_step`), not to the periods between them (whose weighted mean
+   telescopes to a decay's first and last crossings).
 8. **Start and range.** The first extrema of each decay are left out while the quadratic law's
    coefficients still move when more are (:func:`_stable_start`); how far they still move with
    later starts, beyond what the extrema left out explain, widens their intervals
@@ -151,6 +153,9 @@ MODEL_LIMIT = 3.0
 WILD_SCALE = 10.0
 #: The preferred law's whitened residuals correlated more than this at lag 1 are warned.
 RESIDUAL_RHO = 0.6
+#: Largest lag-1 correlation of the crossing-time residuals the frequency's variance is widened
+#: for (:func:`_frequency_step`; a 19-fold variance at most).
+CROSSING_RHO_CAP = 0.9
 #: Seed of the simulated noise: the same record always gives the same numbers.
 NOISE_SEED = 20261123
 #: Confidence level of the intervals.
@@ -859,55 +864,125 @@ def _data_stiffening(p_data: np.ndarray, x_amp: np.ndarray, weight: np.ndarray
     return 0.5 * float(coef[1]) * top, 0.5 * math.sqrt(max(float(cov[1, 1]), 0.0)) * top
 
 
+def _crossing_times(d: dict) -> dict | None:
+    """The zero crossings of a decay's band signal between its kept extrema, paired with the
+    filtered model's (``model_crossings``): ``data`` and ``model`` times (s), ``sign`` of each
+    crossing's slope (+-1, alternating), the ``amplitude`` there (geometric mean of the two
+    neighbouring corrected extrema), the model's ``half`` period (s) and the extremum
+    ``peak`` of the half cycle before each crossing (0 for the first), and ``ok``: the
+    crossings the frequency is fitted to (not the window's first :data:`EDGE_EXTREMA`, where
+    the filters smear; each paired with a model crossing of its own within a third of a half
+    period, after the pairs' common offset). None when fewer than 3 crossings pair up."""
+    t = d["times"]
+    c = d["crossings"]
+    c = c[(c > t[0]) & (c < t[-1])]
+    mc = d.get("model_crossings")
+    if mc is None or c.size < 3 or mc.size < 3:
+        return None
+    idx = _match(mc, c)
+    m = mc[idx]
+    counts = np.bincount(idx, minlength=mc.size)
+    half = float(np.median(np.diff(c)))
+    lag = c - m
+    ok = (counts[idx] == 1) & (np.abs(lag - np.median(lag)) < half / 3.0)
+    ok[:EDGE_EXTREMA] = False
+    amp = np.abs(d["amplitude"])
+    k = np.clip(np.searchsorted(t, c), 1, t.size - 1)
+    at = np.sqrt(amp[k - 1] * amp[k])
+    peak = np.r_[0.0, amp[np.clip(np.searchsorted(t, 0.5 * (c[1:] + c[:-1])), 0, t.size - 1)]]
+    if ok.sum() < 3:
+        return None
+    return {"data": c, "model": m, "sign": 1.0 - 2.0 * (np.arange(c.size) % 2),
+            "amplitude": at, "half": np.r_[0.0, np.diff(m)], "peak": peak, "ok": ok}
+
+
 def _frequency_step(mode: _Mode, quantity: str) -> None:
     """Gauss-Newton step on the linear natural frequency (and the cubic stiffness when the
-    record resolves it) from the half periods of the data and of the filtered model: both went
-    through the same filters, so their difference is the model's error alone."""
-    parts = [h for h in (_half_periods(d) for d in mode.decays) if h is not None]
-    if not parts:
+    record resolves it) from the zero-crossing times of the data and of the filtered model:
+    both went through the same filters, so their difference is the model's error alone.
+
+    The crossing times themselves are fitted (with a free time offset per decay), each
+    weighted by its amplitude (a crossing's time error is the noise over the signal's slope
+    there) and whitened with the band's noise correlation. Their differences, the half
+    periods, are not: each crossing's error enters two neighbouring half periods with opposite
+    signs, so a weighted mean of half periods telescopes to its first and last crossings -
+    on a heavily damped decay, to the window's first few cycles alone."""
+    pairs = [(p, d) for p, d in ((_crossing_times(d), d) for d in mode.decays) if p is not None]
+    if not pairs:
         return
-    p_data = np.concatenate([p[0] for p in parts])
-    p_model = np.concatenate([p[1] for p in parts])
-    amp = np.concatenate([p[2] for p in parts])
-    if p_data.size < 3:
-        return
-    x_amp = amp / mode.w0 if quantity == "velocity" else amp
-    weight = x_amp / np.max(x_amp)          # a crossing's time error ~ 1 / amplitude
-    r = (p_data - p_model) * weight
+    top = 0.0
+    for p, _ in pairs:
+        x_hp = p["peak"] / mode.w0 if quantity == "velocity" else p["peak"]
+        top = max(top, float(np.max(x_hp)))
     # The stiffness column on the amplitude relative to the largest (``top``): in the record's
     # unit it can be 1e-11 of the other, and the covariance's pseudo-inverse would drop it.
-    top = max(float(np.max(x_amp)), 1e-300) ** 2
-    jac = np.stack((-p_model / mode.w0, -0.375 * p_model * (x_amp ** 2 / top) / mode.w0 ** 2),
-                   axis=1)
-    jac *= weight[:, None]
+    top = max(top, 1e-300) ** 2
+    blocks, rhs = [], []
+    x_seen = []
+    for j, (p, _) in enumerate(pairs):
+        ok = p["ok"]
+        x_hp = p["peak"] / mode.w0 if quantity == "velocity" else p["peak"]
+        x_seen.append(x_hp[1:])
+        d_w0 = -(p["model"] - p["model"][0]) / mode.w0
+        d_alpha = -np.cumsum(0.375 * p["half"] * (x_hp ** 2 / top)) / mode.w0 ** 2
+        cols = np.zeros((ok.sum(), 2 + len(pairs)))
+        cols[:, 0], cols[:, 1], cols[:, 2 + j] = d_w0[ok], d_alpha[ok], 1.0
+        scale = float(np.max(p["amplitude"][ok])) / np.maximum(p["amplitude"][ok], 1e-300)
+        white = Whitener(p["data"][ok], p["sign"][ok], mode.correlation, scale)
+        rhs.append(white.apply(p["data"][ok] - p["model"][ok]))
+        blocks.append(np.stack([white.apply(col) for col in cols.T], axis=1))
+    jac, r = np.concatenate(blocks), np.concatenate(rhs)
     n = r.size
-    use_alpha = n >= 8 and np.ptp(x_amp) > 0
-    cols = 2 if use_alpha else 1
-    step, *_ = np.linalg.lstsq(jac[:, :cols], r, rcond=None)
-    resid = r - jac[:, :cols] @ step
-    s2 = float(resid @ resid) / max(n - cols, 1)
-    cov = np.linalg.pinv(jac[:, :cols].T @ jac[:, :cols]) * s2
+    x_all = np.concatenate(x_seen)
+    use_alpha = n >= 8 + len(pairs) and np.ptp(x_all) > 0
+
+    inner = np.ones(n, dtype=bool)          # a residual with a predecessor in its decay
+    inner[np.cumsum([0] + [b.shape[0] for b in blocks[:-1]])] = False
+
+    def solve(names: list[int]) -> tuple[np.ndarray, np.ndarray, int]:
+        sub = jac[:, names]
+        step, *_ = np.linalg.lstsq(sub, r, rcond=None)
+        resid = r - sub @ step
+        dof = max(n - len(names), 1)
+        cov = np.linalg.pinv(sub.T @ sub) * float(resid @ resid) / dof
+        # What the band's noise correlation leaves correlated (a drift, a close mode's slow
+        # beat) makes neighbouring residuals alike: the variance of a rate fitted to them
+        # grows by (1 + rho) / (1 - rho) (rho: their lag-1 correlation, as for AR(1) errors).
+        rho = float(resid[1:][inner[1:]] @ resid[:-1][inner[1:]]) / max(float(resid @ resid),
+                                                                         1e-300)
+        rho = min(max(rho, 0.0), CROSSING_RHO_CAP)
+        return step, cov * (1.0 + rho) / (1.0 - rho), dof
+
+    offsets = list(range(2, 2 + len(pairs)))
     if use_alpha:
+        step, cov, dof = solve([0, 1, *offsets])
         alpha_new = mode.alpha + float(step[1]) / top
         se_alpha = math.sqrt(max(cov[1, 1], 0.0)) / top
         # Kept only when clearly resolved and large enough to matter: the frequency it moves
         # at the largest amplitude (harmonic balance) at least STIFFNESS_SHIFT.
-        shift = 0.375 * alpha_new * float(np.max(x_amp)) ** 2 / mode.w0 ** 2
+        shift = 0.375 * alpha_new * top / mode.w0 ** 2
         # ... and only when the measured frequencies themselves move that way with amplitude
         # (a model with a misfitting damping law can ask for a stiffness the data do not show)
-        seen, seen_se = _data_stiffening(p_data, x_amp, weight)
-        visible = abs(seen) > 5.0 * seen_se and seen * shift > 0 and abs(seen) >= 0.5 * abs(shift)
+        halves = [h for h in (_half_periods(d) for _, d in pairs) if h is not None]
+        visible = False
+        if halves:
+            p_data = np.concatenate([h[0] for h in halves])
+            amp = np.concatenate([h[2] for h in halves])
+            if p_data.size >= 3:
+                x_amp = amp / mode.w0 if quantity == "velocity" else amp
+                seen, seen_se = _data_stiffening(p_data, x_amp, x_amp / np.max(x_amp))
+                visible = (abs(seen) > 5.0 * seen_se and seen * shift > 0
+                           and abs(seen) >= 0.5 * abs(shift))
         if abs(alpha_new) <= 5.0 * se_alpha or abs(shift) < STIFFNESS_SHIFT or not visible:
-            step, *_ = np.linalg.lstsq(jac[:, :1], r, rcond=None)
-            resid = r - jac[:, :1] @ step
-            s2 = float(resid @ resid) / max(n - 1, 1)
-            cov = np.linalg.pinv(jac[:, :1].T @ jac[:, :1]) * s2
+            step, cov, dof = solve([0, *offsets])
             mode.alpha = 0.0
         else:
             mode.alpha = alpha_new
+    else:
+        step, cov, dof = solve([0, *offsets])
     mode.w0 += float(step[0])
     mode.w0_se = math.sqrt(max(cov[0, 0], 0.0))
-    mode.w0_dof = max(n - cols, 1)
+    mode.w0_dof = dof
 
 
 def _backbone(mode: _Mode, quantity: str) -> Backbone:

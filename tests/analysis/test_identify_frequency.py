@@ -1,0 +1,56 @@
+"""identify()'s natural frequency on a short, heavily damped impact record with a weak line in
+the mode's band: the features of pysdkit's beam record (tests/analysis/test_real_data.py), with
+known truth.
+
+The record: five decaying modes in acceleration, as a least-squares fit of damped sinusoids gives
+them on the beam record's channel 0 (2560 Hz, 1280 samples = 0.5 s, the impact at sample 23):
+30.703 Hz (decay rate 5.29 1/s: damping ratio 2.7 %, about 15 cycles in the record), a weak
+48.79 Hz mode (6 % of the first's acceleration) inside the first mode's band, 215.77 Hz, and
+586.1 and 1114.9 Hz (4.4 and 2.3 samples per cycle: left out as undersampled); white noise of
+0.3 m/s^2 (the fit's residual on the record is 0.9 m/s^2 RMS, most of it above 150 Hz).
+
+The frequency was fitted to the half periods between crossings, weighted as if each were
+measured on its own: each crossing's error enters two neighbouring half periods with opposite
+signs, so their weighted mean telescoped to the first and last crossings, and on a decay this
+short and damped to the window's first cycles, where the filters' edge and the noise weigh
+most. Measured on these records (10 seeds): -0.56 % (noise 0.3) and -0.20 % (noise 0.08) from
+the truth; the beam record's channels 0 and 1 gave 30.58 and 30.47 Hz. Fitted to the crossing
+times themselves: -0.07 % and -0.04 %, every 95 % interval holding the truth (20 seeds).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fsi_lab.dsp.identify import identify
+
+FS, N, START = 2560.0, 1280, 23
+#: (frequency Hz, decay rate 1/s, cosine and sine amplitudes m/s^2) of each mode.
+MODES = ((30.703, 5.294, -0.607, 3.814), (48.793, 3.529, -0.219, -0.123),
+         (215.774, 6.01, -15.152, -18.586), (586.115, 21.441, 14.869, 7.755),
+         (1114.948, 16.178, 3.524, -3.667))
+NOISE = 0.3
+#: The target on natural frequencies (relative).
+TARGET = 0.002
+
+
+def beam_like(seed: int) -> np.ndarray:
+    t = (np.arange(N) - START) / FS
+    x = np.zeros(N)
+    for f, s, a, b in MODES:
+        x += np.exp(-s * t) * (a * np.cos(2 * np.pi * f * t) + b * np.sin(2 * np.pi * f * t))
+    x[:START] = 0.0
+    return x + NOISE * np.random.default_rng(seed).standard_normal(N)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_short_damped_mode_beside_a_weak_line_within_the_target(seed):
+    found = identify(beam_like(seed), FS, quantity="acceleration")
+    for truth in (MODES[0][0], MODES[2][0]):
+        mode = min(found.modes, key=lambda m: abs(m.damped_frequency_hz - truth))
+        damped = mode.damped_frequency_hz
+        scale = damped / mode.frequency_hz
+        lo, hi = mode.frequency_ci[0] * scale, mode.frequency_ci[1] * scale
+        assert damped == pytest.approx(truth, rel=TARGET), (seed, truth, damped)
+        assert lo <= truth <= hi, (seed, truth, damped, lo, hi)
