@@ -44,6 +44,8 @@ HIGH_PASS, HIGH_STOP = 2.4, 3.6
 PAD_FIT_CYCLES = 1.5
 #: Periods of the lowest band edge by which each window end is extended.
 PAD_PERIODS = 4.0
+#: A band filter's reach ends where its impulse response stays below this share of its peak.
+REACH_LEVEL = 0.01
 
 
 @dataclass(frozen=True)
@@ -123,6 +125,20 @@ class ModeBands:
         if integrate:
             g2 = g2 / (2.0 * math.pi * grid) ** 2
         return grid, g2
+
+    def reach(self, k: int, level: float = REACH_LEVEL) -> float:
+        """How far (s) band ``k``'s filter reaches: the lag beyond which its impulse response
+        stays below ``level`` of its peak. A band signal's value depends on the input within
+        this lag of it (and on nothing further within ``level``)."""
+        lo, hi = float(self.transitions[k, 0]), float(self.transitions[k + 1, 1])
+        df = lo / 64.0                                       # lags up to 32 / lo s
+        grid = np.arange(int(math.ceil(hi / df)) + 1) * df
+        size = sfft.next_fast_len(max(2 * grid.size, int(8.0 * hi / df)))
+        spec = np.zeros(size // 2 + 1)
+        spec[:grid.size] = self.gain(k, grid)
+        h = np.abs(sfft.irfft(spec, n=size)[:size // 2])
+        above = np.flatnonzero(h > level * h[0])
+        return float(above[-1] + 1) / (size * df)
 
     def correlation(self, k: int) -> Callable[[np.ndarray], np.ndarray]:
         """Correlation of white noise after band ``k``'s filter as a function of the lag (s):

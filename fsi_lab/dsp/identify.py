@@ -700,10 +700,12 @@ def _preferred(mode: _Mode) -> LawFit:
 
 
 def _model_record(modes: list[_Mode], window: tuple[int, int, int], fs: float, follow: str,
-                  output: str, w_index: int, limit: float) -> np.ndarray:
+                  output: str, w_index: int, limit: float, reach: Sequence[float]
+                  ) -> np.ndarray:
     """The fitted decays of every mode in one window, summed, as ``output`` (the record's
-    quantity). A mode whose model leaves ``limit`` (a fit gone astray: a growing decay) is
-    left out, so it cannot spoil the correction of the others."""
+    quantity), each kept before its first extremum over its band filter's ``reach`` (s, per
+    band: :meth:`.bands.ModeBands.reach`). A mode whose model leaves ``limit`` (a fit gone
+    astray: a growing decay) is left out, so it cannot spoil the correction of the others."""
     start, _, stop = window
     times = np.arange(start, stop) / fs
     out = np.zeros(stop - start)
@@ -716,9 +718,18 @@ def _model_record(modes: list[_Mode], window: tuple[int, int, int], fs: float, f
             anchor = d.get("anchor", float(d["times"][0]))
             decay = simulate_decay(fit.law, fit.params, mode.w0, start_value, anchor, times,
                                    alpha=mode.alpha, quantity=follow, output=output)
-            # Before its first free extremum the model runs backwards in time and grows; past
-            # a period it describes nothing the record holds (the excitation): faded out.
-            lead = np.clip((times - anchor) * mode.frequency + 2.0, 0.0, 1.0)
+            # Before its first free extremum the model runs backwards in time from its anchor.
+            # The record holds the mode's oscillation there (the window opens after the
+            # excitation; with a reference, a mode's extrema count only once the base has
+            # calmed in its band, periods later), and the band filter carries it into the first
+            # extrema as far as the filter reaches: the model is kept over that reach, so it is
+            # padded and filtered as the record is (faded to zero a period before the anchor,
+            # the smear taken off the first extrema was not theirs: up to 6 % of the first
+            # extremum of the wet bench's ramp, C_f 25 % low). Further back the backward run
+            # describes nothing the record holds (quadratic damping read backwards grows fast):
+            # faded out over a period.
+            keep = max(1.0, reach[mode.band] * mode.frequency)
+            lead = np.clip((times - anchor) * mode.frequency + keep + 1.0, 0.0, 1.0)
             decay = decay * smooth_step(lead)
             if np.all(np.isfinite(decay)) and float(np.max(np.abs(decay))) <= limit:
                 out += decay
@@ -742,11 +753,13 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
     """
     integrate = quantity == "acceleration"
     rng = np.random.default_rng(NOISE_SEED)
+    reach = [bands.reach(k) for k in range(bands.count)]
     for w, window in enumerate(windows):
         if not any(d["w"] == w for m in modes for d in m.decays):
             continue
         model = _model_record(modes, window, fs, follow, quantity, w,
-                              MODEL_LIMIT * float(np.max(np.abs(record[window[0]:window[2]]))))
+                              MODEL_LIMIT * float(np.max(np.abs(record[window[0]:window[2]]))),
+                              reach)
         clean = split(model, fs, bands, integrate=integrate)
         noisy = _noisy_errors(modes, w, window, model, bands, fs, integrate, noise, rng)
         for mode in modes:
