@@ -504,13 +504,7 @@ def extremum_sequence(law: str, params: Sequence[float], w0: float, start: float
     0.904792 0.904792
     """
     func = "extremum_sequence"
-    _check_law(law, params, func)
-    if quantity not in QUANTITIES:
-        raise fail(func, f"quantity = {quantity!r}; expected one of {', '.join(QUANTITIES)}")
-    if not (math.isfinite(w0) and w0 > 0):
-        raise fail(func, f"w0 = {w0!r}; expected a finite angular frequency > 0 rad/s")
-    if count < 1:
-        raise fail(func, f"count = {count!r}; expected at least 1 extremum")
+    _check_sequence(func, law, params, quantity, w0, count)
     a, beta, gamma = _law_terms(law, params)
     x, v = _start_state(float(start), quantity, w0, float(alpha), a, beta, gamma)
     amp = np.zeros(int(count))
@@ -518,6 +512,18 @@ def extremum_sequence(law: str, params: Sequence[float], w0: float, start: float
     found = _sequence(x, v, float(w0), float(alpha), 2.0 * a, beta, gamma, int(count),
                       int(steps), quantity == "velocity", amp, times)
     return amp[:found], times[:found]
+
+
+def _check_sequence(func: str, law: str, params: Sequence[float], quantity: str, w0: float,
+                    count: int) -> None:
+    """The argument checks of :func:`extremum_sequence` and :func:`extremum_derivatives`."""
+    _check_law(law, params, func)
+    if quantity not in QUANTITIES:
+        raise fail(func, f"quantity = {quantity!r}; expected one of {', '.join(QUANTITIES)}")
+    if not (math.isfinite(w0) and w0 > 0):
+        raise fail(func, f"w0 = {w0!r}; expected a finite angular frequency > 0 rad/s")
+    if count < 1:
+        raise fail(func, f"count = {count!r}; expected at least 1 extremum")
 
 
 def extremum_derivatives(law: str, params: Sequence[float], w0: float, start: float,
@@ -551,13 +557,7 @@ def extremum_derivatives(law: str, params: Sequence[float], w0: float, start: fl
         As :func:`extremum_sequence`.
     """
     func = "extremum_derivatives"
-    _check_law(law, params, func)
-    if quantity not in QUANTITIES:
-        raise fail(func, f"quantity = {quantity!r}; expected one of {', '.join(QUANTITIES)}")
-    if not (math.isfinite(w0) and w0 > 0):
-        raise fail(func, f"w0 = {w0!r}; expected a finite angular frequency > 0 rad/s")
-    if count < 1:
-        raise fail(func, f"count = {count!r}; expected at least 1 extremum")
+    _check_sequence(func, law, params, quantity, w0, count)
     a, beta, gamma = _law_terms(law, params)
     amp, times, deriv = _tangent_run(law, a, beta, gamma, float(start), quantity, float(w0),
                                      float(alpha), int(count), int(steps))
