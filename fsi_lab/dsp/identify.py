@@ -1079,7 +1079,9 @@ def _drift(mode: _Mode, decays: list[dict], follow: str) -> tuple[LawFit, dict[s
     unscaled_late = fit.cov / max(s2, 1e-300)
     z = {}
     for i, name in enumerate(full.names):
-        allowed = max(float(unscaled_late[i, i] - unscaled_full[i, i]),
+        # as Python floats: two undetermined fits' infinite variances give NaN, skipped below,
+        # without numpy's warning
+        allowed = max(float(unscaled_late[i, i]) - float(unscaled_full[i, i]),
                       1e-3 * abs(float(unscaled_late[i, i])), 0.0)
         spread = math.sqrt(max(s2, 0.0) * allowed)
         # A fit that pins nothing (an undetermined or exact one) is no test of the start.
@@ -1152,7 +1154,8 @@ def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
         except AnalysisError:
             break
         later = trial.fits["quadratic"]
-        allowed = np.maximum(np.diag(later.cov) - variance, 0.0)
+        with np.errstate(invalid="ignore"):  # inf - inf: NaN, which the check below refuses
+            allowed = np.maximum(np.diag(later.cov) - variance, 0.0)
         moved = (later.params - base.params) ** 2
         extra = np.maximum(extra, moved - START_Z ** 2 * allowed)
     if not (np.all(np.isfinite(extra)) and np.all(np.isfinite(variance))
