@@ -198,6 +198,13 @@ def lookup(entry: Any, key: str) -> Any:
     return entry
 
 
+def _require(method: str, kind: type, item: Any) -> None:
+    """Refuse ``views.<method>(item)`` unless ``item`` is a ``kind``, naming what was given."""
+    if not isinstance(item, kind):
+        raise TypeError(f"views.{method}() takes an fsi_lab.presentation.{kind.__name__}; got "
+                        f"{type(item).__name__}")
+
+
 @dataclass
 class ViewSet:
     """What the ``fsi_lab_addviews(views)`` hook registers into: the GUI's views, the curves
@@ -229,33 +236,25 @@ class ViewSet:
 
     def add(self, view: AnalysisView) -> None:
         """Add a tab of the Analysis panel."""
-        if not isinstance(view, AnalysisView):
-            raise TypeError(f"views.add() takes an fsi_lab.presentation.AnalysisView; got "
-                            f"{type(view).__name__}")
+        _require("add", AnalysisView, view)
         self._claim("view", view.title)
         self.views.append(view)
 
     def add_curve(self, curve: ComparisonCurve) -> None:
         """Add a curve the runs browser compares across runs."""
-        if not isinstance(curve, ComparisonCurve):
-            raise TypeError(f"views.add_curve() takes an fsi_lab.presentation.ComparisonCurve; "
-                            f"got {type(curve).__name__}")
+        _require("add_curve", ComparisonCurve, curve)
         self._claim("curve", curve.name)
         self.curves.append(curve)
 
     def add_column(self, column: SummaryColumn) -> None:
         """Add a column of the tables of identified values."""
-        if not isinstance(column, SummaryColumn):
-            raise TypeError(f"views.add_column() takes an fsi_lab.presentation.SummaryColumn; "
-                            f"got {type(column).__name__}")
+        _require("add_column", SummaryColumn, column)
         self._claim("column", column.name)
         self.columns.append(column)
 
     def add_aggregation_view(self, view: AggregationView) -> None:
         """Add a figure of the Sequence tab drawing a sequence's aggregation."""
-        if not isinstance(view, AggregationView):
-            raise TypeError(f"views.add_aggregation_view() takes an "
-                            f"fsi_lab.presentation.AggregationView; got {type(view).__name__}")
+        _require("add_aggregation_view", AggregationView, view)
         self._claim("aggregation view", view.title)
         self.aggregation_views.append(view)
 

@@ -42,7 +42,7 @@ from fsi_lab.errors import FsiLabError
 from fsi_lab.events import EventBus, Progress
 from fsi_lab.registry import Registry
 from fsi_lab.segments import SEGMENT_SAMPLES, Segment, SegmentPlan, plan_segments
-from fsi_lab.sources import LazyChannelData, samples_of
+from fsi_lab.sources import LazyChannelData, WindowSource, samples_of
 from fsi_lab.summary import json_safe
 
 #: Length of the Welch segments of a segmented record's spectrum, s.
@@ -85,36 +85,11 @@ def segment_plan(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any
     return plan_segments(((samples_of(cut[n]), cut[n].sample_rate) for n in used), budget)
 
 
-class _Window:
-    """Samples ``[start, stop)`` of an array or a source, read by slices as a source."""
-
-    def __init__(self, data: Any, start: int, stop: int) -> None:
-        self.data, self.start, self.length = data, int(start), max(0, int(stop) - int(start))
-
-    def __len__(self) -> int:
-        return self.length
-
-    def read(self, start: int, stop: int) -> np.ndarray:
-        start, stop = max(0, int(start)), min(self.length, int(stop))
-        if stop <= start:
-            return np.empty(0)
-        return np.asarray(self.data[self.start + start:self.start + stop], dtype=np.float64)
-
-    def __getitem__(self, index: slice) -> np.ndarray:
-        if not isinstance(index, slice) or index.step not in (None, 1):
-            raise TypeError(f"a segment is read by slices of step 1, not {index!r}")
-        start, stop, _ = index.indices(self.length)
-        return self.read(start, stop)
-
-    def head(self, length: int) -> _Window:
-        return _Window(self.data, self.start, self.start + min(int(length), self.length))
-
-
 def _segment_channel(channel: ChannelData, segment: Segment) -> LazyChannelData:
     """``channel`` over ``segment``, read when first used."""
     data = samples_of(channel)
     start, stop = segment.samples(channel.sample_rate, len(data))
-    return LazyChannelData(channel.name, _Window(data, start, stop), channel.sample_rate,
+    return LazyChannelData(channel.name, WindowSource(data, start, stop), channel.sample_rate,
                            channel.quantity, channel.unit, channel.t0)
 
 

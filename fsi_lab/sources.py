@@ -27,7 +27,32 @@ from fsi_lab.errors import AnalysisError
 CHUNK = 1 << 20
 
 
-class DatasetSource:
+class _SliceSource:
+    """What every source shares: ``len``, ``read(start, stop)`` clipped to the source, and
+    slicing like an array (steps of 1 only). A subclass sets ``length`` and ``label`` (for
+    messages) and reads a slice already clipped and not empty in ``_read``."""
+
+    length: int
+    label: str
+
+    def __len__(self) -> int:
+        return self.length
+
+    def read(self, start: int, stop: int) -> np.ndarray:
+        """Samples ``[start, stop)`` (clipped to the source), float64."""
+        start, stop = max(0, int(start)), min(self.length, int(stop))
+        if stop <= start:
+            return np.empty(0)
+        return self._read(start, stop)
+
+    def __getitem__(self, index: slice) -> np.ndarray:
+        if not isinstance(index, slice) or index.step not in (None, 1):
+            raise TypeError(f"{self.label}: a source is read by slices of step 1, not {index!r}")
+        start, stop, _ = index.indices(self.length)
+        return self.read(start, stop)
+
+
+class DatasetSource(_SliceSource):
     """One 1-D dataset of a run file, read a slice at a time (as float64).
 
     Parameters
@@ -45,7 +70,7 @@ class DatasetSource:
 
     def __init__(self, path: str | Path, name: str, length: int | None = None) -> None:
         self.path = Path(path)
-        self.name = name
+        self.name = self.label = name
         if length is None:
             import h5py
 
@@ -53,31 +78,32 @@ class DatasetSource:
                 length = int(handle[name].shape[0])
         self.length = max(0, int(length))
 
-    def __len__(self) -> int:
-        return self.length
-
-    def read(self, start: int, stop: int) -> np.ndarray:
-        """Samples ``[start, stop)`` (clipped to the source), float64."""
+    def _read(self, start: int, stop: int) -> np.ndarray:
         import h5py
 
-        start, stop = max(0, int(start)), min(self.length, int(stop))
-        if stop <= start:
-            return np.empty(0)
         with h5py.File(self.path, "r") as handle:
             return np.asarray(handle[self.name][start:stop], dtype=np.float64)
 
-    def __getitem__(self, index: slice) -> np.ndarray:
-        if not isinstance(index, slice) or index.step not in (None, 1):
-            raise TypeError(f"{self.name}: a source is read by slices of step 1, not {index!r}")
-        start, stop, _ = index.indices(self.length)
-        return self.read(start, stop)
-
     def head(self, length: int) -> DatasetSource:
         """The same dataset up to ``length`` samples."""
-        out = object.__new__(DatasetSource)
-        out.path, out.name = self.path, self.name
-        out.length = max(0, min(int(length), self.length))
-        return out
+        return DatasetSource(self.path, self.name, max(0, min(int(length), self.length)))
+
+
+class WindowSource(_SliceSource):
+    """Samples ``[start, stop)`` of an array or a source, read by slices as a source (a
+    segment of a long record: :mod:`fsi_lab.segmented`)."""
+
+    def __init__(self, data: Any, start: int, stop: int) -> None:
+        self.data, self.start = data, int(start)
+        self.length = max(0, int(stop) - self.start)
+        self.label = f"samples {self.start} to {self.start + self.length}"
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        return np.asarray(self.data[self.start + start:self.start + stop], dtype=np.float64)
+
+    def head(self, length: int) -> WindowSource:
+        """The same window up to ``length`` samples."""
+        return WindowSource(self.data, self.start, self.start + min(int(length), self.length))
 
 
 def chunks(data: Any, size: int | None = None) -> Iterator[tuple[int, np.ndarray]]:

@@ -843,15 +843,26 @@ def _errors(band_signal: np.ndarray, fs: float, frequency: float, start: int,
     return np.abs(hc.values[idx]) - exact
 
 
-def _half_periods(d: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """Half periods (s) of the data and of the filtered model between the crossings of the
-    decay's kept extrema, and the extremum amplitude of each half cycle."""
+def _crossings_to_pair(d: dict) -> tuple[np.ndarray, np.ndarray] | None:
+    """A decay's zero crossings between its kept extrema and its filtered model's crossings
+    (s), or None when either has fewer than 3."""
     t = d["times"]
     c = d["crossings"]
     c = c[(c > t[0]) & (c < t[-1])]
     mc = d.get("model_crossings")
     if mc is None or c.size < 3 or mc.size < 3:
         return None
+    return c, mc
+
+
+def _half_periods(d: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Half periods (s) of the data and of the filtered model between the crossings of the
+    decay's kept extrema, and the extremum amplitude of each half cycle."""
+    t = d["times"]
+    both = _crossings_to_pair(d)
+    if both is None:
+        return None
+    c, mc = both
     m = mc[_match(mc, c)]
     p_data, p_model = np.diff(c), np.diff(m)
     ok = (p_model > 0) & (np.abs(p_model / p_data - 1.0) < 0.2)
@@ -887,11 +898,10 @@ def _crossing_times(d: dict) -> dict | None:
     the filters smear; each paired with a model crossing of its own within a third of a half
     period, after the pairs' common offset). None when fewer than 3 crossings pair up."""
     t = d["times"]
-    c = d["crossings"]
-    c = c[(c > t[0]) & (c < t[-1])]
-    mc = d.get("model_crossings")
-    if mc is None or c.size < 3 or mc.size < 3:
+    both = _crossings_to_pair(d)
+    if both is None:
         return None
+    c, mc = both
     idx = _match(mc, c)
     m = mc[idx]
     counts = np.bincount(idx, minlength=mc.size)
