@@ -105,6 +105,10 @@ ANALYSIS_PARAMS: tuple[Param, ...] = (
                "reference) together: a record holding more is analysed in segments cut "
                "between its free decays, each within the budget (default 2000000: about 1.3 GB "
                "for the whole process; docs/streaming-analysis.md)."),
+    Param("segment_stride", "int", "", default=None, minimum=1, maximum=1_000_000,
+          help="A record analysed in segments stores its per-sample results (components, "
+               "envelopes, frequencies) every this many samples; default: as many as keep 40 "
+               "samples per cycle at the top of the highest mode's band (1 keeps them all)."),
 )
 
 SECTIONS = ("run", "safety", "shaker", "specimen", "model", "bench", "channels", "excitation",

@@ -15,7 +15,11 @@ and the runner's analysis (:func:`fsi_lab.store.analyse_and_store`) take it in s
   is made once at the record's full length (chunked, NaN where no segment was analysed) and
   filled at the segment's offset; any other dataset (spectra, tables of extrema, curves) and
   the segment's attributes go to a group ``segment_NNNN`` of the analysis's group, their
-  times from the segment's start;
+  times from the segment's start. A per-sample dataset keeps every ``stride``-th sample of
+  the record (:func:`stride_of`: the profile's ``[analysis] segment_stride``, or as many as
+  leave :data:`STORED_PER_CYCLE` samples per cycle at the top of the highest mode's band, so
+  an hour at 204.8 kS/s stores its components in about 2 GB instead of 40); the stride is
+  the group's ``sample_stride`` attribute;
 - the identification is pooled over the segments: the modes of the segments are grouped by
   frequency (:func:`fsi_lab.aggregate.group_modes`) and the damping law is fitted to the union
   of their free decays (:func:`fsi_lab.aggregate_fit.fit_union`, through the aggregation's
@@ -49,12 +53,46 @@ from fsi_lab.summary import json_safe
 WELCH_S = 8.0
 #: Samples along the record in one HDF5 chunk of a per-sample result.
 ROW_CHUNK = 1 << 16
+#: Samples per cycle a stored per-sample result keeps at the top of the highest mode's band
+#: (the band components hold nothing above it but what the filters let through).
+STORED_PER_CYCLE = 40
 
 
 def budget_of(analysis: Mapping[str, Any]) -> int:
     """The analysis's budget: samples of the used channels together in one segment."""
     value = analysis.get("segment_samples")
     return int(value) if value else SEGMENT_SAMPLES
+
+
+def stride_of(analysis: Mapping[str, Any], sample_rate: float, ident: Any) -> int:
+    """Every how many samples a per-sample result of the channel is stored: the profile's
+    ``[analysis] segment_stride`` when given; else the most that keep
+    :data:`STORED_PER_CYCLE` samples per cycle at the highest band edge of ``ident``'s modes
+    (the channel's identification on its first segment), 1 when it has none.
+
+    Parameters
+    ----------
+    analysis
+        The profile's ``[analysis]`` values.
+    sample_rate
+        The channel's sample rate, Hz.
+    ident
+        The channel's :class:`fsi_lab.dsp.identify.Identification` on the first segment, or
+        None.
+
+    Returns
+    -------
+    int
+        The stride, samples (at least 1).
+    """
+    value = analysis.get("segment_stride")
+    if value:
+        return int(value)
+    edges = [float(max(m.band_hz)) for m in getattr(ident, "modes", None) or []
+             if getattr(m, "band_hz", None) is not None]
+    if not edges:
+        return 1
+    return max(1, int(sample_rate // (STORED_PER_CYCLE * max(edges))))
 
 
 def used_channels(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any]
@@ -118,14 +156,18 @@ def _per_sample(array: np.ndarray, lengths: set[int]) -> bool:
 
 
 def _store(root: Any, key: str, content: Mapping[str, Any], index: int, offset: int,
-           total: int, lengths: set[int]) -> None:
+           total: int, lengths: set[int], stride: int) -> None:
     """One segment's result ``content`` of ``key`` into ``root`` (``/analysis`` of the
     rewrite): per-sample datasets at ``offset`` of their full-length dataset (``total``
-    samples), the rest in the group ``segment_NNNN``."""
+    samples; sample ``j`` of it is the record's sample ``j * stride``), the rest in the group
+    ``segment_NNNN``."""
     from fsi_lab.runfile import write_attrs
 
     group = root.require_group(key)
     own = group.create_group(f"segment_{index:04d}")
+    # The first stored sample inside the segment, and where it sits in the segment.
+    first = -(-offset // stride)
+    skip = first * stride - offset
     for name, value in content.get("datasets", {}).items():
         array = np.asarray(value)
         unit = content.get("units", {}).get(name)
@@ -133,18 +175,22 @@ def _store(root: Any, key: str, content: Mapping[str, Any], index: int, offset: 
         if _per_sample(array, lengths):
             dataset = group.get(name)
             rows = array.shape[:-1]
+            stored = -(-total // stride)
             if dataset is None:
                 dataset = group.create_dataset(
-                    name, shape=rows + (total,), maxshape=(None,) * len(rows) + (total,),
+                    name, shape=rows + (stored,), maxshape=(None,) * len(rows) + (stored,),
                     dtype=np.float64 if array.dtype.kind == "f" else np.float32,
-                    chunks=(1,) * len(rows) + (min(total, ROW_CHUNK),), fillvalue=np.nan)
+                    chunks=(1,) * len(rows) + (min(stored, ROW_CHUNK),), fillvalue=np.nan)
                 dataset.attrs["filled"] = ("segment by segment at each segment's offset along "
-                                           "the record; NaN where no segment was analysed")
+                                           "the record, every sample_stride-th sample; NaN "
+                                           "where no segment was analysed")
+                dataset.attrs["sample_stride"] = stride
             elif any(r > d for r, d in zip(rows, dataset.shape[:-1])):
                 dataset.resize(tuple(max(r, d) for r, d in zip(rows, dataset.shape[:-1]))
-                               + (total,))
-            where = tuple(slice(0, r) for r in rows) + (slice(offset, offset + array.shape[-1]),)
-            dataset[where] = array
+                               + (stored,))
+            kept = array[..., skip::stride]
+            where = tuple(slice(0, r) for r in rows) + (slice(first, first + kept.shape[-1]),)
+            dataset[where] = kept
         else:
             dataset = own.create_dataset(name, data=array)
         if unit is not None:
@@ -276,6 +322,7 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
     unpooled: dict[str, str] = {}
     errors: dict[str, list[dict[str, Any]]] = {n: [] for n in present}
     statuses: dict[str, list[str]] = {}
+    strides: dict[str, int] = {}
     summary: dict[str, Any] = {"run": str(path), "channels": {}}
     with rewrite_analysis(path) as handle:
         root = handle["analysis"]
@@ -286,13 +333,18 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                                             mass_per_length,
                                             _SegmentBus(bus, index, count, segment), typed)
             for key, content in groups.items():
-                channel = cut[key.partition("/")[0]]
+                name = key.partition("/")[0]
+                channel = cut[name]
+                if name not in strides:
+                    strides[name] = stride_of(analysis, channel.sample_rate,
+                                              _identification(typed.get(name, {})))
                 start, stop = segment.samples(channel.sample_rate,
                                               len(samples_of(channel)))
                 analysed = content.get("attrs", {}).get("analysed_s")
                 lengths = {stop - start} | ({int(math.ceil(analysed * channel.sample_rate))}
                                             if analysed else set())
-                _store(root, key, content, index, start, len(samples_of(channel)), lengths)
+                _store(root, key, content, index, start, len(samples_of(channel)), lengths,
+                       strides[name])
                 statuses.setdefault(key, []).append(content["attrs"].get("status", "ok"))
             for name in present:
                 info = seg_summary.get(name, {})
@@ -328,11 +380,11 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
             ok = found.count("ok")
             write_attrs(root[key], {
                 "status": "ok" if ok else "failed", "segmented": True, "segments": len(found),
-                "segments_ok": ok,
-                "layout": "per-sample datasets at the record's full length, filled at each "
-                          "segment's offset (NaN where no segment was analysed); the rest, and "
-                          "each segment's attributes, in segment_NNNN (times from the "
-                          "segment's start: <channel>/segments/start_s)"})
+                "segments_ok": ok, "sample_stride": strides.get(key.partition("/")[0], 1),
+                "layout": "per-sample datasets along the whole record, every sample_stride-th "
+                          "sample, filled at each segment's offset (NaN where no segment was "
+                          "analysed); the rest, and each segment's attributes, in segment_NNNN "
+                          "(times from the segment's start: <channel>/segments/start_s)"})
         bus.emit(Progress("analysis", 1.0, "pooling the segments' free decays"))
         for name in present:
             starts = [s.samples(cut[name].sample_rate, len(samples_of(cut[name])))[0]

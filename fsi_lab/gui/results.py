@@ -3,7 +3,8 @@
 Reading happens on a worker thread. A missing, corrupt or foreign file raises
 :class:`fsi_lab.errors.InputFileError` (the core's :func:`~fsi_lab.runfile.read_run` decides what a
 run file is); a run file without analysis, or with some groups missing or failed, reads fine:
-the views say "not computed" or show the failure message.
+the views say "not computed" or show the failure message. A long record's per-sample results
+are read every so many samples (at most :data:`DISPLAY_SAMPLES` along the record).
 """
 
 from __future__ import annotations
@@ -20,6 +21,10 @@ from fsi_lab.contract import ChannelData
 from fsi_lab.errors import InputFileError
 from fsi_lab.runfile import read_attrs, read_run
 
+#: Samples along the record the views read of a long record's per-sample dataset (every
+#: so many of them): they draw a few thousand points of it at a time anyway.
+DISPLAY_SAMPLES = 1 << 20
+
 
 @dataclass
 class PluginResult:
@@ -35,6 +40,9 @@ class PluginResult:
     units: dict[str, str] = field(default_factory=dict)
     #: the dataset each dataset is drawn against (its ``axis`` attribute), by name
     axes: dict[str, str] = field(default_factory=dict)
+    #: samples of the channel between two samples of the per-sample datasets held here (a
+    #: long record's are stored and read every so many samples)
+    stride: int = 1
 
     @property
     def ok(self) -> bool:
@@ -108,7 +116,15 @@ def _read_group(channel: str, plugin: str, group: h5py.Group) -> PluginResult:
     def visit(name: str, node: Any) -> None:
         if isinstance(node, h5py.Dataset) and not name.startswith("params"):
             try:
-                result.datasets[name] = node[()]
+                stored = node.attrs.get("sample_stride")
+                if stored is not None and node.ndim and node.shape[-1] > DISPLAY_SAMPLES:
+                    step = -(-node.shape[-1] // DISPLAY_SAMPLES)
+                    result.datasets[name] = node[..., ::step]
+                    result.stride = int(stored) * step
+                else:
+                    result.datasets[name] = node[()]
+                    if stored is not None:
+                        result.stride = int(stored)
             except (OSError, ValueError, TypeError):
                 return
             for attribute, into in (("units", result.units), ("axis", result.axes)):

@@ -259,3 +259,54 @@ def test_peak_memory_does_not_grow_with_the_record(period, tmp_path, monkeypatch
         assert "errors" not in info
         assert info["segmented"]["segments"] == repeats
     assert peaks[3] <= 1.25 * peaks[1]
+
+
+def test_per_sample_results_are_stored_every_stride_th_sample(period, analysed, tmp_path,
+                                                               monkeypatch):
+    """With ``segment_stride = 4`` a per-sample dataset holds every 4th sample of the record's
+    (sample j of it is the record's sample 4 j: the same numbers as the full one there,
+    NaN between segments as well); the views read such a dataset every so many samples when
+    it is longer than they draw, and put each point at its time on the record."""
+    from fsi_lab.gui import results as gui_results
+    from fsi_lab.gui.analysis.datasets import time_axis
+
+    registry = period[0]
+    source, _, _, full_path, _ = analysed
+    path = tmp_path / "strided.h5"
+    shutil.copy(source, path)
+    summary = _analyse(path, registry, CHAIN, BUDGET, "analysis.segment_stride=4")
+    assert summary["channels"]["tip_velocity"]["segmented"]["segments"] == 3
+    with h5py.File(full_path, "r") as full, h5py.File(path, "r") as strided:
+        for name in ("components", "envelopes", "frequencies", "edge_mask", "residual"):
+            every, kept = full["analysis/tip_velocity/hvd"][name][()], \
+                strided["analysis/tip_velocity/hvd"][name][()]
+            assert kept.shape[-1] == -(-every.shape[-1] // 4), name
+            np.testing.assert_array_equal(kept, every[..., ::4], err_msg=name)
+            assert strided["analysis/tip_velocity/hvd"][name].attrs["sample_stride"] == 4
+        assert strided["analysis/tip_velocity/hvd"].attrs["sample_stride"] == 4
+        n = full["analysis/tip_velocity/hvd/components"].shape[-1]
+    monkeypatch.setattr(gui_results, "DISPLAY_SAMPLES", n // 4 // 3 + 1)
+    shown = gui_results.load_results(path)
+    hvd = shown.result("tip_velocity", "hvd")
+    step = -(-(-(-n // 4)) // (n // 4 // 3 + 1))
+    assert step >= 3 and hvd.stride == 4 * step
+    with h5py.File(full_path, "r") as full:
+        every = full["analysis/tip_velocity/hvd/components"][()]
+    np.testing.assert_array_equal(hvd.datasets["components"], every[..., ::4 * step])
+    t = time_axis(shown, "tip_velocity", hvd, hvd.datasets["components"].shape[-1])
+    assert t[1] - t[0] == pytest.approx(4 * step / RATE, rel=1e-12)
+    assert t[-1] == pytest.approx((t.size - 1) * 4 * step / RATE, rel=1e-12)
+
+
+def test_the_stride_keeps_forty_samples_per_cycle_at_the_highest_band_edge():
+    from types import SimpleNamespace
+
+    from fsi_lab.segmented import STORED_PER_CYCLE, stride_of
+
+    ident = SimpleNamespace(modes=[SimpleNamespace(band_hz=(11.8, 21.0)),
+                                   SimpleNamespace(band_hz=(81.8, 224.6))])
+    assert stride_of({}, 204_800.0, ident) == int(204_800.0 // (STORED_PER_CYCLE * 224.6)) == 22
+    assert stride_of({}, 10_000.0, ident) == 1
+    assert stride_of({}, 204_800.0, SimpleNamespace(modes=[])) == 1
+    assert stride_of({}, 204_800.0, None) == 1
+    assert stride_of({"segment_stride": 7}, 204_800.0, ident) == 7

@@ -68,10 +68,12 @@ def summary_series(results: RunResults, channel: str, section: str, x: str, y: s
 def time_axis(results: RunResults, channel: str, result: PluginResult | None, n: int
               ) -> np.ndarray:
     """Sample times of a dataset of ``n`` samples of ``result`` that stores none of its own:
-    the channel's sample times from where the analysis started (its ``start_s`` attribute)."""
+    the channel's sample times from where the analysis started (its ``start_s`` attribute),
+    every ``result.stride``-th of them."""
     data = results.channels.get(channel)
     if data is not None and data.sample_rate > 0:
-        return origin(results, channel, result) + np.arange(n) / data.sample_rate
+        stride = result.stride if result is not None else 1
+        return origin(results, channel, result) + np.arange(n) * (stride / data.sample_rate)
     return np.arange(n, dtype=float)
 
 
