@@ -282,6 +282,56 @@ def _pooled(extracts: list[Any]) -> tuple[list[dict], list[str]]:
     return modes, notes
 
 
+def _merge_curves(channel_group: Any, modes: list[dict], starts_s: list[float]) -> None:
+    """Each analysis's curves (a segment's datasets of one row per component: backbones,
+    damping curves, extrema) gathered at the top of its group with one row per pooled mode
+    (row m is the summary's component m): the rows of the segments' components that went into
+    that mode, one after the other, times (unit s) moved onto the record's clock and free-decay
+    indices counted on. Per-sample datasets are at the top already; tables that are not curves
+    (two columns or fewer, such as bands) stay in the segments' groups."""
+    from fsi_lab.runfile import write_attrs
+
+    for group in channel_group.values():
+        if not hasattr(group, "keys") or not group.attrs.get("segmented", False):
+            continue
+        segments = {int(k[len("segment_"):]): group[k] for k in group
+                    if k.startswith("segment_")}
+        names = sorted({n for g in segments.values() for n, d in g.items()
+                        if getattr(d, "ndim", 0) == 2 and d.shape[1] > 2} - set(group))
+        for name in names:
+            rows, unit = [], None
+            for mode in modes:
+                parts, decays = [], 0.0
+                for member in mode.get("per_segment", []):
+                    index, k = member.get("segment", 0) - 1, member.get("component")
+                    dataset = segments.get(index, {}).get(name)
+                    if dataset is None or k is None or not 0 <= k < dataset.shape[0]:
+                        continue
+                    unit = dataset.attrs.get("units", unit)
+                    row = np.asarray(dataset[k], dtype=np.float64)
+                    if dataset.attrs.get("units") == "s":
+                        row = row + starts_s[index]
+                    elif name == "decay":
+                        row = row + decays
+                        decays = float(np.nanmax(row)) + 1.0 if np.isfinite(row).any() \
+                            else decays
+                    parts.append(row)
+                rows.append(np.concatenate(parts) if parts else np.empty(0))
+            width = max((r.size for r in rows), default=0)
+            if not width:
+                continue
+            table = np.full((len(rows), width), np.nan)
+            for m, row in enumerate(rows):
+                table[m, :row.size] = row
+            dataset = group.create_dataset(name, data=table)
+            if unit is not None:
+                dataset.attrs["units"] = unit
+            write_attrs(dataset, {"merged": "one row per pooled mode (the summary's component "
+                                            "index): the rows of the segments' components "
+                                            "that went into it, in order; times on the "
+                                            "record's clock"})
+
+
 # --------------------------------------------------------------------------- the analysis
 def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                         analysis: Mapping[str, Any],
@@ -392,6 +442,8 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
             welch = _welch(root, name, cut[name], plan, starts)
             modes, notes = ([], [unpooled[name]]) if name in unpooled else \
                 _pooled(extracts[name])
+            if name in root:
+                _merge_curves(root[name], modes, [s.start_s for s in plan.segments])
             info: dict[str, Any] = {
                 "components": [_pooled_component(i, m) for i, m in enumerate(modes)],
                 "notes": [plan.note(), *([tail.note()] if tail.cut else []), *notes],

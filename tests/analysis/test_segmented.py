@@ -310,3 +310,65 @@ def test_the_stride_keeps_forty_samples_per_cycle_at_the_highest_band_edge():
     assert stride_of({}, 204_800.0, SimpleNamespace(modes=[])) == 1
     assert stride_of({}, 204_800.0, None) == 1
     assert stride_of({"segment_stride": 7}, 204_800.0, ident) == 7
+
+
+@pytest.fixture(scope="module")
+def whole_chain(period, tmp_path_factory):
+    """The 3-period record analysed in segments by the profile's whole chain."""
+    registry = period[0]
+    path = tmp_path_factory.mktemp("whole") / "train.h5"
+    _train(path, period, 3)
+    return path, _analyse(path, registry, BUDGET)
+
+
+def test_the_segments_curves_are_gathered_per_pooled_mode(whole_chain):
+    """Backbones, damping curves and C_q points of the segments are at the top of their groups,
+    one row per pooled mode (the summary's component), made of the rows of the segments'
+    components that went into it, times on the record's clock, decays counted on."""
+    path, summary = whole_chain
+    info = summary["channels"]["tip_velocity"]
+    modes = info["segmented"]["modes"]
+    starts = [row["start_s"] for row in info["segmented"]["table"]]
+    assert len(modes) >= 1 and all(len(m["per_segment"]) == 3 for m in modes[:1])
+    with h5py.File(path, "r") as handle:
+        for plugin, name in (("backbone", "frequency"), ("backbone", "time"),
+                             ("damping", "zeta"), ("backbone", "decay"),
+                             ("equivalent-damping", "c_q")):
+            group = handle[f"analysis/tip_velocity/{plugin}"]
+            merged = group[name][()]
+            assert merged.shape[0] == len(modes), (plugin, name)
+            for m, mode in enumerate(modes):
+                parts, counted = [], 0.0
+                for member in mode["per_segment"]:
+                    k, index = member["component"], member["segment"] - 1
+                    row = group[f"segment_{index:04d}/{name}"][k]
+                    if name == "time":
+                        row = row + starts[index]
+                    if name == "decay":
+                        row = row + counted
+                        counted = np.nanmax(row) + 1
+                    parts.append(row)
+                whole = np.concatenate(parts)
+                np.testing.assert_array_equal(merged[m, :whole.size], whole)
+                assert np.isnan(merged[m, whole.size:]).all()
+        times = handle["analysis/tip_velocity/backbone/time"][0]
+        finite = times[np.isfinite(times)]
+        assert finite.min() < PERIOD_S and finite.max() > 2 * PERIOD_S  # every segment's decay
+        assert "bands" not in handle["analysis/tip_velocity/hvd"]  # not a curve: left in place
+
+
+def test_the_gui_draws_a_segmented_records_curves(whole_chain, qtbot):
+    from fsi_lab.gui.results import load_results
+    from fsi_lab.plugins.analysis.views.amplitude_views import BackboneView, DampingView
+    from fsi_lab.plugins.analysis.views.equivalent_damping_view import EquivalentDampingView
+
+    path, summary = whole_chain
+    results = load_results(path)
+    pooled = summary["channels"]["tip_velocity"]["components"][0]
+    for kind in (BackboneView, DampingView, EquivalentDampingView):
+        view = kind()
+        qtbot.addWidget(view)
+        view.show_results(results, "tip_velocity")
+        assert view.filled, (kind.__name__, view.note.text())
+    text = view.values.text()  # the C_q view gives the pooled C_i and C_f
+    assert f"{pooled['c_i']:.4g}" in text and f"{pooled['c_f']:.4g}" in text

@@ -42,8 +42,12 @@ class EquivalentDampingView(View):
         if result is None or not result.ok:
             return False
         components = results.components(channel)
-        summaries = {c.get("index"): c.get("equivalent_damping") for c in components
-                     if isinstance(c.get("equivalent_damping"), dict)}
+        # A long record's components are pooled over its segments: their C_i and C_f are the
+        # component's own (docs/json-output.md, "Long records").
+        summaries = {c.get("index"): c["equivalent_damping"]
+                     if isinstance(c.get("equivalent_damping"), dict)
+                     else {k: c.get(k) for k in ("c_i", "c_i_ci95", "c_f", "c_f_ci95")}
+                     for c in components}
         frequencies = {c.get("index"): c.get("frequency_hz") for c in components}
         rows_w = per_component(result, CQ_AMPLITUDE)
         rows_cq = per_component(result, CQ)
