@@ -36,6 +36,7 @@ summaries: kilobytes per segment.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -333,6 +334,64 @@ def _merge_curves(channel_group: Any, modes: list[dict], starts_s: list[float]) 
 
 
 # --------------------------------------------------------------------------- the analysis
+@dataclass
+class _Tally:
+    """What the segments leave of one analysed channel: the segment table's rows, the extracts
+    to pool, the refusals, and why its modes are not pooled (empty when they are)."""
+
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    extracts: list[Any] = field(default_factory=list)
+    errors: list[dict[str, Any]] = field(default_factory=list)
+    unpooled: str = ""
+
+    def add(self, index: int, segment: Segment, info: Mapping[str, Any]) -> None:
+        """Segment ``index``'s row of the table, from its chain summary ``info``."""
+        row = {"segment": index + 1, "start_s": segment.start_s, "stop_s": segment.stop_s,
+               "free_decays": segment.bursts,
+               "components": [_component_numbers(c) for c in info.get("components", [])]}
+        if info.get("errors"):
+            row["errors"] = [e["message"] for e in info["errors"]]
+            self.errors.extend({"plugin": e.get("plugin"),
+                                "message": f"segment {index + 1} ({segment.start_s:.4g}-"
+                                           f"{segment.stop_s:.4g} s): {e['message']}"}
+                               for e in info["errors"])
+        self.rows.append(row)
+
+
+def _store_segment(root: Any, groups: Mapping[str, Mapping[str, Any]], index: int,
+                   segment: Segment, cut: Mapping[str, ChannelData], strides: dict[str, int],
+                   statuses: dict[str, list[str]]) -> None:
+    """Write segment ``index``'s results (``groups``, as :func:`fsi_lab.chain.run_chain` gives
+    them) into ``root``, each channel's per-sample ones every ``strides[channel]``-th sample;
+    note each group's status in ``statuses``."""
+    for key, content in groups.items():
+        channel = cut[key.partition("/")[0]]
+        total = len(samples_of(channel))
+        start, stop = segment.samples(channel.sample_rate, total)
+        analysed = content.get("attrs", {}).get("analysed_s")
+        lengths = {stop - start} | ({int(math.ceil(analysed * channel.sample_rate))}
+                                    if analysed else set())
+        _store(root, key, content, index, start, total, lengths,
+               strides[key.partition("/")[0]])
+        statuses.setdefault(key, []).append(content["attrs"].get("status", "ok"))
+
+
+def _mark_segmented(root: Any, statuses: Mapping[str, list[str]],
+                    strides: Mapping[str, int]) -> None:
+    """Each analysis group's attributes: how many segments it holds and how."""
+    from fsi_lab.runfile import write_attrs
+
+    for key, found in statuses.items():
+        ok = found.count("ok")
+        write_attrs(root[key], {
+            "status": "ok" if ok else "failed", "segmented": True, "segments": len(found),
+            "segments_ok": ok, "sample_stride": strides.get(key.partition("/")[0], 1),
+            "layout": "per-sample datasets along the whole record, every sample_stride-th "
+                      "sample, filled at each segment's offset (NaN where no segment was "
+                      "analysed); the rest, and each segment's attributes, in segment_NNNN "
+                      "(times from the segment's start: <channel>/segments/start_s)"})
+
+
 def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                         analysis: Mapping[str, Any],
                         params: Mapping[str, Mapping[str, Any]], registry: Registry,
@@ -362,15 +421,10 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
     from fsi_lab.runfile import rewrite_analysis, utc_now, write_attrs
 
     bus = bus or EventBus()
-    used = used_channels(channels, analysis)
-    cut, tail = cut_quiet_tail(channels, used)
+    cut, tail = cut_quiet_tail(channels, used_channels(channels, analysis))
     names = channels_to_analyse(channels, analysis.get("channels", []))
-    present = [n for n in names if n in cut]
+    tallies = {n: _Tally() for n in names if n in cut}
     count = len(plan.segments)
-    table: dict[str, list[dict[str, Any]]] = {n: [] for n in present}
-    extracts: dict[str, list[Any]] = {n: [] for n in present}
-    unpooled: dict[str, str] = {}
-    errors: dict[str, list[dict[str, Any]]] = {n: [] for n in present}
     statuses: dict[str, list[str]] = {}
     strides: dict[str, int] = {}
     summary: dict[str, Any] = {"run": str(path), "channels": {}}
@@ -382,66 +436,35 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
             groups, seg_summary = run_chain(own, analysis, params, registry, specimen,
                                             mass_per_length,
                                             _SegmentBus(bus, index, count, segment), typed)
-            for key, content in groups.items():
-                name = key.partition("/")[0]
-                channel = cut[name]
-                if name not in strides:
-                    strides[name] = stride_of(analysis, channel.sample_rate,
-                                              _identification(typed.get(name, {})))
-                start, stop = segment.samples(channel.sample_rate,
-                                              len(samples_of(channel)))
-                analysed = content.get("attrs", {}).get("analysed_s")
-                lengths = {stop - start} | ({int(math.ceil(analysed * channel.sample_rate))}
-                                            if analysed else set())
-                _store(root, key, content, index, start, len(samples_of(channel)), lengths,
-                       strides[name])
-                statuses.setdefault(key, []).append(content["attrs"].get("status", "ok"))
-            for name in present:
-                info = seg_summary.get(name, {})
-                entry = {"segment": index + 1, "start_s": segment.start_s,
-                         "stop_s": segment.stop_s, "free_decays": segment.bursts,
-                         "components": [_component_numbers(c) for c in info.get("components",
-                                                                                 [])]}
-                if info.get("errors"):
-                    entry["errors"] = [e["message"] for e in info["errors"]]
-                    errors[name].extend({"plugin": e.get("plugin"),
-                                         "message": f"segment {index + 1} "
-                                                    f"({segment.start_s:.4g}-"
-                                                    f"{segment.stop_s:.4g} s): {e['message']}"}
-                                        for e in info["errors"])
-                table[name].append(entry)
+            for name in {key.partition("/")[0] for key in groups} - set(strides):
+                strides[name] = stride_of(analysis, cut[name].sample_rate,
+                                          _identification(typed.get(name, {})))
+            _store_segment(root, groups, index, segment, cut, strides, statuses)
+            for name, tally in tallies.items():
+                tally.add(index, segment, seg_summary.get(name, {}))
                 ident = _identification(typed.get(name, {}))
-                if ident is not None and getattr(ident, "modes", None) \
-                        and name not in unpooled:
-                    context = AnalysisContext(channel=own[name], channels=own, results={},
-                                              specimen=specimen,
-                                              mass_per_length=mass_per_length,
-                                              reference=analysis.get("reference"))
-                    try:
-                        extracts[name].append(_segment_extract(
-                            name, index, segment, ident, context, params, registry, specimen,
-                            mass_per_length))
-                    except FsiLabError as exc:
-                        unpooled[name] = f"the segments' modes are not pooled: {exc}"
-                    del context
-                del ident
+                if ident is None or not getattr(ident, "modes", None) or tally.unpooled:
+                    continue
+                context = AnalysisContext(channel=own[name], channels=own, results={},
+                                          specimen=specimen, mass_per_length=mass_per_length,
+                                          reference=analysis.get("reference"))
+                try:
+                    tally.extracts.append(_segment_extract(
+                        name, index, segment, ident, context, params, registry, specimen,
+                        mass_per_length))
+                except FsiLabError as exc:
+                    tally.unpooled = f"the segments' modes are not pooled: {exc}"
+            # nothing of this segment's samples is kept into the next one's analysis
+            ident = context = None
             del own, groups, typed
-        for key, found in statuses.items():
-            ok = found.count("ok")
-            write_attrs(root[key], {
-                "status": "ok" if ok else "failed", "segmented": True, "segments": len(found),
-                "segments_ok": ok, "sample_stride": strides.get(key.partition("/")[0], 1),
-                "layout": "per-sample datasets along the whole record, every sample_stride-th "
-                          "sample, filled at each segment's offset (NaN where no segment was "
-                          "analysed); the rest, and each segment's attributes, in segment_NNNN "
-                          "(times from the segment's start: <channel>/segments/start_s)"})
+        _mark_segmented(root, statuses, strides)
         bus.emit(Progress("analysis", 1.0, "pooling the segments' free decays"))
-        for name in present:
+        for name, tally in tallies.items():
             starts = [s.samples(cut[name].sample_rate, len(samples_of(cut[name])))[0]
                       for s in plan.segments]
             welch = _welch(root, name, cut[name], plan, starts)
-            modes, notes = ([], [unpooled[name]]) if name in unpooled else \
-                _pooled(extracts[name])
+            modes, notes = ([], [tally.unpooled]) if tally.unpooled else \
+                _pooled(tally.extracts)
             if name in root:
                 _merge_curves(root[name], modes, [s.start_s for s in plan.segments])
             info: dict[str, Any] = {
@@ -453,9 +476,9 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                               "free_decays": plan.bursts,
                               "analysed_s": sum(s.stop_s - s.start_s for s in plan.segments),
                               "record_s": plan.record_s, **welch,
-                              "modes": modes, "table": table[name]}}
-            if errors[name]:
-                info["errors"] = errors[name]
+                              "modes": modes, "table": tally.rows}}
+            if tally.errors:
+                info["errors"] = tally.errors
             summary["channels"][name] = json_safe(info)
         for name in names:
             if name not in cut:
