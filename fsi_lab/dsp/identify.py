@@ -160,6 +160,14 @@ CROSSING_RHO_CAP = 0.9
 NOISE_SEED = 20261123
 #: Confidence level of the intervals.
 LEVEL = 0.95
+#: The relative precision of the band splitting (its end predictions leave errors of about
+#: 1e-7 of a record's largest value at a window's end, more in the lowest band) and of the
+#: base motion integrated for a relative signal: a record whose noise lies below this share
+#: of its largest value (a simulation without noise) is analysed as if its noise were that,
+#: so that no extremum, decay or crossing is read from what the processing itself leaves (on
+#: `fsi-lab simulate`'s noise-free wet bench, the relative signal's end held a "decay" of
+#: 4e-7 of the record's peak, and the bands' last extrema followed the end prediction).
+PRECISION = 1e-6
 
 
 @dataclass(frozen=True)
@@ -567,15 +575,17 @@ def _away_from(freqs: np.ndarray, peaks: np.ndarray) -> np.ndarray:
     return ok
 
 
-def _noise_rms(x: np.ndarray, fs: float, peaks: np.ndarray) -> float:
+def _noise_rms(x: np.ndarray, fs: float, peaks: np.ndarray, precision: float = 0.0) -> float:
     """RMS of the white noise in a record, from the median of its amplitude spectrum (Hann
     window) away from its spectral ``peaks`` (Hz): a Rayleigh-distributed bin's median is
-    ``sigma sqrt(ln 2) sqrt(sum w^2)``."""
+    ``sigma sqrt(ln 2) sqrt(sum w^2)``; at least ``precision`` times the record's largest
+    absolute value."""
     w = np.hanning(x.size)
     spec = np.abs(np.fft.rfft(x * w))
     freqs = np.arange(spec.size) * (fs / x.size)
     med = float(np.median(spec[_away_from(freqs, peaks)]))
-    return med / (math.sqrt(math.log(2.0)) * math.sqrt(float(np.sum(w * w))))
+    measured = med / (math.sqrt(math.log(2.0)) * math.sqrt(float(np.sum(w * w))))
+    return max(measured, precision * float(np.max(np.abs(x))))
 
 
 def _col(f: float, amplitude: float, others: np.ndarray, freqs: np.ndarray,
@@ -658,6 +668,24 @@ def _span_period(crossings: np.ndarray, t0: float, t1: float) -> float | None:
         return None
     k = np.arange(c.size)
     return float(np.polyfit(k, c, 1)[0])
+
+
+def _pooled_half_period(decays: list[dict]) -> float | None:
+    """The half period (s) of a mode's decays: each decay's (:func:`_span_period`), their
+    median weighted by the half cycles each spans - a short stretch of something else (a
+    processing artifact at a record's end, split off as a decay of its own) cannot move it,
+    as it moved the plain median of two decays halfway to itself."""
+    values, weights = [], []
+    for d in decays:
+        h = _span_period(d["crossings"], d["times"][0], d["times"][-1])
+        if h:
+            values.append(h)
+            weights.append(d["times"].size)
+    if not values:
+        return None
+    order = np.argsort(values)
+    cumulative = np.cumsum(np.asarray(weights, dtype=np.float64)[order])
+    return float(np.asarray(values)[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
 
 
 @dataclass
@@ -942,6 +970,11 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
     top = max(top, 1e-300) ** 2
     blocks, rhs = [], []
     x_seen = []
+    # One scale for every decay: a crossing's time error is the noise over the signal's slope,
+    # and the noise is the record's, so a small decay's crossings weigh as little as its
+    # amplitude says (scaled per decay, a few crossings of a tiny decay weighed as much as
+    # the largest and could pull the frequency anywhere).
+    loudest = max(float(np.max(p["amplitude"][p["ok"]])) for p, _ in pairs)
     for j, (p, _) in enumerate(pairs):
         ok = p["ok"]
         x_hp = p["peak"] / mode.w0 if quantity == "velocity" else p["peak"]
@@ -950,7 +983,7 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
         d_alpha = -np.cumsum(0.375 * p["half"] * (x_hp ** 2 / top)) / mode.w0 ** 2
         cols = np.zeros((ok.sum(), 2 + len(pairs)))
         cols[:, 0], cols[:, 1], cols[:, 2 + j] = d_w0[ok], d_alpha[ok], 1.0
-        scale = float(np.max(p["amplitude"][ok])) / np.maximum(p["amplitude"][ok], 1e-300)
+        scale = loudest / np.maximum(p["amplitude"][ok], 1e-300)
         white = Whitener(p["data"][ok], p["sign"][ok], mode.correlation, scale)
         rhs.append(white.apply(p["data"][ok] - p["model"][ok]))
         blocks.append(np.stack([white.apply(col) for col in cols.T], axis=1))
@@ -1479,7 +1512,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, "found no spectral peak: the record holds no oscillation above "
                          f"{2.0 * fs / record.size:.3g} Hz")
     f_dom = float(top.frequencies[0])
-    sigma = _noise_rms(record, fs, top.frequencies)
+    sigma = _noise_rms(record, fs, top.frequencies, PRECISION)
     windows = _windows(record, fs, f_dom, sigma, decay_starts)
     if not windows:
         raise fail(func, "found no free decay of at least 32 samples")
@@ -1494,7 +1527,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         where = f" inside {band_t[0]:g} to {band_t[1]:g} Hz" if band_t else ""
         raise fail(func, f"found no usable spectral peak{where}; "
                          + ("; ".join(notes) if notes else "the record holds no free decay"))
-    sigma = _noise_rms(record, fs, cand_f)
+    sigma = _noise_rms(record, fs, cand_f, PRECISION)
     # Peaks left out but standing out as modes do keep bands of their own (not analysed), so
     # that no mode's band passes them (their crossings would pull its frequency away).
     guards = guards[(guards < 0.9 * 0.5 * fs)
@@ -1542,9 +1575,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, _too_short(windows, dropped, fs) + "; ".join(notes))
     # Step 5: first fits, then the floor judged on the fitted envelope.
     for mode in modes:
-        half = [_span_period(d["crossings"], d["times"][0], d["times"][-1]) for d in mode.decays]
-        half = [h for h in half if h]
-        mode.w0 = math.pi / float(np.median(half)) if half else 2.0 * math.pi * mode.frequency
+        half = _pooled_half_period(mode.decays)
+        mode.w0 = math.pi / half if half else 2.0 * math.pi * mode.frequency
         _fit_all(mode, follow, laws)
         fit = mode.fits["quadratic"]
         a = max(fit.value("a"), 0.0)
