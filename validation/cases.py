@@ -222,6 +222,12 @@ def other_cases() -> list[Case]:
                                       Mode(2.0 * WET_F, c_i=1.0, x0=0.3e-3)), duration=4.0),
         Case("viscous + Coulomb", (Mode(WET_F, c_i=0.3, friction=0.4, x0=1e-3),),
              duration=3.0, law="coulomb"),
+        # Other modes than the wet beam's second: a high one sampled at 10 samples per cycle,
+        # and a low one whose linear damping alone is 7.7 % of critical.
+        Case("quadratic, noise 1 %, 200 Hz mode at 2000 Hz, 2 s, x0 0.1 mm",
+             (Mode(200.0, c_f=WET_C_F, x0=1e-4),), fs=2000.0, duration=2.0),
+        Case("quadratic, noise 1 %, 5 Hz mode at 500 Hz, 10 s, x0 2 mm",
+             (Mode(5.0, c_f=WET_C_F, x0=2e-3),), fs=500.0, duration=10.0),
     ]
     for spacing in (0.25, 0.5, 1.0, 2.0):
         cases.append(impulse_train(spacing))

@@ -216,7 +216,7 @@ def noise_free_run(tmp_path_factory):
 def test_a_noise_free_simulation_gives_each_beam_mode_its_c_i_and_c_f(noise_free_run):
     """Every mode found is analysed (components = "auto"): the beam's modes at 17.06, 47.8 and
     93.6 Hz each give C_i within 0.5 % and C_f within 3 % of the model's 0.65 and 33.0 (measured
-    0.6499 / 33.1, 0.6500 / 32.95, 0.6500 / 33.0), their damped frequencies within 0.1 % of
+    0.6500 / 33.01, 0.6500 / 32.94, 0.6501 / 32.9), their damped frequencies within 0.1 % of
     their spectral peaks. Before, the processing's own residue (the end prediction, a "decay"
     split off the relative signal's end) counted as signal: 5.7, 33.7 and 78.2 Hz with C_f
     of -420, -78 and 250. A component whose frequency leaves its spectral peak (the 2.7 Hz
