@@ -45,10 +45,13 @@ gui: $(VENV)/.installed-gui qt-libs
 screenshots: $(VENV)/.installed-gui
 	$(BIN)/python docs/screenshots.py
 
-# ruff first: a lint error stops the run before the tests start.
+# ruff first: a lint error stops the run before the tests start. The tests run in
+# TEST_WORKERS processes (pytest-xdist), a test file to a worker so that each file's fixtures
+# are built once; TEST_WORKERS=0 runs them in this process.
+TEST_WORKERS ?= 2
 test: $(VENV)/.installed-dev,gui h5dump-tool
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile
 
 # ruff with the rule set stated in pyproject.toml ([tool.ruff.lint]); LINT narrows it to some
 # paths (make lint LINT="fsi_lab/testing tests/test_hooks.py").
