@@ -975,8 +975,8 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
     x_seen = []
     # One scale for every decay: a crossing's time error is the noise over the signal's slope,
     # and the noise is the record's, so a small decay's crossings weigh as little as its
-    # amplitude says (scaled per decay, a few crossings of a tiny decay weighed as much as
-    # the largest and could pull the frequency anywhere).
+    # amplitude says (scaled per decay, the crossings of a decay a tenth the size of another
+    # weighed as much as that one's).
     loudest = max(float(np.max(p["amplitude"][p["ok"]])) for p, _ in pairs)
     for j, (p, _) in enumerate(pairs):
         ok = p["ok"]
