@@ -25,8 +25,8 @@ number. The steps:
    unity: a component cannot switch to another mode), its ends extended by prediction.
 4. **Extrema.** The extrema of each mode's band signal (:func:`.instantaneous.half_cycles`),
    from the first free one on - every cycle counts: the large first cycles carry the quadratic
-   damping - down to :data:`FLOOR` times the noise RMS in the band (the record's noise, or
-   :data:`PRECISION` of its largest value where that is higher).
+   damping - down to :data:`FLOOR` times the noise RMS in the band, and no lower than
+   :data:`PRECISION` of the window's largest band value (the splitting's own residue).
 5. **Laws.** Each candidate law is fitted to the extrema of all the mode's decays together
    (:func:`.laws.fit_law`, errors whitened with the band's noise correlation) and the laws are
    ranked by AICc (:func:`.laws.compare_laws`).
@@ -161,15 +161,16 @@ CROSSING_RHO_CAP = 0.9
 NOISE_SEED = 20261123
 #: Confidence level of the intervals.
 LEVEL = 0.95
-#: The relative precision of the band splitting: its end predictions leave errors of up to
-#: about 1e-5 of a window's largest value in the lowest band of a heavily damped mode (a 5 Hz
-#: decay with 7.7 % damping, released at the record's start: 2e-6 to 1e-5, alternating with
-#: the extrema; 1e-7 in upper bands), and the base motion integrated for a relative signal
-#: leaves about 4e-7 at a record's end. A record whose noise lies below this share of its
-#: largest value (a simulation without noise; no instrument comes near it) is analysed as if
-#: its noise were that, so that no extremum, decay or crossing is read from what the
-#: processing itself leaves: on such records the bands' last extrema followed the residue,
-#: 5 Hz read 3.6 Hz with C_i -28 %, and the wet bench's 17 Hz mode 5.7 Hz.
+#: The band splitting's own precision, relative to a window's largest band value: its end
+#: predictions leave a residue of up to about 1e-5 of it in the lowest band of a heavily damped
+#: mode (measured on noise-free 5 Hz decays with 7.7 to 9.5 % damping, released at the
+#: record's start: 2e-6 to 1e-5, alternating with the extrema), 1e-7 in upper bands; and the
+#: base motion integrated for a relative signal leaves about 4e-7 of the record's largest
+#: value at its end. Extrema below this share of their window's largest band value are not
+#: used, and nothing below it of the record's largest value starts a free decay, however low
+#: the noise: on records without noise (simulations) the bands' last extrema followed the
+#: residue, and a 5 Hz mode read 3.6 Hz with C_i -28 %, the wet bench's 17 Hz mode 5.7 Hz.
+#: On a record with noise the noise floor lies higher and this changes nothing.
 PRECISION = 1e-5
 
 
@@ -337,7 +338,8 @@ class Identification:
 
 # ----------------------------------------------------------------------------- steps
 def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
-             starts: Sequence[float] | None) -> list[tuple[int, int, int]]:
+             starts: Sequence[float] | None, resolution: float = 0.0
+             ) -> list[tuple[int, int, int]]:
     """Free-decay windows ``(start, free, stop)``: analysis starts at ``start`` (a quarter
     period before the decay's largest sample, so an extremum there is a complete one),
     extrema count from ``free`` (the largest sample, or a later excitation end).
@@ -345,7 +347,9 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     The decays are split on the maxima of ``|x|`` over half periods (each holds an extremum)
     of the record low-passed at :data:`SPLIT_BAND` times the dominant frequency (less
     broadband noise: a fast decay stays above it for more cycles), those below
-    :data:`SPLIT_FLOOR` times that record's noise RMS counted as that floor."""
+    :data:`SPLIT_FLOOR` times that record's noise RMS, or below ``resolution`` (the level,
+    unit of x, under which the processing's own residue lies: :data:`PRECISION`), counted as
+    that floor."""
     n = x.size
     period = 1.0 / f_dom
     cutoff = SPLIT_BAND * f_dom
@@ -353,9 +357,10 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     if 1.25 * cutoff < 0.45 * fs:
         smooth = _band_limited(x, fs, cutoff)
         noise = sigma * math.sqrt(min(1.0, 1.125 * cutoff / (0.5 * fs)))
-    segments = decay_segments(smooth, fs, 0.5 * period, SPLIT_FLOOR * noise, confirm=2)
+    segments = decay_segments(smooth, fs, 0.5 * period, max(SPLIT_FLOOR * noise, resolution),
+                              confirm=2)
     if len(segments) == 1:
-        segments = [(first_decay_peak(x, fs, period, 10.0 * sigma), n)]
+        segments = [(first_decay_peak(x, fs, period, max(10.0 * sigma, resolution)), n)]
     else:
         # Each decay's largest sample in the record itself (the low-pass moves it a little).
         reach = max(1, int(0.25 * fs / f_dom))
@@ -578,17 +583,15 @@ def _away_from(freqs: np.ndarray, peaks: np.ndarray) -> np.ndarray:
     return ok
 
 
-def _noise_rms(x: np.ndarray, fs: float, peaks: np.ndarray, precision: float = 0.0) -> float:
+def _noise_rms(x: np.ndarray, fs: float, peaks: np.ndarray) -> float:
     """RMS of the white noise in a record, from the median of its amplitude spectrum (Hann
     window) away from its spectral ``peaks`` (Hz): a Rayleigh-distributed bin's median is
-    ``sigma sqrt(ln 2) sqrt(sum w^2)``; at least ``precision`` times the record's largest
-    absolute value."""
+    ``sigma sqrt(ln 2) sqrt(sum w^2)``."""
     w = np.hanning(x.size)
     spec = np.abs(np.fft.rfft(x * w))
     freqs = np.arange(spec.size) * (fs / x.size)
     med = float(np.median(spec[_away_from(freqs, peaks)]))
-    measured = med / (math.sqrt(math.log(2.0)) * math.sqrt(float(np.sum(w * w))))
-    return max(measured, precision * float(np.max(np.abs(x))))
+    return med / (math.sqrt(math.log(2.0)) * math.sqrt(float(np.sum(w * w))))
 
 
 def _col(f: float, amplitude: float, others: np.ndarray, freqs: np.ndarray,
@@ -675,20 +678,26 @@ def _span_period(crossings: np.ndarray, t0: float, t1: float) -> float | None:
 
 def _pooled_half_period(decays: list[dict]) -> float | None:
     """The half period (s) of a mode's decays: each decay's (:func:`_span_period`), their
-    median weighted by the half cycles each spans - a short stretch of something else (a
-    processing artifact at a record's end, split off as a decay of its own) cannot move it,
-    as it moved the plain median of two decays halfway to itself."""
+    median weighted by each decay's energy (the sum of its squared extrema), the two middle
+    values averaged when the weights split evenly. A short or small stretch of something else
+    (the residue at a noise-free record's end, split off as a decay of its own) cannot move
+    it, as it moved the plain median of two decays halfway to itself."""
     values, weights = [], []
     for d in decays:
         h = _span_period(d["crossings"], d["times"][0], d["times"][-1])
         if h:
             values.append(h)
-            weights.append(d["times"].size)
+            weights.append(float(np.sum(np.square(d["values"]))))
     if not values:
         return None
     order = np.argsort(values)
-    cumulative = np.cumsum(np.asarray(weights, dtype=np.float64)[order])
-    return float(np.asarray(values)[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
+    sorted_values = np.asarray(values)[order]
+    cumulative = np.cumsum(np.asarray(weights)[order])
+    half = 0.5 * cumulative[-1]
+    k = int(np.searchsorted(cumulative, half))
+    if math.isclose(cumulative[k], half) and k + 1 < sorted_values.size:
+        return float(0.5 * (sorted_values[k] + sorted_values[k + 1]))
+    return float(sorted_values[k])
 
 
 @dataclass
@@ -973,11 +982,6 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
     top = max(top, 1e-300) ** 2
     blocks, rhs = [], []
     x_seen = []
-    # One scale for every decay: a crossing's time error is the noise over the signal's slope,
-    # and the noise is the record's, so a small decay's crossings weigh as little as its
-    # amplitude says (scaled per decay, the crossings of a decay a tenth the size of another
-    # weighed as much as that one's).
-    loudest = max(float(np.max(p["amplitude"][p["ok"]])) for p, _ in pairs)
     for j, (p, _) in enumerate(pairs):
         ok = p["ok"]
         x_hp = p["peak"] / mode.w0 if quantity == "velocity" else p["peak"]
@@ -986,7 +990,7 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
         d_alpha = -np.cumsum(0.375 * p["half"] * (x_hp ** 2 / top)) / mode.w0 ** 2
         cols = np.zeros((ok.sum(), 2 + len(pairs)))
         cols[:, 0], cols[:, 1], cols[:, 2 + j] = d_w0[ok], d_alpha[ok], 1.0
-        scale = loudest / np.maximum(p["amplitude"][ok], 1e-300)
+        scale = float(np.max(p["amplitude"][ok])) / np.maximum(p["amplitude"][ok], 1e-300)
         white = Whitener(p["data"][ok], p["sign"][ok], mode.correlation, scale)
         rhs.append(white.apply(p["data"][ok] - p["model"][ok]))
         blocks.append(np.stack([white.apply(col) for col in cols.T], axis=1))
@@ -1515,8 +1519,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, "found no spectral peak: the record holds no oscillation above "
                          f"{2.0 * fs / record.size:.3g} Hz")
     f_dom = float(top.frequencies[0])
-    sigma = _noise_rms(record, fs, top.frequencies, PRECISION)
-    windows = _windows(record, fs, f_dom, sigma, decay_starts)
+    sigma = _noise_rms(record, fs, top.frequencies)
+    windows = _windows(record, fs, f_dom, sigma, decay_starts,
+                       PRECISION * float(np.max(np.abs(record))))
     if not windows:
         raise fail(func, "found no free decay of at least 32 samples")
     if reference is not None:
@@ -1530,7 +1535,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         where = f" inside {band_t[0]:g} to {band_t[1]:g} Hz" if band_t else ""
         raise fail(func, f"found no usable spectral peak{where}; "
                          + ("; ".join(notes) if notes else "the record holds no free decay"))
-    sigma = _noise_rms(record, fs, cand_f, PRECISION)
+    sigma = _noise_rms(record, fs, cand_f)
     # Peaks left out but standing out as modes do keep bands of their own (not analysed), so
     # that no mode's band passes them (their crossings would pull its frequency away).
     guards = guards[(guards < 0.9 * 0.5 * fs)
@@ -1555,6 +1560,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     base_free = _band_quiet(reference, fs, bands) if reference is not None else None
     for w, (start, free, stop) in enumerate(windows):
         parts = split(record[start:stop], fs, bands, integrate=integrate)
+        resolution = PRECISION * max(float(parts.max()), -float(parts.min()))
         for mode in modes:
             first = free
             if base_free is not None:
@@ -1562,13 +1568,13 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                                              & (base_free[mode.band] < stop)]
                 first = max(first, int(later.max())) if later.size else first
             t, v, c = _extrema(parts[mode.band], fs, mode.frequency, 0, first - start,
-                               FIRST_FLOOR / FLOOR * mode.floor)
+                               max(FIRST_FLOOR / FLOOR * mode.floor, resolution))
             t = t + start / fs
             c = c + start / fs
             if t.size >= 2 * MIN_CYCLES:
                 mode.decays.append({"w": w, "times": t, "values": v,
                                     "amplitude": _unlifted(np.abs(v), mode.lift),
-                                    "crossings": c})
+                                    "crossings": c, "resolution": resolution})
     dropped = [m for m in modes if not m.decays]
     for m in dropped:
         notes.append(f"the spectral peak at {m.frequency:.4g} Hz has no free decay of "
@@ -1586,7 +1592,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         mode.w0 = math.sqrt(mode.w0 ** 2 + a * a)
         kept = []
         for j, d in enumerate(mode.decays):
-            n_keep = int(np.sum(fit.model[j] >= mode.floor))
+            n_keep = int(np.sum(fit.model[j] >= max(mode.floor, d["resolution"])))
             if n_keep >= 2 * MIN_CYCLES:
                 kept.append({key: (val[:n_keep] if key in ("times", "values", "amplitude")
                                    else val) for key, val in d.items()})

@@ -180,7 +180,7 @@ def test_a_coulomb_decay_prefers_friction_and_says_c_f_does_not_apply():
 
 @pytest.mark.parametrize("fs", [2000.0, 10000.0])
 def test_a_noise_free_heavily_damped_decay_is_read_to_where_the_processing_residue_starts(fs):
-    """A 5 Hz mode with 7.7 % linear damping and the wet C_f, released from 2 mm, no noise:
+    """A 5 Hz mode with 9.5 % linear damping and the wet C_f, released from 2 mm, no noise:
     the decay sinks through 1e-5 of its peak within 3 s, where the lowest band's end prediction
     leaves its residue (alternating with the extrema, then slower than the mode). Read into
     it, the mode came out at 3.6 Hz (2.99 Hz at 2 kHz) with C_i -28 % (-40 %) and intervals

@@ -58,18 +58,28 @@ def test_short_damped_mode_beside_a_weak_line_within_the_target(seed):
 
 def test_a_short_stretch_of_something_else_does_not_set_a_mode_s_first_frequency():
     """A mode's first frequency (before the fits refine it) pools its decays' half periods
-    weighted by the half cycles each spans: a decay of 194 half cycles at 17.06 Hz beside a
-    stretch of 8 at 4.3 Hz (what the noise-free wet bench's relative signal held at its end,
-    split off as a decay) gives 17.06 Hz; the plain median of the two gave 7.6 Hz, and the fits
-    started there never came back (the mode was reported at 5.7 Hz)."""
+    weighted by each decay's energy: a decay of 194 extrema from 1e-2 at 17.06 Hz beside a
+    stretch of 8 near 1e-7 at 4.3 Hz (what the noise-free wet bench's relative signal held at
+    its end, split off as a decay) gives 17.06 Hz, and so does a heavily damped decay of 12
+    extrema beside a long, small one; the plain median of two gave the mean (7.6 Hz on the
+    wet bench, where the fits started there never came back: the mode was reported at 5.7 Hz).
+    Two decays of equal weight give the mean of their half periods."""
     from fsi_lab.dsp.identify import _pooled_half_period
 
-    def decay(frequency, count, start):
+    def decay(frequency, count, start, amplitude):
         crossings = start + np.arange(count + 1) / (2.0 * frequency)
         times = 0.5 * (crossings[1:] + crossings[:-1])
-        return {"crossings": crossings, "times": times}
+        values = amplitude * (-0.8) ** np.arange(count)
+        return {"crossings": crossings, "times": times, "values": values}
 
-    decays = [decay(17.06, 194, 0.5), decay(4.3, 8, 16.5)]
-    assert np.pi / _pooled_half_period(decays) == pytest.approx(2 * np.pi * 17.06, rel=1e-9)
-    assert _pooled_half_period([decays[0]]) == pytest.approx(1 / (2 * 17.06), rel=1e-9)
+    def frequency(decays):
+        return 0.5 / _pooled_half_period(decays)
+
+    main = decay(17.06, 194, 0.5, 1e-2)
+    assert frequency([main, decay(4.3, 8, 16.5, 1e-7)]) == pytest.approx(17.06, rel=1e-9)
+    assert frequency([decay(17.06, 12, 0.5, 1e-2), decay(16.0, 400, 3.0, 1e-4)]) \
+        == pytest.approx(17.06, rel=1e-9)
+    even = _pooled_half_period([decay(17.0, 50, 0.0, 1.0), decay(18.0, 50, 5.0, 1.0)])
+    assert even == pytest.approx(0.25 * (1 / 17.0 + 1 / 18.0), rel=1e-9)
+    assert frequency([main]) == pytest.approx(17.06, rel=1e-9)
     assert _pooled_half_period([]) is None
