@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -31,11 +32,16 @@ def bench_lock_dir(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def example_plugin_dir(tmp_path_factory) -> Path:
-    """The example plugin distribution pip-installed into a directory of its own."""
+    """The example plugin distribution pip-installed into a directory of its own, from a copy
+    of its source (a build writes into the tree it builds, and the test workers of
+    ``make test`` would build the same tree at once)."""
+    source = tmp_path_factory.mktemp("example-source") / "example_plugin"
+    shutil.copytree(EXAMPLE_PLUGIN, source,
+                    ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__"))
     target = tmp_path_factory.mktemp("site")
     subprocess.run(
         [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
-         "--target", str(target), str(EXAMPLE_PLUGIN)],
+         "--target", str(target), str(source)],
         check=True, timeout=300, capture_output=True,
     )
     return target
