@@ -57,10 +57,14 @@ def fsi_lab_estimate(case: Case, x: np.ndarray) -> Estimate:
 
 
 def _envelope(t: np.ndarray, a: float, b: float, a0: float) -> np.ndarray:
-    if abs(a) < 1e-12:
-        return a0 / (1.0 + b * a0 * t)
-    e = np.exp(-a * t)
-    return a * a0 * e / (a + b * a0 * (1.0 - e))
+    # The peer's least squares may try coefficients for which the closed form's denominator
+    # vanishes or overflows: the residual is then inf or NaN and the step is rejected, as
+    # least_squares does, without numpy's warning in the matrix's output.
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        if abs(a) < 1e-12:
+            return a0 / (1.0 + b * a0 * t)
+        e = np.exp(-a * t)
+        return a * a0 * e / (a + b * a0 * (1.0 - e))
 
 
 def peer_estimate(case: Case, x: np.ndarray) -> Estimate:
