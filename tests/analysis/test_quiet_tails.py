@@ -133,6 +133,12 @@ def test_rounding_junk_below_the_floor_starts_no_decay():
 def long_tailed_run(tmp_path_factory):
     """The wet profile's simulated record, 60 s at 2 kHz: its decay is at rounding level after
     about 15 s (a noise-free simulation), the rest is a quiet tail."""
+    return _simulated(tmp_path_factory.mktemp("tail") / "long.h5", 60.0, 2000.0)
+
+
+def _simulated(out, duration, rate):
+    """The registry, the wet profile and what `fsi-lab simulate` writes for it to ``out``
+    (``duration`` s at ``rate`` Hz), read back."""
     from support import PROFILES
 
     from fsi_lab.preflight import prepare_excitation
@@ -143,9 +149,8 @@ def long_tailed_run(tmp_path_factory):
 
     registry = load_registry()
     profile = load_profile(PROFILES / "wet-beam-sim.toml", registry)
-    waveform, rate = prepare_excitation(profile, registry)
-    out = tmp_path_factory.mktemp("tail") / "long.h5"
-    simulate_run(profile, waveform, rate, 60.0, 2000.0, out, None,
+    waveform, waveform_rate = prepare_excitation(profile, registry)
+    simulate_run(profile, waveform, waveform_rate, duration, rate, out, None,
                  {"uuid": "0" * 32, "start_time": "2026-11-24T00:00:00.000000+00:00"})
     return registry, profile, read_run(out)
 
@@ -196,21 +201,7 @@ def noise_free_run(tmp_path_factory):
     """What `fsi-lab simulate profiles/wet-beam-sim.toml --duration 20 --rate 10000` writes: the
     wet bench's pulse and its noise-free decay (a relative signal whose end holds the base
     integration's residue, about 4e-7 of the record's peak)."""
-    from support import PROFILES
-
-    from fsi_lab.preflight import prepare_excitation
-    from fsi_lab.profile import load_profile
-    from fsi_lab.registry import load_registry
-    from fsi_lab.runfile import read_run
-    from fsi_lab.simulation import simulate_run
-
-    registry = load_registry()
-    profile = load_profile(PROFILES / "wet-beam-sim.toml", registry)
-    waveform, rate = prepare_excitation(profile, registry)
-    out = tmp_path_factory.mktemp("noise-free") / "sim.h5"
-    simulate_run(profile, waveform, rate, 20.0, 10000.0, out, None,
-                 {"uuid": "0" * 32, "start_time": "2026-11-28T00:00:00.000000+00:00"})
-    return registry, profile, read_run(out)
+    return _simulated(tmp_path_factory.mktemp("noise-free") / "sim.h5", 20.0, 10000.0)
 
 
 def test_a_noise_free_simulation_gives_each_beam_mode_its_c_i_and_c_f(noise_free_run):
