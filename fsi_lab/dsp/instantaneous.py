@@ -171,7 +171,9 @@ def _refine_extrema(x: np.ndarray, idx: np.ndarray, half: np.ndarray, wdt: np.nd
         y0 = x[i]
         sin_part = (x[i - 1] - x[i + 1]) / (2.0 * np.sin(wdt[three]))
         amp = np.hypot(y0, sin_part) * np.sign(y0)
-        pos[three] = i + np.arctan2(sin_part * np.sign(y0), np.abs(y0)) / wdt[three]
+        # sin_part is -sin(w p) for a peak p samples after i (x[i - 1] - x[i + 1] of a cosine
+        # centred at p): the peak lies at i + p.
+        pos[three] = i - np.arctan2(sin_part * np.sign(y0), np.abs(y0)) / wdt[three]
         val[three] = amp
     for w in np.unique(half[half > 1]):
         sel = np.flatnonzero((half == w) & (idx - w >= 0) & (idx + w < x.size))

@@ -18,7 +18,7 @@ from _analysis_sims import (
 
 from fsi_lab.dsp.backbone import backbone
 from fsi_lab.dsp.hvd import hvd
-from fsi_lab.dsp.instantaneous import instantaneous
+from fsi_lab.dsp.instantaneous import half_cycles, instantaneous
 from fsi_lab.errors import AnalysisError
 
 
@@ -132,3 +132,18 @@ def test_bad_parameters_are_refused():
         instantaneous(x, 1000.0, offset="median")
     with pytest.raises(AnalysisError, match="min_amplitude"):
         instantaneous(x, 1000.0, min_amplitude=1.5)
+
+
+@pytest.mark.parametrize("offset", [0.15, -0.3, 0.45])
+def test_half_cycles_place_an_extremum_between_samples_on_its_side(offset):
+    """Below 20 samples per cycle an extremum is the sinusoid through its three largest samples
+    (exact for a sinusoid): a peak ``offset`` samples after a sample lies there, for maxima and
+    minima alike. It was mirrored about the sample (0.15 read -0.15), which left up to 0.34 %
+    in C_i and C_f of noise-free decays at 480-520 Hz, depending on where the samples fell."""
+    fs, f = 500.0, 17.0
+    t = np.arange(2000) / fs
+    peak = (6 + offset) / fs
+    hc = half_cycles(np.cos(2 * np.pi * f * (t - peak)), fs, f)
+    expected = peak + np.arange(4) / (2 * f)
+    np.testing.assert_allclose(hc.times[:4], expected, atol=1e-9)
+    np.testing.assert_allclose(np.abs(hc.values[:4]), 1.0, atol=1e-9)

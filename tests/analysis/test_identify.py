@@ -194,6 +194,18 @@ def test_a_noise_free_heavily_damped_decay_is_read_to_where_the_processing_resid
     assert est.c_f == pytest.approx(WET_C_F, rel=0.02)
 
 
+@pytest.mark.parametrize("fs", [480.0, 490.0, 505.0])
+def test_a_noise_free_decay_at_a_low_rate_gives_its_coefficients_wherever_the_samples_fall(fs):
+    """The wet mode released from 2 mm, no noise, at 28 to 29 samples per cycle: C_i and C_f
+    within 0.02 % whatever the sampling's phase against the cycles. With the extrema placed
+    mirrored about their largest sample they were off by up to 0.34 % (C_f +0.34 % at 490 Hz),
+    and the intervals of the 0.1 %-noise rows at 500 Hz covered C_f in 78 % of trials."""
+    case = release(noise=0.0, fs=fs, duration=1.0, x0=2e-3)
+    est = fsi_lab_estimate(case, clean_record(case))
+    assert est.c_i == pytest.approx(WET_C_I, rel=2e-4)
+    assert est.c_f == pytest.approx(WET_C_F, rel=2e-4)
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_a_single_mode_record_gives_one_component(seed):
     noise = (0.001, 0.01, 0.03)[seed % 3]
