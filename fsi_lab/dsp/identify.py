@@ -22,7 +22,12 @@ number. The steps:
    becomes a mode when one of its decays keeps :data:`MIN_CYCLES` cycles above the noise floor:
    a spectral bump without a free decay is no mode (no phantom components).
 3. **Separation.** Each window is split into one band per mode (:mod:`.bands`, a partition of
-   unity: a component cannot switch to another mode), its ends extended by prediction.
+   unity: a component cannot switch to another mode), its ends extended by prediction. A
+   record sampled far above its highest band (a signal analyser's 204.8 kS/s for modes below
+   a few hundred Hz) is first brought to the rate the bands need
+   (:func:`.bands.reduce_rate`, at least :data:`.bands.REDUCED_SAMPLES_PER_CYCLE` samples per
+   cycle of the highest band's stop edge): the same band signals at a fraction of the cost.
+   Times are in seconds throughout; the windows are reported in the record's own samples.
 4. **Extrema.** The extrema of each mode's band signal (:func:`.instantaneous.half_cycles`),
    from the first free one on - every cycle counts: the large first cycles carry the quadratic
    damping - down to :data:`FLOOR` times the noise RMS in the band, and no lower than
@@ -63,7 +68,7 @@ import numpy as np
 import scipy.stats as sstats
 
 from fsi_lab.dsp._signal import _band_limited, as_record, check_rate, fail, smooth_step
-from fsi_lab.dsp.bands import ModeBands, split
+from fsi_lab.dsp.bands import ModeBands, reduce_rate, reduction_factor, split
 from fsi_lab.dsp.decays import decay_segments, first_decay_peak, quiet_times
 from fsi_lab.dsp.instantaneous import half_cycles
 from fsi_lab.dsp.laws import (
@@ -102,6 +107,8 @@ NOISE_MARGIN = 10.0
 VALLEY = 0.5
 #: The decays' averaged spectrum has at least this many bins per dominant frequency.
 SPECTRUM_BINS = 32
+#: Samples a free-decay window needs to be analysed.
+MIN_WINDOW = 32
 #: Relative smoothing of the spectrum before the peak search: peaks closer merge.
 PEAK_SMOOTHING = 0.05
 #: Fewest samples per cycle of a mode.
@@ -384,7 +391,7 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
             if later and max(later) > free:
                 free, lead = max(later), 0
         out.append((max(0, free - lead), free, stop))
-    out = [w for w in out if w[2] - w[0] >= 32]
+    out = [w for w in out if w[2] - w[0] >= MIN_WINDOW]
     # A window cut short by a late excitation end (a burst of random forcing split off as a
     # decay) holds no decay; it is left out when another holds MIN_CYCLES cycles (all short:
     # an impulse train too dense, which the candidates' notes then name).
@@ -1523,7 +1530,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     windows = _windows(record, fs, f_dom, sigma, decay_starts,
                        PRECISION * float(np.max(np.abs(record))))
     if not windows:
-        raise fail(func, "found no free decay of at least 32 samples")
+        raise fail(func, f"found no free decay of at least {MIN_WINDOW} samples")
     if reference is not None:
         windows = _unforced(windows, reference, fs, f_dom)
     cand_f, cand_a, notes, guards = _candidates(record, fs, windows, int(components)
@@ -1555,10 +1562,25 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             / (2.0 * (2.0 * math.pi * f_k) ** 2)
         modes.append(_Mode(band=k, frequency=f_k, floor=max(FLOOR * noise_k, 1e-300),
                            correlation=bands.correlation(k), lift=lift, noise=noise_k))
+    # A record sampled far above its highest band is analysed at a reduced rate: the bands see
+    # the same signals, at a fraction of the cost. Its white noise keeps its density (the RMS
+    # per sample falls as the rate); the windows' ends are kept on the reduced samples inside.
+    full_windows = windows
+    record_noise = sigma
+    factor = reduction_factor(bands, fs)
+    if factor > 1:
+        record = reduce_rate(record, fs, factor, bands)
+        if reference is not None:
+            reference = reduce_rate(reference, fs, factor, bands)
+        windows = [(-(-a // factor), -(-b // factor), -(-c // factor)) for a, b, c in windows]
+        fs /= factor
+        sigma /= math.sqrt(factor)
     # Steps 3 and 4: extrema of each mode in each window, from where the mode is free (its
     # band of the base acceleration has calmed down too, when the reference is given).
     base_free = _band_quiet(reference, fs, bands) if reference is not None else None
     for w, (start, free, stop) in enumerate(windows):
+        if stop - start < MIN_WINDOW:         # (a short window at a reduced rate)
+            continue
         parts = split(record[start:stop], fs, bands, integrate=integrate)
         resolution = PRECISION * max(float(parts.max()), -float(parts.min()))
         for mode in modes:
@@ -1632,7 +1654,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])
         mode.drift["residual_rho"] = _residual_correlation(mode, comparison)
-        decays = [DecayExtrema(window=(windows[d["w"]][0], windows[d["w"]][2]),
+        decays = [DecayExtrema(window=(full_windows[d["w"]][0], full_windows[d["w"]][2]),
                                times=d["times"], values=d["values"], amplitude=d["amplitude"],
                                crossings=d["crossings"][(d["crossings"] >= d["times"][0])
                                                         & (d["crossings"] <= d["times"][-1])],
@@ -1663,6 +1685,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         m = results[i]
         m = ModeIdentification(**{**m.__dict__, "index": index})
         final.append(ModeIdentification(**{**m.__dict__, "warnings": _warnings(m)}))
-    return Identification(modes=final, windows=[(a, c) for a, _, c in windows],
-                          free_windows=list(windows), noise_rms=sigma, notes=notes, bands=bands,
+    return Identification(modes=final, windows=[(a, c) for a, _, c in full_windows],
+                          free_windows=list(full_windows), noise_rms=record_noise, notes=notes,
+                          bands=bands,
                           band_of=[modes[i].band for i in ranked])
