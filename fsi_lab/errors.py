@@ -47,8 +47,11 @@ class InstrumentError(FsiLabError):
     exit_code = 1
 
 
-class AnalysisError(FsiLabError):
-    """An analysis cannot be carried out on the given signal (names plugin, channel, condition)."""
+class AnalysisError(FsiLabError, ValueError):
+    """An analysis cannot be carried out on the given signal (names plugin, channel, condition).
+
+    A ``ValueError`` too, as scipy's signal functions raise for input they cannot use: a
+    notebook that calls :mod:`fsi_lab.dsp` catches either."""
 
     exit_code = 1
 
