@@ -285,7 +285,7 @@ def _row(minutes: float, period: dict, ffts: dict[int, float]) -> tuple[Row, dic
             reference.append(f"numpy rfft of {total:,}: {exc}{estimate}")
         reference.append(f"(written in {written:.0f} s)")
         try:
-            # (about 16 s of CPU per million samples of a channel: an hour is 2 h of CPU)
+            # (about 6 s of CPU per million samples of a channel: an hour is 70 min of CPU)
             elapsed, peak, cpu = guarded([*_fsi_lab(), "analyze", str(path), "--quiet"], limit,
                                          timeout=max(7200.0, 40e-6 * total))
         except Stopped as exc:
