@@ -67,6 +67,9 @@ STEPS_PER_HALF_CYCLE = 24
 MAX_BAND = 200
 #: Relative resolution of a measured extremum (the information criteria see no finer misfit).
 RESOLUTION = 1e-6
+#: Above this many elements (extrema x parameters), a fit's Jacobian is reduced decay by decay
+#: (:func:`_reduced`) rather than held whole.
+DENSE_JACOBIAN = 1 << 21
 #: Within this much AICc of the best, the law with the fewest parameters is preferred.
 AICC_TIE = 2.0
 #: A model extremum larger than this multiple of the start amplitude ends the sequence (a law
@@ -764,6 +767,26 @@ def _start_values(law: str, decays: Sequence[np.ndarray], w0: float) -> np.ndarr
     return np.array([0.5 * rate, 0.5 * rate * math.pi * top / 2.0])
 
 
+def _reduced(blocks: Sequence[np.ndarray], p: int) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals and Jacobian of a fit of ``p`` law parameters and a start per decay,
+    each decay's rows (``blocks``: columns residual, law derivatives, start derivative) put
+    through the orthogonal ``Q^T`` of the QR factorisation of its [derivatives | residuals]:
+    at most p + 2 rows per decay (the last holds the residual's part no step can reduce, with
+    no derivative). ``|f|``, ``J^T f`` and ``J^T J`` are those of the full rows, so a
+    trust-region solver takes the same steps to the same fit; the orthogonal factor changes
+    with the parameters, so the reduced rows are not a Jacobian to differentiate further."""
+    k = len(blocks)
+    r = [np.linalg.qr(both[:, list(range(1, p + 2)) + [0]], mode="r") for both in blocks]
+    count = np.cumsum([0] + [x.shape[0] for x in r])
+    out = np.empty(count[-1])
+    jac = np.zeros((count[-1], p + k))
+    for j, x in enumerate(r):
+        out[count[j]:count[j + 1]] = x[:, p + 1]
+        jac[count[j]:count[j + 1], :p] = x[:, :p]
+        jac[count[j]:count[j + 1], p + j] = x[:, p]
+    return out, jac
+
+
 def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float = 0.0,
             quantity: str = "velocity", times: Sequence[np.ndarray] | None = None,
             signs: Sequence[np.ndarray] | None = None,
@@ -840,6 +863,11 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     whiten = whiteners
 
     rows = np.cumsum([0] + [d.size for d in decays])
+    # Each extremum depends on the law and on its own decay's start alone: a row of the
+    # Jacobian holds p + 1 non-zeros of p + k. Dense, it grows as the square of the decays (a
+    # long record's union of 360 decays of 350 extrema: 2.7 GB and 100 s of CPU); above
+    # DENSE_JACOBIAN elements, each decay's rows are reduced to p + 2 (:func:`_reduced`).
+    reduce = n * (p + k) > DENSE_JACOBIAN
     cache: dict[str, np.ndarray] = {}
 
     def model(q: np.ndarray, deriv: list | None = None) -> list[np.ndarray]:
@@ -864,24 +892,36 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
             out.append(amp)
         return out
 
-    def residuals(q: np.ndarray) -> np.ndarray:
-        # The Jacobian comes with the residuals (one integration with its tangent), kept for
-        # the call of ``jacobian`` at the same point that follows.
+    def blocks(q: np.ndarray) -> list[np.ndarray]:
+        """Per decay, its whitened residuals and derivatives (columns: residual, the law's
+        parameters, its own log start), over ``scale``; a residual that is not finite is
+        1e6 with no derivatives, as is a row whose derivatives are not all finite."""
         derivs: list[np.ndarray] = []
-        jac = np.zeros((n, p + k))
-        parts = []
-        for j, (d, m, dm, w) in enumerate(zip(decays, model(q, derivs), derivs, whiten)):
+        out = []
+        for d, m, dm, w in zip(decays, model(q, derivs), derivs, whiten):
             both = np.column_stack(((d - m) / scale, -dm / scale))
             if w is not None:
                 both = w.apply(both)
-            parts.append(both[:, 0])
-            jac[rows[j]:rows[j + 1], :p] = both[:, 1:p + 1]
-            jac[rows[j]:rows[j + 1], p + j] = both[:, p + 1]
-        out = np.concatenate(parts)
-        bad = ~np.isfinite(out)
-        jac[bad | ~np.all(np.isfinite(jac), axis=1)] = 0.0
+            bad = ~np.isfinite(both[:, 0])
+            both[bad | ~np.all(np.isfinite(both[:, 1:]), axis=1), 1:] = 0.0
+            both[bad, 0] = 1e6
+            out.append(both)
+        return out
+
+    def residuals(q: np.ndarray) -> np.ndarray:
+        # The Jacobian comes with the residuals (one integration with its tangent), kept for
+        # the call of ``jacobian`` at the same point that follows.
+        parts = blocks(q)
+        if reduce:
+            out, jac = _reduced(parts, p)
+        else:
+            jac = np.zeros((n, p + k))
+            for j, both in enumerate(parts):
+                jac[rows[j]:rows[j + 1], :p] = both[:, 1:p + 1]
+                jac[rows[j]:rows[j + 1], p + j] = both[:, p + 1]
+            out = np.concatenate([both[:, 0] for both in parts])
         cache["x"], cache["jac"] = q.copy(), jac
-        return np.where(bad, 1e6, out)
+        return out
 
     def jacobian(q: np.ndarray) -> np.ndarray:
         if "x" not in cache or not np.array_equal(cache["x"], q):
@@ -920,7 +960,13 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
         cov_all = np.diag(np.full(p + k, math.inf))
     # Gauss-Newton: the whitened residuals move by e / scale when the whitened errors move
     # by e, the parameters by -(J^T J)^-1 J^T (e / scale) with J = res.jac = jac / scale.
-    influence = -(normal_inv @ res.jac.T)[:p] * scale
+    if reduce:  # the influence is on every extremum's whitened error: the full rows
+        influence = -np.concatenate(
+            [normal_inv[:p, :p] @ both[:, 1:p + 1].T
+             + normal_inv[:p, p + j][:, None] * both[None, :, p + 1]
+             for j, both in enumerate(blocks(res.x))], axis=1) * scale
+    else:
+        influence = -(normal_inv @ res.jac.T)[:p] * scale
     kk = p + k + 1
     # Extrema are not measured better than RESOLUTION of the largest: below that, a better fit
     # is rounding, not evidence for a law.
