@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from fsi_lab.accuracy import ACCURACY
 from fsi_lab.aggregate_extract import ExtractTask, ModeExtract, RunExtract, extract_run
 from fsi_lab.errors import FsiLabError
 
@@ -200,7 +201,9 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
                     "spread": {"c_i": float(union.spread_factor[0]),
                                "c_f": float(union.spread_factor[1])},
                     "spread_chi2": {"c_i": _finite(union.spread_chi2[0]),
-                                    "c_f": _finite(union.spread_chi2[1])}}})
+                                    "c_f": _finite(union.spread_chi2[1])},
+                    "accuracy": {"c_i": float(union.accuracy_factor[0]),
+                                 "c_f": float(union.accuracy_factor[1])}}})
     entry["between_runs"] = {
         "c_i": _spread([r["c_i"] for r in per_run], [r["c_i_ci95"] for r in per_run]),
         "c_f": _spread([r["c_f"] for r in per_run], [r["c_f_ci95"] for r in per_run]),
@@ -289,6 +292,13 @@ def _widening(entry: dict[str, Any]) -> str:
              (("C_i", spread.get("c_i", 1.0)), ("C_f", spread.get("c_f", 1.0))) if value > 1.05]
     if shown:
         parts.append(f"{', '.join(shown)} by the spread between runs")
+    accuracy = widened.get("accuracy") or {}
+    shown = [f"{name} x{accuracy.get(key, 1.0):.2g}" for name, key in (("C_i", "c_i"),
+                                                                       ("C_f", "c_f"))
+             if accuracy.get(key, 1.0) > 1.05]
+    if shown:
+        parts.append(f"{', '.join(shown)} to the method's accuracy (+-"
+                     f"{100 * ACCURACY['c_i']:g} % on C_i, +-{100 * ACCURACY['c_f']:g} % on C_f)")
     return "; " + "; ".join(parts) if parts else ""
 
 

@@ -19,6 +19,12 @@ residuals alone would give), so that a union of equally widened runs is widened 
 The runs may also disagree beyond their own intervals (the bench changed between runs, a run's
 systematic error): the chi-square of the runs' own estimates about the union's, per degree of
 freedom (Birge's ratio), scales the union's variance when it exceeds 1 (``spread_factor``).
+
+Last, the identification's accuracy on records of known truth (:data:`fsi_lab.accuracy.
+ACCURACY`: C_i 0.3 %, C_f 2 % of the value, as a 95 % half-width) is added to the interval in
+quadrature: the union narrows the noise's part as more decays come, not the method's
+systematic errors, which every run shares, so its interval is never narrower than those
+(``accuracy_factor``).
 """
 
 from __future__ import annotations
@@ -30,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.stats as sstats
 
+from fsi_lab.accuracy import LAW_ACCURACY
 from fsi_lab.dsp.identify import DecayExtrema
 from fsi_lab.dsp.laws import LawComparison, LawFit, Whitener, compare_laws, fit_law
 from fsi_lab.errors import AnalysisError
@@ -97,6 +104,9 @@ class UnionFit:
         widened).
     spread_factor
         Factors on the standard errors of ``a`` and ``beta`` for the spread between runs.
+    accuracy_factor
+        Factors on them for the method's accuracy (:data:`fsi_lab.accuracy.LAW_ACCURACY`),
+        added in quadrature to each variance.
     spread_chi2
         Chi-square per degree of freedom of the runs' own ``a`` and ``beta`` about the
         union's (NaN with one run).
@@ -113,6 +123,7 @@ class UnionFit:
     noise_factor: float
     spread_factor: np.ndarray
     spread_chi2: np.ndarray
+    accuracy_factor: np.ndarray
     runs: int
     decays: int
     extrema: int
@@ -201,8 +212,21 @@ def fit_union(runs: Sequence[RunDecays]) -> UnionFit:
         spread_factor = np.sqrt(np.maximum(chi2, 1.0))
     factor = noise_factor * spread_factor
     cov = quad.cov * np.outer(factor, factor)
+    # The method's accuracy as a standard error (its 95 % half-width over the t quantile the
+    # interval uses), added to each variance; the correlation of a and beta is kept.
+    q = float(sstats.t.ppf(0.975, max(quad.dof, 1)))
+    floor = np.array([LAW_ACCURACY[name] * abs(float(v)) / q
+                      for name, v in zip(quad.names, quad.params)])
+    variance = np.diag(cov)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        accuracy_factor = np.where(variance > 0, np.sqrt(1.0 + floor ** 2 / variance), 1.0)
+    accuracy_factor = np.where(np.isfinite(accuracy_factor), accuracy_factor, 1.0)
+    cov = cov * np.outer(accuracy_factor, accuracy_factor)
+    exact = variance == 0.0  # (a noise-free union fitted exactly)
+    cov[exact, exact] = floor[exact] ** 2
     return UnionFit(fit=quad, cov=cov, comparison=compare_laws(list(fits.values())),
                     widenings=np.array([run.widening for run in runs]),
                     noise_factor=noise_factor, spread_factor=spread_factor, spread_chi2=chi2,
+                    accuracy_factor=accuracy_factor,
                     runs=len(runs), decays=len(amps), extrema=int(sum(a.size for a in amps)),
                     w0=w0, alpha=alpha)

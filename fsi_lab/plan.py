@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from fsi_lab.accuracy import ACCURACY
 from fsi_lab.errors import FsiLabError, ParameterError, ProfileError
 from fsi_lab.inputfiles import MAX_PROFILE_BYTES, read_text
 from fsi_lab.params import Param, validate
@@ -85,7 +86,8 @@ STOP_PARAMS: tuple[Param, ...] = (
           maximum=1.0,
           help="Stop once the quantity's 95 % interval reaches no further than this fraction "
                "of its value on either side (0.05: +-5 %); the runs not carried out are "
-               "recorded as skipped."),
+               "recorded as skipped. Above the method's accuracy (0.003 for c_i, 0.02 for "
+               "c_f), which no aggregate's interval gets below."),
     Param("frequency_hz", "float", "Hz", None, minimum=0.0, exclusive_minimum=True,
           help="The mode: the aggregated mode nearest this frequency (unset: the one with the "
                "most extrema)."),
@@ -117,6 +119,19 @@ class StopWhen:
         return (f"{name}'s 95 % interval within +-{100 * self.relative_half_width:g} % "
                 f"({', '.join(where)}), after {self.min_runs} run"
                 f"{'s' * (self.min_runs != 1)}")
+
+
+def _check_reachable(stop: StopWhen) -> None:
+    """Refuse a target no aggregate can reach: an interval narrower than the method's
+    accuracy (:data:`fsi_lab.accuracy.ACCURACY`), which the union's never goes below."""
+    floor = ACCURACY[stop.quantity]
+    if stop.relative_half_width <= floor:
+        name = {"c_i": "C_i", "c_f": "C_f"}[stop.quantity]
+        raise ParameterError(
+            f"plan.stop_when.relative_half_width: {stop.relative_half_width:g} can never be "
+            f"reached: an aggregate's 95 % interval of {name} is never narrower than +-"
+            f"{100 * floor:g} %, the identification's accuracy on records of known truth "
+            f"(fsi_lab.accuracy); expected more than {floor:g}")
 
 
 RANGE_PARAMS: tuple[Param, ...] = (
@@ -299,6 +314,8 @@ def parse_plan(text: str, path: Path) -> Plan:
                                  "[plan.stop_when] with quantity and relative_half_width")
         stop_when = StopWhen(**validate(STOP_PARAMS, stop, "plan.stop_when")) \
             if stop is not None else None
+        if stop_when is not None:
+            _check_reachable(stop_when)
         steps = raw.get("step")
         if not isinstance(steps, list) or not steps or not all(isinstance(s, dict)
                                                                for s in steps):

@@ -42,6 +42,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from fsi_lab.accuracy import ACCURACY
 from fsi_lab.contract import AnalysisContext, ChannelData, Result
 from fsi_lab.errors import FsiLabError
 from fsi_lab.events import EventBus, Progress
@@ -513,5 +514,9 @@ def _pooled_component(index: int, mode: Mapping[str, Any]) -> dict[str, Any]:
                          f"C_f = {mode['c_f']:.4g} kg/m^2 (95 %: {c:.4g} to {d:.4g}) from "
                          f"{mode['decays']} decays in {mode['segments']} segment"
                          f"{'s' * (mode['segments'] != 1)}")
+        accuracy = (mode.get("widened") or {}).get("accuracy") or {}
+        if max(accuracy.values(), default=1.0) > 1.05:
+            out["pooled"] += (f"; the method's accuracy (+-{100 * ACCURACY['c_i']:g} % on C_i, "
+                              f"+-{100 * ACCURACY['c_f']:g} % on C_f) included")
     return out
 

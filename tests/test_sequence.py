@@ -136,6 +136,10 @@ STOP = '[plan.stop_when]\nquantity = "c_f"\nrelative_half_width = 0.05\n'
      "plan.toml: step 1, run 1 of 1: {base}: plan.stop_when.channel: 'base_acceleration' is "
      "not analysed (analysed: tip_velocity)"),
     ('stop_when = 3\n', "plan.toml: plan.stop_when: got 3; expected a table [plan.stop_when]"),
+    # an aggregate's interval is never narrower than the method's accuracy (fsi_lab.accuracy)
+    (STOP.replace("0.05", "0.01"), "plan.toml: plan.stop_when.relative_half_width: 0.01 can "
+                                   "never be reached: an aggregate's 95 % interval of C_f is "
+                                   "never narrower than +-2 %"),
 ])
 def test_a_stop_condition_is_checked_before_anything_is_driven(tmp_path, base, stop, problem):
     out = tmp_path / "out"

@@ -531,12 +531,12 @@ def test_a_frequency_that_disagrees_with_its_spectral_peak_is_warned():
     assert any("disagrees with the spectral peak" in w for w in _warnings(moved))
 
 
-@pytest.mark.parametrize("pretrigger", [0.1, 1.5, 3.0])
+@pytest.mark.parametrize("pretrigger", [0.1, 3.0])
 def test_the_noise_is_measured_where_the_record_is_quiet(pretrigger):
     """The record's white noise is measured in blocks along it, from the quietest: with one
-    spectrum of the whole record, a pulse 1.5 or 3 s after the acquisition started (where the
-    Hann window no longer tapers it) had its broadband content counted as noise, 39 and 52 %
-    too much on this two-mode record (2.8 times on the simulated bench's relative velocity,
+    spectrum of the whole record, a pulse 3 s after the acquisition started (where the Hann
+    window no longer tapers it) had its broadband content counted as noise, 52 % too much on
+    this two-mode record (39 % at 1.5 s; 2.8 times on the simulated bench's relative velocity,
     whose C_i moved by +3 %). Within 5 % wherever the pulse sits, and the noise-free record's
     own estimate below 1e-6 of the noise."""
     case = Case("pre-trigger", (Mode(17.0, c_f=WET_C_F), Mode(94.0, c_f=WET_C_F, gain=0.5)),

@@ -149,6 +149,14 @@ def test_pooled_segments_give_the_in_memory_c_i_and_c_f(period, analysed):
     assert [row["segment"] for row in mode["per_segment"]] == [1, 2, 3]
     assert all(row["c_i_ci95"][0] < row["c_i"] < row["c_i_ci95"][1]
                for row in mode["per_segment"])
+    # the union's intervals hold the method's accuracy (fsi_lab.accuracy), and say so
+    for component, pooled in zip(info["components"], seg["modes"]):
+        factors = pooled["widened"]["accuracy"]
+        assert min(factors.values()) >= 1.0
+        assert ("the method's accuracy" in component["pooled"]) == (max(factors.values())
+                                                                   > 1.05)
+        lo, hi = component["c_i_ci95"]
+        assert (hi - lo) / 2 >= 0.003 * component["c_i"]
 
 
 def test_no_free_decay_is_cut(period, analysed):
