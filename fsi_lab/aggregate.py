@@ -202,8 +202,8 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
                                "c_f": float(union.spread_factor[1])},
                     "spread_chi2": {"c_i": _finite(union.spread_chi2[0]),
                                     "c_f": _finite(union.spread_chi2[1])},
-                    "accuracy": {"c_i": float(union.accuracy_factor[0]),
-                                 "c_f": float(union.accuracy_factor[1])}}})
+                    "accuracy": {"c_i": _finite(union.accuracy_factor[0]),
+                                 "c_f": _finite(union.accuracy_factor[1])}}})
     entry["between_runs"] = {
         "c_i": _spread([r["c_i"] for r in per_run], [r["c_i_ci95"] for r in per_run]),
         "c_f": _spread([r["c_f"] for r in per_run], [r["c_f_ci95"] for r in per_run]),
@@ -293,11 +293,13 @@ def _widening(entry: dict[str, Any]) -> str:
     if shown:
         parts.append(f"{', '.join(shown)} by the spread between runs")
     accuracy = widened.get("accuracy") or {}
-    shown = [f"{name} x{accuracy.get(key, 1.0):.2g}" for name, key in (("C_i", "c_i"),
-                                                                       ("C_f", "c_f"))
-             if accuracy.get(key, 1.0) > 1.05]
+    # (None: the fit's own interval was 0, the accuracy is all of it)
+    shown = [f"x{'inf' if value is None else f'{value:.2g}'} ({name})"
+             for name, value in (("C_i", accuracy.get("c_i", 1.0)),
+                                 ("C_f", accuracy.get("c_f", 1.0)))
+             if value is None or value > 1.05]
     if shown:
-        parts.append(f"{', '.join(shown)} to the method's accuracy (+-"
+        parts.append(f"widened {', '.join(shown)} for the method's accuracy (+-"
                      f"{100 * ACCURACY['c_i']:g} % on C_i, +-{100 * ACCURACY['c_f']:g} % on C_f)")
     return "; " + "; ".join(parts) if parts else ""
 

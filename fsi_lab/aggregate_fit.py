@@ -106,7 +106,8 @@ class UnionFit:
         Factors on the standard errors of ``a`` and ``beta`` for the spread between runs.
     accuracy_factor
         Factors on them for the method's accuracy (:data:`fsi_lab.accuracy.LAW_ACCURACY`),
-        added in quadrature to each variance.
+        added in quadrature to each variance (infinite where the fit's own variance is 0);
+        the correlation of ``a`` and ``beta`` is kept.
     spread_chi2
         Chi-square per degree of freedom of the runs' own ``a`` and ``beta`` about the
         union's (NaN with one run).
@@ -222,8 +223,9 @@ def fit_union(runs: Sequence[RunDecays]) -> UnionFit:
         accuracy_factor = np.where(variance > 0, np.sqrt(1.0 + floor ** 2 / variance), 1.0)
     accuracy_factor = np.where(np.isfinite(accuracy_factor), accuracy_factor, 1.0)
     cov = cov * np.outer(accuracy_factor, accuracy_factor)
-    exact = variance == 0.0  # (a noise-free union fitted exactly)
+    exact = variance == 0.0  # (a noise-free union fitted exactly: its interval is the floor)
     cov[exact, exact] = floor[exact] ** 2
+    accuracy_factor[exact & (floor > 0)] = math.inf
     return UnionFit(fit=quad, cov=cov, comparison=compare_laws(list(fits.values())),
                     widenings=np.array([run.widening for run in runs]),
                     noise_factor=noise_factor, spread_factor=spread_factor, spread_chi2=chi2,

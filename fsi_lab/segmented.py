@@ -515,7 +515,7 @@ def _pooled_component(index: int, mode: Mapping[str, Any]) -> dict[str, Any]:
                          f"{mode['decays']} decays in {mode['segments']} segment"
                          f"{'s' * (mode['segments'] != 1)}")
         accuracy = (mode.get("widened") or {}).get("accuracy") or {}
-        if max(accuracy.values(), default=1.0) > 1.05:
+        if any(f is None or f > 1.05 for f in accuracy.values()):
             out["pooled"] += (f"; the method's accuracy (+-{100 * ACCURACY['c_i']:g} % on C_i, "
                               f"+-{100 * ACCURACY['c_f']:g} % on C_f) included")
     return out

@@ -599,15 +599,21 @@ def _noise_rms(x: np.ndarray, fs: float, peaks: np.ndarray) -> float:
     window) away from its spectral ``peaks`` (Hz): a Rayleigh-distributed bin's median is
     ``sigma sqrt(ln 2) sqrt(sum w^2)``.
 
-    The spectrum is taken in blocks along the record (:data:`NOISE_BLOCK`), and the noise from
-    the quietest: one spectrum of the whole record counts the broadband content of the
-    excitation (a pulse, the base's motion taken off) as noise wherever the window does not
-    taper it. A decay recorded 1.5 s after the acquisition started measured 2.8 times its
-    noise that way, which raised its extrema's noise correction and floor and moved its C_i
-    by +3 %. Blocks of noise alone agree within their median's spread (a relative standard
-    error of about ``0.9 / sqrt(bins)``, the Hann window's neighbouring bins being
-    correlated); those within three of it of the lowest are averaged. Blocks whose samples
-    are all equal (padding, not a measurement) are left out unless all are."""
+    The spectrum is taken in blocks along the record (:data:`NOISE_BLOCK` samples or more, at
+    most :data:`NOISE_BLOCKS`), and the noise from the quietest: one spectrum of the whole
+    record counts the broadband content of the excitation (a pulse, the base's motion taken
+    off) as noise wherever the window does not taper it. A decay recorded 1.5 s after the
+    acquisition started measured 2.8 times its noise that way, which raised its extrema's noise
+    correction and floor and moved its C_i by +3 %. Blocks of noise alone agree within their
+    median's spread (a relative standard error of about ``0.9 / sqrt(bins)``, the Hann window's
+    neighbouring bins being correlated); those within three of it of the lowest are averaged.
+    Runs of one value at the record's ends (padding, a held last sample) and blocks whose
+    samples are all equal are no measurement and are left out. A record shorter than two
+    blocks is still measured on one spectrum, as is a constant stretch inside a block (a
+    dropout), which reads low."""
+    moving = np.flatnonzero(np.diff(x) != 0)
+    if moving.size and moving[-1] + 2 - moving[0] >= NOISE_BLOCK:
+        x = x[moving[0]:moving[-1] + 2]
     count = int(min(NOISE_BLOCKS, max(1, x.size // NOISE_BLOCK)))
     size = x.size // count
     w = np.hanning(size)

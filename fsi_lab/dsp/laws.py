@@ -771,8 +771,9 @@ def _reduced(blocks: Sequence[np.ndarray], p: int) -> tuple[np.ndarray, np.ndarr
     """The residuals and Jacobian of a fit of ``p`` law parameters and a start per decay,
     each decay's rows (``blocks``: columns residual, law derivatives, start derivative) put
     through the orthogonal ``Q^T`` of the QR factorisation of its [derivatives | residuals]:
-    at most p + 2 rows per decay (the last holds the residual's part no step can reduce, with
-    no derivative). ``|f|``, ``J^T f`` and ``J^T J`` are those of the full rows, so a
+    at most p + 2 rows per decay (with more than p + 1 extrema, the last holds the part of the
+    residuals no step can reduce, with no derivative). ``|f|``, ``J^T f`` and ``J^T J`` are
+    those of the full rows, so a
     trust-region solver takes the same steps to the same fit; the orthogonal factor changes
     with the parameters, so the reduced rows are not a Jacobian to differentiate further."""
     k = len(blocks)
@@ -866,7 +867,8 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     # Each extremum depends on the law and on its own decay's start alone: a row of the
     # Jacobian holds p + 1 non-zeros of p + k. Dense, it grows as the square of the decays (a
     # long record's union of 360 decays of 350 extrema: 2.7 GB and 100 s of CPU); above
-    # DENSE_JACOBIAN elements, each decay's rows are reduced to p + 2 (:func:`_reduced`).
+    # DENSE_JACOBIAN elements, each decay's rows are reduced to p + 2 (:func:`_reduced`): the
+    # Jacobian is then (p + 2) k x (p + k), 4 MB for those 360 decays.
     reduce = n * (p + k) > DENSE_JACOBIAN
     cache: dict[str, np.ndarray] = {}
 
