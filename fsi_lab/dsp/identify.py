@@ -104,7 +104,7 @@ MODE_THRESHOLD = 0.01
 NOISE_MARGIN = 10.0
 #: The record's white noise is measured in blocks of at least this many samples
 #: (:func:`_noise_rms`), at most :data:`NOISE_BLOCKS` of them.
-NOISE_BLOCK = 4096
+NOISE_BLOCK = 1024
 NOISE_BLOCKS = 16
 #: A spectral peak is a mode of its own when the spectrum around it (its col) falls below this
 #: fraction of its height.
@@ -609,8 +609,8 @@ def _noise_rms(x: np.ndarray, fs: float, peaks: np.ndarray) -> float:
     neighbouring bins being correlated); those within three of it of the lowest are averaged.
     Runs of one value at the record's ends (padding, a held last sample) and blocks whose
     samples are all equal are no measurement and are left out. A record shorter than two
-    blocks is still measured on one spectrum, as is a constant stretch inside a block (a
-    dropout), which reads low."""
+    blocks (2048 samples) is still measured on one spectrum; a constant stretch inside a block
+    (a dropout) reads low."""
     moving = np.flatnonzero(np.diff(x) != 0)
     if moving.size and moving[-1] + 2 - moving[0] >= NOISE_BLOCK:
         x = x[moving[0]:moving[-1] + 2]
