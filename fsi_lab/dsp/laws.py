@@ -773,9 +773,9 @@ def _reduced(blocks: Sequence[np.ndarray], p: int) -> tuple[np.ndarray, np.ndarr
     through the orthogonal ``Q^T`` of the QR factorisation of its [derivatives | residuals]:
     at most p + 2 rows per decay (with more than p + 1 extrema, the last holds the part of the
     residuals no step can reduce, with no derivative). ``|f|``, ``J^T f`` and ``J^T J`` are
-    those of the full rows, so a
-    trust-region solver takes the same steps to the same fit; the orthogonal factor changes
-    with the parameters, so the reduced rows are not a Jacobian to differentiate further."""
+    those of the full rows, so a trust-region solver takes the same steps to the same fit; the
+    orthogonal factor changes with the parameters, so the reduced rows are not a Jacobian to
+    differentiate further."""
     k = len(blocks)
     r = [np.linalg.qr(both[:, list(range(1, p + 2)) + [0]], mode="r") for both in blocks]
     count = np.cumsum([0] + [x.shape[0] for x in r])
