@@ -28,3 +28,8 @@ from __future__ import annotations
 ACCURACY = {"c_i": 0.003, "c_f": 0.02}
 #: The same, by the quadratic law's parameter names.
 LAW_ACCURACY = {"a": ACCURACY["c_i"], "beta": ACCURACY["c_f"]}
+
+
+def describe() -> str:
+    """``+-0.3 % on C_i, +-2 % on C_f``: the accuracy in words."""
+    return f"+-{100 * ACCURACY['c_i']:g} % on C_i, +-{100 * ACCURACY['c_f']:g} % on C_f"

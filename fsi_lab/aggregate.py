@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from fsi_lab.accuracy import ACCURACY
+from fsi_lab import accuracy as method_accuracy
 from fsi_lab.aggregate_extract import ExtractTask, ModeExtract, RunExtract, extract_run
 from fsi_lab.errors import FsiLabError
 
@@ -299,8 +299,8 @@ def _widening(entry: dict[str, Any]) -> str:
                                  ("C_f", accuracy.get("c_f", 1.0)))
              if value is None or value > 1.05]
     if shown:
-        parts.append(f"widened {', '.join(shown)} for the method's accuracy (+-"
-                     f"{100 * ACCURACY['c_i']:g} % on C_i, +-{100 * ACCURACY['c_f']:g} % on C_f)")
+        parts.append(f"widened {', '.join(shown)} for the method's accuracy "
+                     f"({method_accuracy.describe()})")
     return "; " + "; ".join(parts) if parts else ""
 
 

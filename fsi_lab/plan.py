@@ -78,6 +78,8 @@ STEP_PARAMS: tuple[Param, ...] = (
 )
 
 STOP_QUANTITIES = ("c_i", "c_f")
+#: How each quantity is written in messages.
+STOP_SYMBOLS = {"c_i": "C_i", "c_f": "C_f"}
 STOP_PARAMS: tuple[Param, ...] = (
     Param("quantity", "str", "", choices=STOP_QUANTITIES,
           help="c_i (kg/(m s)) or c_f (kg/m^2) fitted to the union of the completed runs' "
@@ -111,7 +113,7 @@ class StopWhen:
 
     def describe(self) -> str:
         """``C_f's 95 % interval within +-5 % (the mode nearest 17 Hz)``."""
-        name = {"c_i": "C_i", "c_f": "C_f"}[self.quantity]
+        name = STOP_SYMBOLS[self.quantity]
         where = [f"the mode nearest {self.frequency_hz:g} Hz" if self.frequency_hz
                  else "the largest mode"]
         if self.channel:
@@ -126,7 +128,7 @@ def _check_reachable(stop: StopWhen) -> None:
     accuracy (:data:`fsi_lab.accuracy.ACCURACY`), which the union's never goes below."""
     floor = ACCURACY[stop.quantity]
     if stop.relative_half_width <= floor:
-        name = {"c_i": "C_i", "c_f": "C_f"}[stop.quantity]
+        name = STOP_SYMBOLS[stop.quantity]
         raise ParameterError(
             f"plan.stop_when.relative_half_width: {stop.relative_half_width:g} can never be "
             f"reached: an aggregate's 95 % interval of {name} is never narrower than +-"

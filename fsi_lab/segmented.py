@@ -42,7 +42,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from fsi_lab.accuracy import ACCURACY
+from fsi_lab import accuracy as method_accuracy
 from fsi_lab.contract import AnalysisContext, ChannelData, Result
 from fsi_lab.errors import FsiLabError
 from fsi_lab.events import EventBus, Progress
@@ -516,7 +516,6 @@ def _pooled_component(index: int, mode: Mapping[str, Any]) -> dict[str, Any]:
                          f"{'s' * (mode['segments'] != 1)}")
         accuracy = (mode.get("widened") or {}).get("accuracy") or {}
         if any(f is None or f > 1.05 for f in accuracy.values()):
-            out["pooled"] += (f"; the method's accuracy (+-{100 * ACCURACY['c_i']:g} % on C_i, "
-                              f"+-{100 * ACCURACY['c_f']:g} % on C_f) included")
+            out["pooled"] += f"; the method's accuracy ({method_accuracy.describe()}) included"
     return out
 

@@ -922,7 +922,7 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
                 jac[rows[j]:rows[j + 1], :p] = both[:, 1:p + 1]
                 jac[rows[j]:rows[j + 1], p + j] = both[:, p + 1]
             out = np.concatenate([both[:, 0] for both in parts])
-        cache["x"], cache["jac"] = q.copy(), jac
+        cache["x"], cache["jac"], cache["parts"] = q.copy(), jac, parts
         return out
 
     def jacobian(q: np.ndarray) -> np.ndarray:
@@ -963,10 +963,12 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     # Gauss-Newton: the whitened residuals move by e / scale when the whitened errors move
     # by e, the parameters by -(J^T J)^-1 J^T (e / scale) with J = res.jac = jac / scale.
     if reduce:  # the influence is on every extremum's whitened error: the full rows
+        if not np.array_equal(cache["x"], res.x):
+            residuals(res.x)
         influence = -np.concatenate(
             [normal_inv[:p, :p] @ both[:, 1:p + 1].T
              + normal_inv[:p, p + j][:, None] * both[None, :, p + 1]
-             for j, both in enumerate(blocks(res.x))], axis=1) * scale
+             for j, both in enumerate(cache["parts"])], axis=1) * scale
     else:
         influence = -(normal_inv @ res.jac.T)[:p] * scale
     kk = p + k + 1
