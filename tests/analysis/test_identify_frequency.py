@@ -83,3 +83,32 @@ def test_a_short_stretch_of_something_else_does_not_set_a_mode_s_first_frequency
     assert even == pytest.approx(0.25 * (1 / 17.0 + 1 / 18.0), rel=1e-9)
     assert frequency([main]) == pytest.approx(17.06, rel=1e-9)
     assert _pooled_half_period([]) is None
+
+
+def test_the_noise_s_shift_of_the_first_crossings_is_not_read_as_a_frequency():
+    """A heavily damped 30.78 Hz mode (2.8 %) under a 215.6 Hz mode of 2.2 times its
+    acceleration, from an impact at sample 3, with white noise of 2.5 % of the first mode's
+    largest acceleration. The noise changes the prediction that pads the window's ends for the
+    band filters, and with it the first crossings of the 31 Hz band (by about 1.5 ms, a tenth
+    of a half period, the same sign on every noise record); the noise-free model's crossings
+    do not move so. Paired with those, the frequency read 0.155 % low on average over these
+    six records (each -0.13 to -0.18 %): close to the 0.2 % target on this mode alone. With
+    the model's crossings moved by their mean shift over its noisy realisations: within
+    0.06 % on average."""
+    fs, n, start = 2560.0, 1280, 3
+    t = np.clip((np.arange(n) - start) / fs, 0.0, None)
+    errors = []
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        x = np.zeros(n)
+        for (f, zeta), amplitude, phase in zip(((30.78, 0.028), (215.6, 0.0047)), (4.5, 10.0),
+                                               rng.uniform(0.0, 2 * np.pi, 2)):
+            w = 2 * np.pi * f
+            x += amplitude * np.exp(-zeta * w * t) * np.sin(w * t + phase)
+        x[:start] = 0.0
+        x += 0.1 * rng.standard_normal(n)
+        found = identify(x, fs, quantity="acceleration")
+        mode = min(found.modes, key=lambda m: abs(m.damped_frequency_hz - 30.78))
+        errors.append(mode.damped_frequency_hz / 30.78 - 1.0)
+    assert abs(np.mean(errors)) < 6e-4, errors
+    assert max(abs(e) for e in errors) < TARGET, errors

@@ -217,7 +217,7 @@ def test_integration_by_blocks_of_bins_equals_the_whole_spectrum_at_once(monkeyp
 # ----------------------------------------------------------------------------- identify
 def _all_noisy_splits_first(modes, w, window, model, bands, fs, integrate, noise, rng):
     """The correction's noisy model records as the in-memory path measured them: every
-    realisation's bands split and held first, the errors taken after."""
+    realisation's bands split and held first, the errors and crossings taken after."""
     from fsi_lab.dsp import identify as module
 
     noisy = []
@@ -225,17 +225,17 @@ def _all_noisy_splits_first(modes, w, window, model, bands, fs, integrate, noise
         extra = rng.normal(0.0, noise, model.size)
         noisy += [module.split(model + extra, fs, bands, integrate=integrate),
                   module.split(model - extra, fs, bands, integrate=integrate)]
-    out = {}
-    if not noisy:
-        return out
+    errors, crossings = {}, {}
     for mode in modes:
+        cycles = [module.half_cycles(parts[mode.band], fs, mode.frequency) for parts in noisy]
+        if cycles:
+            crossings[mode.band] = [hc.crossings for hc in cycles]
         fit = module._preferred(mode)
         for j, d in enumerate(mode.decays):
-            if d["w"] == w:
-                out[id(mode), j] = [module._errors(parts[mode.band], fs, mode.frequency,
-                                                   window[0], d["times"], fit.model[j])
-                                    for parts in noisy]
-    return out
+            if d["w"] == w and cycles:
+                errors[id(mode), j] = [module._errors(hc, window[0] / fs, d["times"],
+                                                      fit.model[j]) for hc in cycles]
+    return errors, crossings
 
 
 def _numbers(ident):
