@@ -41,7 +41,9 @@ number. The steps:
    off the measured ones; the linear frequency is adjusted the same way from the crossings.
    The fits are then repeated until they settle (:data:`MAX_PASSES`), the last time with the
    record's noise added to the model, whose spread of the coefficients widens their intervals
-   where the fit's own covariance falls short (:func:`_noise_spread`).
+   where the fit's own covariance falls short (:func:`_noise_spread`), and whose mean shift of
+   each crossing (the noise changes the end padding's prediction) moves the model's crossings
+   the frequency is adjusted to.
 7. **Backbone.** Frequency ``1 / (t[i+1] - t[i-1])`` at each zero crossing against the
    displacement amplitude (the geometric mean of the two neighbouring extrema). The natural
    frequency is the backbone's small-amplitude limit: the fitted model (its damping law, and
@@ -911,13 +913,15 @@ def _noisy_errors(modes: list[_Mode], w: int, window: tuple[int, int, int], mode
             parts = split(model + extra if sign > 0 else model - extra, fs, bands,
                           integrate=integrate)
             for mode in modes:
+                here = [(j, d) for j, d in enumerate(mode.decays) if d["w"] == w]
+                if not here:
+                    continue
                 fit = _preferred(mode)
                 hc = half_cycles(parts[mode.band], fs, mode.frequency)
                 crossings.setdefault(mode.band, []).append(hc.crossings)
-                for j, d in enumerate(mode.decays):
-                    if d["w"] == w:
-                        errors.setdefault((id(mode), j), []).append(
-                            _errors(hc, window[0] / fs, d["times"], fit.model[j]))
+                for j, d in here:
+                    errors.setdefault((id(mode), j), []).append(
+                        _errors(hc, window[0] / fs, d["times"], fit.model[j]))
             del parts
     return errors, crossings
 
