@@ -21,10 +21,11 @@ Records
     samples per cycle: fsi-lab's identification leaves them out with a note (it needs 6).
     The 30.78 Hz mode lasts about 15 cycles (2.7 % damping) under a 215.6 Hz mode six times
     its acceleration: a least-squares fit of four damped sinusoids to the record itself gives
-    30.66 to 30.72 Hz on channels 0 and 1 (started 0 to 15 ms after sample 23, where the impact
-    is over; 95 % intervals +-0.05 to 0.09 Hz), pyOMA2's SSI 30.74 Hz. fsi-lab's 30.70 Hz agrees with
-    both; the reference lies 0.2 to 0.4 % above what these 0.5 s hold, so the 0.2 % target
-    is not reached on this mode (its warnings are on the damping law, none on the frequency).
+    30.66 to 30.72 Hz on channels 0 and 1 (started 0 to 15 ms after sample 23, where the
+    impact is over; 95 % intervals +-0.05 to 0.09 Hz), pyOMA2's SSI 30.74 Hz. fsi-lab's
+    30.70 Hz agrees with both; the reference lies 0.2 to 0.4 % above what these 0.5 s hold,
+    so the 0.2 % target is not reached on this mode (its warnings are on the damping law,
+    none on the frequency).
 
 Columns: the reference; fsi-lab's damped natural frequency per channel with its 95 % interval,
 its error, its viscous damping ratio (the viscous law's decay rate over the natural angular
