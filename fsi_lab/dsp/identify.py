@@ -833,7 +833,7 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
     gives them (:func:`_noisy_crossings`): the noise changes the prediction that pads each
     window's ends for the filters, and with it a band's first crossings (by 1.5 ms, a tenth of
     a half period, on a heavily damped 31 Hz mode under a 216 Hz one of 2.2 times its
-    acceleration, at 2.5 % noise: its frequency read 0.16 % low).
+    acceleration, noise 2.2 % of its largest acceleration: its frequency read 0.18 % low).
     """
     integrate = quantity == "acceleration"
     rng = np.random.default_rng(NOISE_SEED)

@@ -87,7 +87,7 @@ def test_a_short_stretch_of_something_else_does_not_set_a_mode_s_first_frequency
 
 def test_the_noise_s_shift_of_the_first_crossings_is_not_read_as_a_frequency():
     """A heavily damped 30.78 Hz mode (2.8 %) under a 215.6 Hz mode of 2.2 times its
-    acceleration, from an impact at sample 3, with white noise of 2.5 % of the first mode's
+    acceleration, from an impact at sample 3, with white noise of 2.2 % of the first mode's
     largest acceleration. The noise changes the prediction that pads the window's ends for the
     band filters, and with it the first crossings of the 31 Hz band (by about 1.5 ms, a tenth
     of a half period, the same sign on every noise record); the noise-free model's crossings
