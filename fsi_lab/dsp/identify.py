@@ -848,15 +848,18 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
         noisy, noisy_crossings = _noisy_errors(modes, w, window, model, bands, fs, integrate,
                                                noise, rng)
         for mode in modes:
+            here = _decays_in(mode, w)
+            if not here:
+                continue
             fit = _preferred(mode)
-            for j, d in enumerate(mode.decays):
-                if d["w"] != w:
-                    continue
+            hc = half_cycles(clean[mode.band], fs, mode.frequency)
+            t_model = hc.times + window[0] / fs
+            if t_model.size < 2:
+                continue
+            model_crossings = _noisy_crossings(
+                hc.crossings, noisy_crossings.get(mode.band, []), mode.frequency) + window[0] / fs
+            for j, d in here:
                 measured = np.abs(d["values"])
-                hc = half_cycles(clean[mode.band], fs, mode.frequency)
-                t_model = hc.times + window[0] / fs
-                if t_model.size < 2:
-                    continue
                 idx = _match(t_model, d["times"])
                 exact = fit.model[j]
                 if noisy:
@@ -885,9 +888,7 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
                     mode.correction = max(mode.correction, float(np.max(
                         np.abs(smear[~wild]) / measured[~wild])))
                 mode.wild += int(wild.sum())
-                d["model_crossings"] = _noisy_crossings(
-                    hc.crossings, noisy_crossings.get(mode.band, []), mode.frequency) \
-                    + window[0] / fs
+                d["model_crossings"] = model_crossings
                 # The model's first extremum sits at its anchor; the filters move it by as
                 # much as they move the measured one: anchor the model that much earlier.
                 anchor = d.get("anchor", float(d["times"][0]))
@@ -913,7 +914,7 @@ def _noisy_errors(modes: list[_Mode], w: int, window: tuple[int, int, int], mode
             parts = split(model + extra if sign > 0 else model - extra, fs, bands,
                           integrate=integrate)
             for mode in modes:
-                here = [(j, d) for j, d in enumerate(mode.decays) if d["w"] == w]
+                here = _decays_in(mode, w)
                 if not here:
                     continue
                 fit = _preferred(mode)
@@ -924,6 +925,11 @@ def _noisy_errors(modes: list[_Mode], w: int, window: tuple[int, int, int], mode
                         _errors(hc, window[0] / fs, d["times"], fit.model[j]))
             del parts
     return errors, crossings
+
+
+def _decays_in(mode: _Mode, w: int) -> list[tuple[int, dict]]:
+    """The mode's decays (with their index) found in window ``w``."""
+    return [(j, d) for j, d in enumerate(mode.decays) if d["w"] == w]
 
 
 def _noisy_crossings(clean: np.ndarray, noisy: list[np.ndarray], frequency: float) -> np.ndarray:
