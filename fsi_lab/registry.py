@@ -428,7 +428,8 @@ def load_registry() -> Registry:
     seen: dict[str, metadata.EntryPoint] = {}
     # fsi-lab's own first, then the others by name: a plugin of another distribution that
     # takes a built-in's name is the one refused, whatever its entry point is called
-    for ep in sorted(installed.select(group=ENTRY_POINT_GROUP), key=lambda e: (_distribution(e)[0] != OWN, e.name)):
+    for ep in sorted(installed.select(group=ENTRY_POINT_GROUP),
+                     key=lambda e: (_distribution(e)[0] != OWN, e.name)):
         dist, version = _distribution(ep)
         first = seen.get(ep.name)
         if first is not None:
