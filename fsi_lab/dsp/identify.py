@@ -324,7 +324,7 @@ class Identification:
     Attributes
     ----------
     modes
-        One entry per mode, by decreasing energy of its free decays.
+        One entry per mode, by decreasing height of its peak in the free decays' spectrum.
     windows
         Index ranges ``[start, stop)`` of the free decays analysed.
     free_windows
@@ -1737,11 +1737,12 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             spectral_peak_hz=mode.frequency, band_hz=flat, quantity=follow, decays=decays,
             backbone=bb, laws=comparison, alpha=mode.alpha, noise_floor=mode.floor,
             correction=mode.correction, start_drift=mode.drift))
-    # By decreasing energy in the free decays (the sum of the squared extrema), as HVD ranks
-    # its components by RMS envelope: the mode that carries the record first.
-    ranked = sorted(range(len(results)),
-                    key=lambda i: -sum(float(d.amplitude @ d.amplitude)
-                                       for d in results[i].decays))
+    # By decreasing height of the mode's peak in the free decays' spectrum (of the record's
+    # own quantity): the mode that carries the record first, as the spectrum shows it. Not by
+    # the extrema kept: their number follows the frequency, and the start search (step 8)
+    # may leave a mode's largest cycles out.
+    height = dict(zip(cand_f.tolist(), cand_a.tolist()))
+    ranked = sorted(range(len(results)), key=lambda i: -height[results[i].spectral_peak_hz])
     # Every mode found has its own band (so none leaks into another's); those asked for are
     # reported: inside ``band``, the largest ``components``.
     if band_t is not None:

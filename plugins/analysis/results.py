@@ -157,7 +157,8 @@ class Spectrum(Result):
 _EDGE_MASK = {"bands": "1 outside the free part of every decay (excitation, build-ups): not used",
               "hvd": "1 where the sample is too close to a record end to be trusted (within 1 / "
                      "cutoff)"}
-_ORDER = {"bands": "components by decreasing energy of their free decays; row k = index k",
+_ORDER = {"bands": "components by decreasing height of their peak in the free decays' "
+                   "spectrum; row k = index k",
           "hvd": "components sorted by decreasing RMS envelope; row k = index k"}
 #: Said of every component of Feldman's HVD.
 HVD_FREQUENCY_WARNING = ("frequency_hz is HVD's envelope-weighted mean frequency, not the "

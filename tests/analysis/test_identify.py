@@ -295,6 +295,22 @@ def test_two_modes_an_octave_apart_are_found_kept_apart_and_identified():
     assert low.laws.preferred == "quadratic" and not low.warnings
 
 
+def test_modes_are_ranked_by_their_size_not_by_how_many_cycles_they_ring():
+    """A 10 Hz mode of 3 times the velocity of a 100 Hz one, which rings twice as long (ten
+    times as many extrema): the 10 Hz mode is the largest, first in the list and the one
+    ``components=1`` gives. (Ranked by the sum of its squared extrema, the 100 Hz mode came
+    first.)"""
+    m = WET_MASS
+    case = Case("ranked", (Mode(10.0, c_i=4.0 * m, x0=1e-3), Mode(100.0, c_i=2.0 * m, x0=3e-5)),
+                fs=2000.0, duration=4.0, noise=0.002)
+    record = trial(case, 0)
+    found = identify(record, case.fs)
+    assert [round(mode.frequency_hz) for mode in found.modes] == [10, 100]
+    assert found.modes[1].decays[0].amplitude.size > 10 * found.modes[0].decays[0].amplitude.size
+    (only,) = identify(record, case.fs, components=1).modes
+    assert only.frequency_hz == pytest.approx(10.0, rel=1e-3)
+
+
 def test_two_close_modes_are_kept_apart_and_a_miss_is_warned():
     """Modes at 17 and 22 Hz (ratio 1.3): the heavily damped first cycles of the lower one
     spread over both bands. Both are found; where C_i or C_f misses the targets (2 %, 5 %)
