@@ -1414,10 +1414,15 @@ def _off_peak(m: ModeIdentification) -> str:
     lo, hi = float(np.min(damped)) - tol, float(np.max(damped)) + tol
     if lo <= m.spectral_peak_hz <= hi:
         return ""
-    return (f"the damped natural frequency {m.damped_frequency_hz:.5g} Hz disagrees with the "
-            f"spectral peak the mode was found at ({m.spectral_peak_hz:.5g} Hz) by more than "
-            f"either's precision ({tol:.2g} Hz): something else in the mode's band (another "
-            "mode, a line, drift) pulls its zero crossings; the frequency is not to be trusted")
+    if a >= w0:     # the fit is an overdamped decay: it has no damped frequency to quote
+        found = (f"the fitted damping (a = {a:.3g} 1/s, at least 2 pi times the natural "
+                 f"frequency {m.frequency_hz:.5g} Hz) leaves no oscillation, and so misses")
+    else:
+        found = f"the damped natural frequency {float(np.min(damped)):.5g} Hz disagrees with"
+    return (f"{found} the spectral peak the mode was found at ({m.spectral_peak_hz:.5g} Hz) by "
+            f"more than either's precision ({tol:.2g} Hz): something else in the mode's band "
+            "(another mode, a line, drift) pulls its zero crossings; the frequency is not to "
+            "be trusted")
 
 
 def _warnings(m: ModeIdentification) -> list[str]:
@@ -1466,10 +1471,15 @@ def _warnings(m: ModeIdentification) -> list[str]:
     if m.start_drift.get("untested"):
         short = 2 * MIN_CYCLES + 2
         count = sum(d.amplitude.size < short for d in m.decays)
-        out.append(f"{count} of the {len(m.decays)} free decays are too short (fewer than "
-                   f"{short} extrema above the noise floor) to test whether their first cycles "
-                   "already follow the law: C_i and C_f assume they do, and rest on the few "
-                   "cycles of each decay")
+        if count:
+            out.append(f"{count} of the {len(m.decays)} free decays are too short (fewer than "
+                       f"{short} extrema above the noise floor) to test whether their first "
+                       "cycles already follow the law: C_i and C_f assume they do, and rest on "
+                       "the few cycles of each decay")
+        else:
+            out.append("whether the decays' first cycles already follow the law could not be "
+                       "tested (the law could not be refitted without them): C_i and C_f "
+                       "assume they do")
     start = max((m.start_drift.get(f"start_{name}", 1.0) for name in ("a", "beta")
                  if quad is not None and _relative_width(quad, name) > START_WARNING_WIDTH),
                 default=1.0)
