@@ -397,7 +397,11 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
             if later and max(later) > free:
                 free, lead = max(later), 0
         out.append((max(0, free - lead), free, stop))
-    out = [w for w in out if w[2] - w[0] >= MIN_WINDOW]
+    # A window must hold motion: the zero-phase low-pass rings ahead of a step (a noise-free
+    # record released from rest after exact zeros), and with no noise to hide it that ringing
+    # passes for a decay where the record itself is constant.
+    out = [w for w in out if w[2] - w[0] >= MIN_WINDOW
+           and float(np.ptp(x[w[0]:w[2]])) > 2.0 * resolution]
     # A window cut short by a late excitation end (a burst of random forcing split off as a
     # decay) holds no decay; it is left out when another holds MIN_CYCLES cycles (all short:
     # an impulse train too dense, which the candidates' notes then name).

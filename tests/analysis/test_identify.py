@@ -113,6 +113,21 @@ def test_a_lightly_damped_high_mode_gives_its_frequency_and_decay_rate_exactly()
     assert mode.frequency_hz == pytest.approx(f0, rel=1e-8)
 
 
+def test_a_noise_free_release_after_exact_zeros_is_identified():
+    """1 s of exact zeros, then the closed-form velocity of a 12 Hz viscous decay released at
+    0.08 m/s (a step from zero), no noise at all: one free decay, a within 1e-4. (The
+    low-pass that splits decays rang ahead of the step, and that ringing, under no noise,
+    was taken for a decay in the zeros: 'averaged_spectrum: signal is constant'.)"""
+    fs, f0, a = 5000.0, 12.0, 0.3
+    wd = math.sqrt((2 * math.pi * f0) ** 2 - a ** 2)
+    t = np.arange(int(6 * fs)) / fs
+    v = 0.08 * np.exp(-a * t) * (np.cos(wd * t) - a / wd * np.sin(wd * t))
+    found = identify(np.concatenate([np.zeros(int(fs)), v]), fs)
+    (mode,) = found.modes
+    assert len(found.windows) == 1 and found.windows[0][0] >= int(fs)
+    assert mode.laws.fits["viscous"].value("a") == pytest.approx(a, rel=1e-4)
+
+
 def test_law_fits_recover_their_parameters_and_aicc_picks_the_true_law():
     """Forty noisy extremum sequences per law (fixed seeds, noise 3e-4 of the first extremum):
     AICc prefers the true law in 85 % or more of them, and each parameter's 95 % interval
