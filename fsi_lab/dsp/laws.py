@@ -100,6 +100,14 @@ def _rk4(x, v, s, h, w0sq, alpha, a2, beta, gamma):
 
 
 @numba.njit(cache=True)
+def _rk4_turn(t):
+    """Real and imaginary parts of ``R(i t)``, what one Runge-Kutta step of ``w0 h = t`` does to
+    the undamped oscillator's complex amplitude."""
+    t2 = t * t
+    return 1.0 - 0.5 * t2 + t2 * t2 / 24.0, t - t2 * t / 6.0
+
+
+@numba.njit(cache=True)
 def _rk4_matched(w0sq, a2, h):
     """``(w0sq, a2)`` to integrate with so that the Runge-Kutta steps of length ``h`` (s; < 0
     backwards) turn and shrink a linear oscillator of ``w0sq`` (1/s^2) and ``a2`` (1/s) as the
@@ -115,20 +123,15 @@ def _rk4_matched(w0sq, a2, h):
     if theta <= 0.0:
         return w0sq, a2
     t = theta
-    re = 1.0
-    im = 0.0
     for _ in range(8):   # Newton on arg R(i t) = theta
+        re, im = _rk4_turn(t)
         t2 = t * t
-        re = 1.0 - 0.5 * t2 + t2 * t2 / 24.0
-        im = t - t2 * t / 6.0
         slope = (re * (1.0 - 0.5 * t2) - im * (-t + t2 * t / 6.0)) / (re * re + im * im)
         step = (math.atan2(im, re) - theta) / slope
         t -= step
         if abs(step) <= 1e-15 * theta:
             break
-    t2 = t * t
-    re = 1.0 - 0.5 * t2 + t2 * t2 / 24.0
-    im = t - t2 * t / 6.0
+    re, im = _rk4_turn(t)
     loss = -0.5 * math.log(re * re + im * im) / abs(h)   # amplitude decay rate of the steps, 1/s
     kappa = t / theta
     # forwards the steps add their loss to the damping, backwards they take it away
