@@ -7,6 +7,7 @@ Ground truth: the oscillators of ``validation.cases`` integrated by scipy's DOP8
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -371,6 +372,44 @@ def test_modes_are_ranked_by_their_size_not_by_how_many_cycles_they_ring():
     assert found.modes[1].decays[0].amplitude.size > 10 * found.modes[0].decays[0].amplitude.size
     (only,) = identify(record, case.fs, components=1).modes
     assert only.frequency_hz == pytest.approx(10.0, rel=1e-3)
+
+
+@pytest.mark.parametrize("second", [None, 75.0])
+def test_mains_hum_is_left_out_as_a_steady_line_not_listed_as_a_mode(second):
+    """50 Hz hum at 2 % of the record's largest sample on a release of the 17 Hz mode (alone,
+    and with a 75 Hz mode whose decay leaks into the hum's band): the hum does not decay, so
+    it is no mode; it is named in a note and keeps a band of its own, and the modes keep
+    their numbers (C_i within 2 %, C_f within 5 %). Before, it was listed as a mode at
+    49.9998 Hz, or at 50.7 Hz with C_f = -1400 once the 75 Hz decay pulled it."""
+    modes = (Mode(WET_F, c_f=WET_C_F, x0=1e-3),)
+    if second:
+        modes += (Mode(second, c_f=WET_C_F, x0=3e-5),)
+    case = Case("hum", modes, fs=5000.0, duration=4.0, noise=0.005)
+    record = trial(case, 1)
+    t = np.arange(record.size) / case.fs
+    record = record + 0.02 * np.max(np.abs(record)) * np.sin(2 * math.pi * 50.0 * t + 0.3)
+    found = identify(record, case.fs)
+    expected = [WET_F] + ([second] if second else [])
+    assert sorted(m.frequency_hz for m in found.modes) == pytest.approx(expected, rel=1e-3)
+    assert any(re.search(r"peak at (49\.9\d*|50(\.0\d*)?) Hz does not decay", n)
+               and "steady line" in n for n in found.notes), found.notes
+    assert np.min(np.abs(found.bands.centres - 50.0)) < 0.1
+    low = min(found.modes, key=lambda m: m.frequency_hz)
+    assert 2 * WET_MASS * low.quadratic.value("a") == pytest.approx(WET_C_I, rel=0.02)
+    assert WET_MASS * low.quadratic.value("beta") == pytest.approx(WET_C_F, rel=0.05)
+
+
+def test_a_lightly_damped_mode_that_still_decays_is_not_taken_for_a_line():
+    """A 200 Hz mode with a damping ratio of 6e-4 loses a quarter of its amplitude over the
+    two thirds of a 1.5 s record between the steady-line test's thirds: a mode, identified."""
+    zeta = 6e-4
+    case = Case("light", (Mode(200.0, c_i=2 * zeta * 2 * math.pi * 200.0 * WET_MASS,
+                               x0=1e-5),), fs=5000.0, duration=1.5, noise=0.005)
+    found = identify(trial(case, 0), case.fs)
+    (mode,) = found.modes
+    assert mode.frequency_hz == pytest.approx(200.0, rel=1e-4)
+    assert mode.laws.fits["viscous"].value("a") == pytest.approx(zeta * 2 * math.pi * 200.0,
+                                                                  rel=0.05)
 
 
 def test_two_close_modes_are_kept_apart_and_a_miss_is_warned():
