@@ -497,13 +497,15 @@ def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
 
 
 def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
-                components: Any, band: tuple[float, float] | None, f_dom: float
+                components: Any, band: tuple[float, float] | None, f_dom: float,
+                sigma: float
                 ) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray, np.ndarray]:
     """Candidate mode frequencies (Hz) and spectral amplitudes from the windows' averaged
     spectrum, notes on the peaks left out, the frequencies (Hz) of those left out that
     still stand out of the spectrum as modes do (undersampled, too slow for the windows, or
     steady lines): they keep bands of their own (guards), so no mode's band passes them; and
-    the frequencies (Hz) of the steady lines among them (:func:`_steady_share`)."""
+    the frequencies (Hz) of the steady lines among them (:func:`_steady_share`; ``sigma``: the
+    record's white-noise RMS)."""
     notes = []
     guards = []
     steady = []
@@ -543,7 +545,7 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
             notes.append(f"the spectral peak at {fi:.4g} Hz completes fewer than {MIN_CYCLES} "
                          f"cycles in the longest free decay ({longest:.3g} s): left out"
                          + (f" ({_spacing_advice(fi)})" if len(segs) > 1 else ""))
-        elif (share := _steady_share(x, fs, segs, float(fi))) >= STEADY_SHARE:
+        elif (share := _steady_share(x, fs, segs, float(fi), sigma)) >= STEADY_SHARE:
             keep[i] = False
             guards.append(fi)
             steady.append(fi)
@@ -573,17 +575,21 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
 
 
 def _steady_share(x: np.ndarray, fs: float, segments: list[tuple[int, int]],
-                  frequency: float) -> float:
+                  frequency: float, sigma: float) -> float:
     """The amplitude at ``frequency`` (Hz) over the last third of the ``segments`` (the free
     decays, sample ranges) relative to that over their first third (Hann-windowed, the
     segments' powers summed): near 0 for a mode, whose free decay falls, about 1 for a steady
-    line. 0 when no segment's third holds :data:`STEADY_CYCLES` cycles (no test)."""
-    early = late = 0.0
+    line. 0 (no test) when no segment's third holds :data:`STEADY_CYCLES` cycles, or when the
+    last thirds' amplitude is not :data:`NOISE_MARGIN` times that of white noise of RMS
+    ``sigma`` (a component gone within the first cycles, which the taper of the first third
+    hides as well: a Duffing mode's third harmonic, swept down as it decays)."""
+    early = late = noise = 0.0
     for a, c in segments:
         third = (c - a) // 3
         if third * frequency < STEADY_CYCLES * fs:
             continue
         w = np.hanning(third)
+        noise += sigma * sigma * float(np.dot(w, w))
         for part, target in ((x[a:a + third], "early"), (x[c - third:c], "late")):
             phase = np.exp(-2j * math.pi * frequency / fs * np.arange(third))
             power = abs(complex(np.dot((part - part.mean()) * w, phase))) ** 2
@@ -591,7 +597,9 @@ def _steady_share(x: np.ndarray, fs: float, segments: list[tuple[int, int]],
                 early += power
             else:
                 late += power
-    return math.sqrt(late / early) if early > 0.0 else 0.0
+    if early <= 0.0 or late < NOISE_MARGIN ** 2 * noise:
+        return 0.0
+    return math.sqrt(late / early)
 
 
 def _without_lines(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
@@ -1700,7 +1708,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         windows = _unforced(windows, reference, fs, f_dom)
     cand_f, cand_a, notes, guards, steady = _candidates(
         record, fs, windows, int(components) if components != "auto" else "auto", band_t,
-        f_dom)
+        f_dom, sigma)
     if steady.size:
         record = _without_lines(record, fs, windows, steady)
     if len(windows) == 1:

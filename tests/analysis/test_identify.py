@@ -399,6 +399,19 @@ def test_mains_hum_is_left_out_as_a_steady_line_not_listed_as_a_mode(second):
     assert WET_MASS * low.quadratic.value("beta") == pytest.approx(WET_C_F, rel=0.05)
 
 
+def test_a_decaying_harmonic_is_not_taken_for_a_steady_line():
+    """A hardening Duffing mode's third harmonic sweeps down from 56 Hz within its first
+    cycles: the steady-line test's tapered thirds see only noise at 56 Hz, early and late
+    (a ratio near 1). It is not called a line, since it does not stand out of the noise in
+    the last third."""
+    w = 2 * math.pi * WET_F
+    case = Case("hard", (Mode(WET_F, alpha=0.4 * w * w / 1e-6, x0=1e-3),), duration=4.0,
+                noise=0.01)
+    found = identify(trial(case, 0), case.fs)
+    assert not any("does not decay" in n for n in found.notes), found.notes
+    assert [round(m.frequency_hz) for m in found.modes][:1] == [17]
+
+
 def test_a_lightly_damped_mode_that_still_decays_is_not_taken_for_a_line():
     """A 200 Hz mode with a damping ratio of 6e-4 loses a quarter of its amplitude over the
     two thirds of a 1.5 s record between the steady-line test's thirds: a mode, identified."""
