@@ -100,6 +100,10 @@ def switch_message(context: AnalysisContext, k: int, pair: tuple[float, float],
             + (f" (e.g. {hint})" if hint else ""))
 
 
+#: Modes of the motion relative to the base are sought from this share of the channel's
+#: lowest spectral peak up (the base's integration is high-passed at half of it).
+RELATIVE_FLOOR = 0.8
+
 #: The quantity :func:`fsi_lab.dsp.identify.identify` analyses for each channel quantity (a
 #: voltage from an unknown sensor is taken as the coordinate itself).
 _IDENTIFY_AS = {"velocity": "velocity", "displacement": "displacement",
@@ -121,11 +125,15 @@ def _run_bands(context: AnalysisContext, params: dict[str, Any]) -> Components:
     quantity = _IDENTIFY_AS.get(ch.quantity, "displacement")
     starts = [] if params["start_s"] is None else [params["start_s"]]
     quiet = base_quiet(context)
+    # The base motion is integrated with a high-pass at half the channel's lowest spectral
+    # peak (relative_signal): its transient after each excitation rings near that corner in
+    # the relative motion alone, a decay the channel itself does not show.
+    lowest = RELATIVE_FLOOR * lowest_peak(context, "hvd") if relative_to else None
     with guarded("hvd", context):
         ident = identify(data, fs, quantity=quantity,
                          components=params["components"] or "auto", band=params["band_hz"],
                          decay_starts=(starts + list(quiet)) or None,
-                         reference=base_on_channel_clock(context))
+                         reference=base_on_channel_clock(context), min_frequency=lowest)
         res = band_components(data, fs, ident, integrate=int(quantity == "acceleration"))
     return Components(
         decomposition=res, method="bands",
