@@ -1739,6 +1739,11 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     for law in laws:
         if law not in LAWS:
             raise fail(func, f"law {law!r} is unknown; expected some of {', '.join(LAWS)}")
+    if min_frequency is not None and not (isinstance(min_frequency, (int, float, np.number))
+                                          and math.isfinite(min_frequency)
+                                          and min_frequency >= 0.0):
+        raise fail(func, f"min_frequency = {min_frequency!r}; expected None or a frequency "
+                         "in Hz, >= 0")
     if components != "auto" and not (isinstance(components, (int, np.integer))
                                      and not isinstance(components, bool) and components >= 1):
         raise fail(func, f"components = {components!r}; expected 'auto' or an integer >= 1")
@@ -1956,8 +1961,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     if components != "auto":
         ranked = ranked[:int(components)]
     if not ranked:
-        raise fail(func, f"no mode with a free decay above the noise inside {band_t[0]:g} to "
-                         f"{band_t[1]:g} Hz; " + "; ".join(notes))
+        low = max(band_t[0] if band_t else 0.0, min_frequency or 0.0)
+        high = f" to {band_t[1]:g} Hz" if band_t else " Hz up"
+        raise fail(func, f"no mode with a free decay above the noise from {low:g}{high}; "
+                         + "; ".join(notes))
     final = []
     for index, i in enumerate(ranked):
         m = results[i]

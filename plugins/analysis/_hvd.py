@@ -125,11 +125,12 @@ def _run_bands(context: AnalysisContext, params: dict[str, Any]) -> Components:
     quantity = _IDENTIFY_AS.get(ch.quantity, "displacement")
     starts = [] if params["start_s"] is None else [params["start_s"]]
     quiet = base_quiet(context)
-    # The base motion is integrated with a high-pass at half the channel's lowest spectral
-    # peak (relative_signal): its transient after each excitation rings near that corner in
-    # the relative motion alone, a decay the channel itself does not show.
-    lowest = RELATIVE_FLOOR * lowest_peak(context, "hvd") if relative_to else None
     with guarded("hvd", context):
+        # The base motion is integrated with a high-pass at half the channel's lowest
+        # spectral peak (relative_signal): its transient after each excitation rings near
+        # that corner in the relative motion alone, a decay the channel itself does not show.
+        lowest = RELATIVE_FLOOR * lowest_peak(context, "hvd") \
+            if relative_to and ch.quantity != "acceleration" else None
         ident = identify(data, fs, quantity=quantity,
                          components=params["components"] or "auto", band=params["band_hz"],
                          decay_starts=(starts + list(quiet)) or None,

@@ -419,6 +419,18 @@ def test_modes_below_min_frequency_are_analysed_but_not_reported():
     assert limited.modes[0].quadratic.params == pytest.approx(high.quadratic.params, rel=1e-9)
 
 
+def test_min_frequency_above_every_mode_is_refused_naming_it():
+    """Every mode below ``min_frequency``: refused with an AnalysisError naming the limit;
+    a negative or NaN one is refused as bad input."""
+    case = release(noise=0.005, fs=2000.0, duration=3.0)
+    record = trial(case, 0)
+    with pytest.raises(AnalysisError, match=r"from 100 Hz up"):
+        identify(record, case.fs, min_frequency=100.0)
+    for bad in (-1.0, float("nan")):
+        with pytest.raises(AnalysisError, match="min_frequency"):
+            identify(record, case.fs, min_frequency=bad)
+
+
 def test_a_decaying_harmonic_is_not_taken_for_a_steady_line():
     """A hardening Duffing mode's third harmonic sweeps down from 56 Hz within its first
     cycles: the steady-line test's tapered thirds see only noise at 56 Hz, early and late
