@@ -119,9 +119,9 @@ SPECTRUM_BINS = 32
 MIN_WINDOW = 32
 #: A band's noise is measured on this many of its periods or more after its decays (the
 #: second half of what follows them), and counts when it exceeds the white noise's share in
-#: that band by this factor (an RMS over 8 periods of band noise errs by about 30 %;
-#: :func:`_band_noise_excess`).
-TAIL_PERIODS, TAIL_EXCESS = 8.0, 2.0
+#: that band by this factor (an RMS over 4 periods of band noise errs by about 40 %; the
+#: phantoms this catches show 4 to 20 times the white share: :func:`_band_noise_excess`).
+TAIL_PERIODS, TAIL_EXCESS = 4.0, 2.0
 #: A mode whose damping terms are jointly within DECAY_Z standard errors of 0 (their Wald
 #: statistic below DECAY_Z^2 per term: no decay shown) and whose extrema scatter about its
 #: law more than SCATTER_EXCESS times its noise (RMS) is noise, not a mode
@@ -866,7 +866,8 @@ class _Mode:
 
 def _band_noise_excess(mode: _Mode, fs: float) -> float | None:
     """How many times the white noise's share its band's own noise is, for a mode none of
-    whose decays keeps :data:`MIN_CYCLES` cycles above :data:`FIRST_FLOOR` times that noise;
+    whose decays keeps :data:`MIN_CYCLES` cycles above :data:`FIRST_FLOOR` times that noise
+    and rises above :data:`FLOOR` times it;
     None when one does, or when the band's noise is not measured (fewer than
     :data:`TAIL_PERIODS` periods of the band after its decays, ``tail_power``) or within
     :data:`TAIL_EXCESS` of the white share. The record's noise is measured as white; in a band
@@ -880,10 +881,14 @@ def _band_noise_excess(mode: _Mode, fs: float) -> float | None:
     ratio = math.sqrt(mode.tail_power / mode.tail_samples) / max(mode.noise, 1e-300)
     if ratio <= TAIL_EXCESS:
         return None
+    band_noise = ratio * mode.noise
     for d in mode.decays:
-        above = np.abs(d["values"]) >= FIRST_FLOOR * ratio * mode.noise
+        size = np.abs(d["values"])
+        above = size >= FIRST_FLOOR * band_noise
         run = int(np.argmin(above)) if not above.all() else above.size
-        if run >= 2 * MIN_CYCLES:
+        # Band noise over a few seconds reaches 3 times its RMS, a decay's start is taken at
+        # its largest excursion, and then it "decays": a free decay rises above 5 times it.
+        if run >= 2 * MIN_CYCLES and float(size.max()) >= FLOOR * band_noise:
             return None
     return ratio
 
