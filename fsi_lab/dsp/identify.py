@@ -20,7 +20,8 @@ number. The steps:
    cannot resolve (fewer than :data:`MIN_SAMPLES_PER_CYCLE` samples per cycle) or the windows
    cannot hold (fewer than :data:`MIN_CYCLES` cycles), and steady lines (mains hum: a peak
    that keeps :data:`STEADY_SHARE` of its amplitude from the decays' first third to their
-   last), are left out with a note, each keeping a band of its own. A candidate
+   last and is there before the excitation), are left out with a note, each keeping a band
+   of its own. A candidate
    becomes a mode when one of its decays keeps :data:`MIN_CYCLES` cycles above the noise floor:
    a spectral bump without a free decay is no mode (no phantom components).
 3. **Separation.** Each window is split into one band per mode (:mod:`.bands`, a partition of
@@ -127,12 +128,15 @@ TAIL_PERIODS, TAIL_EXCESS = 4.0, 2.0
 #: law more than SCATTER_EXCESS times its noise (RMS) is noise, not a mode
 #: (:func:`_scatter_without_decay`).
 DECAY_Z, SCATTER_EXCESS = 2.0, 2.0
-#: A spectral peak whose amplitude over the last third of the free decays is this share or
-#: more of that over their first third does not decay: a steady line (mains hum, a machine
-#: nearby; about 1), not a mode (:func:`_steady_share`). A mode that loses less than a tenth
-#: over two thirds of its decays (a damping ratio below 2.5e-4 at 200 Hz in 0.5 s decays)
-#: holds too little decay for its damping to be measured.
-STEADY_SHARE = 0.9
+#: A spectral peak whose amplitude over the last third of the free decays is STEADY_SHARE or
+#: more of that over their first third, and that is there before the record's excitation
+#: at BEFORE_SHARE of that amplitude or more, is a steady line (mains hum, a machine nearby),
+#: not a mode (:func:`_steady_line`). A record without STEADY_CYCLES cycles before its
+#: excitation cannot show that: its lines must keep STRICT_SHARE (a lightly damped mode,
+#: 20 Hz at a damping ratio of 3e-4, keeps 95 % over two thirds of a 2 s record).
+STEADY_SHARE, BEFORE_SHARE, STRICT_SHARE = 0.9, 0.5, 0.99
+#: The record's excitation starts where it first reaches this share of its largest sample.
+ONSET_LEVEL = 0.2
 #: Cycles each third of a window must hold for that test (its Hann window's selectivity).
 STEADY_CYCLES = 6
 #: Relative smoothing of the spectrum before the peak search: peaks closer merge.
@@ -514,7 +518,7 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
     spectrum, notes on the peaks left out, the frequencies (Hz) of those left out that
     still stand out of the spectrum as modes do (undersampled, too slow for the windows, or
     steady lines): they keep bands of their own (guards), so no mode's band passes them; and
-    the frequencies (Hz) of the steady lines among them (:func:`_steady_share`; ``sigma``: the
+    the frequencies (Hz) of the steady lines among them (:func:`_steady_line`; ``sigma``: the
     record's white-noise RMS)."""
     notes = []
     guards = []
@@ -555,17 +559,17 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
             notes.append(f"the spectral peak at {fi:.4g} Hz completes fewer than {MIN_CYCLES} "
                          f"cycles in the longest free decay ({longest:.3g} s): left out"
                          + (f" ({_spacing_advice(fi)})" if len(segs) > 1 else ""))
-        elif (share := _steady_share(x, fs, segs, float(fi), sigma)) >= STEADY_SHARE:
+        elif (share := _steady_line(x, fs, segs, float(fi), sigma, f_dom)) is not None:
             keep[i] = False
             guards.append(fi)
             steady.append(fi)
             notes.append(f"the spectral peak at {fi:.4g} Hz does not decay: over the last "
                          f"third of the free decays it keeps {100 * share:.0f} % of its "
-                         f"amplitude over their first third (a mode falls below "
-                         f"{100 * STEADY_SHARE:.0f} %): a steady line (mains hum, a machine "
-                         "nearby), or a mode too lightly damped for these decays to measure; "
-                         "left out, and subtracted from each free decay (fitted on its "
-                         "second half)")
+                         "amplitude over their first third"
+                         + (", and it is there before the excitation" if share < STRICT_SHARE
+                            else "") + ": a steady line (mains hum, a machine nearby); left "
+                         "out, and subtracted from each free decay (fitted on its second "
+                         "half)")
     f, a = f[keep], a[keep]
     if f_dom * longest < MIN_CYCLES:
         notes.append(f"the free decays last at most {longest:.3g} s, fewer than {MIN_CYCLES} "
@@ -584,22 +588,48 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
     return f, a, notes, np.array(guards, dtype=np.float64), np.array(steady, dtype=np.float64)
 
 
+def _steady_line(x: np.ndarray, fs: float, segments: list[tuple[int, int]], frequency: float,
+                 sigma: float, f_dom: float) -> float | None:
+    """The share of :func:`_steady_share` when the peak at ``frequency`` (Hz) is a steady line
+    (see :data:`STEADY_SHARE`), None when it is not. Before the excitation: the record up to
+    two periods of its dominant oscillation (``f_dom``, Hz) before it first reaches
+    :data:`ONSET_LEVEL` of its largest sample; a mode has not rung there, a line has."""
+    share, late = _steady_share(x, fs, segments, frequency, sigma)
+    if share < STEADY_SHARE:
+        return None
+    onset = int(np.argmax(np.abs(x) >= ONSET_LEVEL * float(np.max(np.abs(x)))))
+    before = x[:max(0, onset - int(2.0 * fs / f_dom))]
+    if before.size * frequency < STEADY_CYCLES * fs:
+        return share if share >= STRICT_SHARE else None
+    return share if _amplitude_at(before, fs, frequency) >= BEFORE_SHARE * late else None
+
+
+def _amplitude_at(part: np.ndarray, fs: float, frequency: float) -> float:
+    """Amplitude of a sinusoid at ``frequency`` (Hz) in ``part`` (Hann-windowed DFT, its
+    mean removed; unit of ``part``)."""
+    w = np.hanning(part.size)
+    phase = np.exp(-2j * math.pi * frequency / fs * np.arange(part.size))
+    return 2.0 * abs(complex(np.dot((part - part.mean()) * w, phase))) / float(np.sum(w))
+
+
 def _steady_share(x: np.ndarray, fs: float, segments: list[tuple[int, int]],
-                  frequency: float, sigma: float) -> float:
+                  frequency: float, sigma: float) -> tuple[float, float]:
     """The amplitude at ``frequency`` (Hz) over the last third of the ``segments`` (the free
     decays, sample ranges) relative to that over their first third (Hann-windowed, the
     segments' powers summed): near 0 for a mode, whose free decay falls, about 1 for a steady
     line. 0 (no test) when no segment's third holds :data:`STEADY_CYCLES` cycles, or when the
     last thirds' amplitude is not :data:`NOISE_MARGIN` times that of white noise of RMS
     ``sigma`` (a component gone within the first cycles, which the taper of the first third
-    hides as well: a Duffing mode's third harmonic, swept down as it decays)."""
-    early = late = noise = 0.0
+    hides as well: a Duffing mode's third harmonic, swept down as it decays). Also returns
+    the amplitude over the last thirds (RMS over the segments, unit of ``x``)."""
+    early = late = noise = gain = 0.0
     for a, c in segments:
         third = (c - a) // 3
         if third * frequency < STEADY_CYCLES * fs:
             continue
         w = np.hanning(third)
         noise += sigma * sigma * float(np.dot(w, w))
+        gain += (0.5 * float(np.sum(w))) ** 2
         for part, target in ((x[a:a + third], "early"), (x[c - third:c], "late")):
             phase = np.exp(-2j * math.pi * frequency / fs * np.arange(third))
             power = abs(complex(np.dot((part - part.mean()) * w, phase))) ** 2
@@ -608,8 +638,8 @@ def _steady_share(x: np.ndarray, fs: float, segments: list[tuple[int, int]],
             else:
                 late += power
     if early <= 0.0 or late < NOISE_MARGIN ** 2 * noise:
-        return 0.0
-    return math.sqrt(late / early)
+        return 0.0, 0.0
+    return math.sqrt(late / early), math.sqrt(late / gain)
 
 
 def _without_lines(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
