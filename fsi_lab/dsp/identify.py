@@ -101,6 +101,10 @@ COMB_LINES, COMB_TOLERANCE = 4, 0.02
 #: A decay whose base (the reference) moves at more than this share of its largest envelope
 #: (the median over the decay) is forced, not free.
 FORCED_LEVEL = 0.02
+#: A base whose largest envelope stands PULSE_MARGIN times above its white noise (RMS) was
+#: excited by something that ends; it is still where its envelope's median is no more than
+#: NOISE_ENVELOPE times that noise (white noise's envelope has a median of 1.18 times it).
+PULSE_MARGIN, NOISE_ENVELOPE = 10.0, 1.5
 #: The decays are split on the record low-passed at this multiple of its dominant frequency.
 SPLIT_BAND = 8.0
 #: Spectral peaks below this fraction of the largest are not candidate modes.
@@ -467,9 +471,13 @@ def _spacing_advice(frequency: float) -> str:
 def _unforced(windows: list[tuple[int, int, int]], reference: np.ndarray, fs: float,
               f_dom: float) -> list[tuple[int, int, int]]:
     """The windows whose base (``reference``, the base acceleration) is still while they last:
-    the median of its envelope over the free part below :data:`FORCED_LEVEL` of its largest.
-    Refuses the record when none is: a base that keeps moving (random or continuous
-    excitation) forces the structure throughout, and no decay is free."""
+    the median of its envelope over the free part below :data:`FORCED_LEVEL` of its largest,
+    or - when its largest stands :data:`PULSE_MARGIN` times above its own white noise (an
+    excitation that ends; random forcing reaches 4 to 5 times its RMS) - no more than
+    :data:`NOISE_ENVELOPE` times that noise (the accelerometer's noise alone: at 3 % of a
+    weak pulse's peak, a still base read as still moving). Refuses the record when none is: a
+    base that keeps moving (random or continuous excitation) forces the structure
+    throughout, and no decay is free."""
     from scipy.signal import hilbert
 
     ref = reference - float(np.median(reference))
@@ -477,16 +485,23 @@ def _unforced(windows: list[tuple[int, int, int]], reference: np.ndarray, fs: fl
     top = float(np.max(env))
     if top <= 0.0:
         return windows
-    level = [float(np.median(env[free:stop])) / top for _, free, stop in windows]
-    kept = [w for w, v in zip(windows, level) if v < FORCED_LEVEL]
+    noise = _noise_rms(ref, fs, np.array([f_dom]))
+    still = FORCED_LEVEL * top
+    if top >= PULSE_MARGIN * noise:
+        still = max(still, NOISE_ENVELOPE * noise)
+    level = [float(np.median(env[free:stop])) for _, free, stop in windows]
+    kept = [w for w, v in zip(windows, level) if v < still]
     if kept:
         return kept
     raise fail("identify", f"the base (the reference channel) keeps moving after every "
-                           f"excitation: its envelope stays at {100 * min(level):.0f} % of its "
-                           f"largest or more over each decay (a free decay needs it below "
-                           f"{100 * FORCED_LEVEL:.0f} %): the record holds no free decay (a "
-                           "random or continuous excitation), and C_i and C_f need free decays; "
-                           "end the excitation well before the record ends")
+                           f"excitation: its envelope stays at {100 * min(level) / top:.0f} % "
+                           f"of its largest or more over each decay, "
+                           f"{min(level) / max(noise, 1e-300):.1f} times its own noise (a free "
+                           f"decay needs it below {100 * FORCED_LEVEL:.0f} % or, after a "
+                           f"pulse, below {NOISE_ENVELOPE:g} times that noise): the record "
+                           "holds no free decay (a random or continuous excitation), and C_i "
+                           "and C_f need free decays; end the excitation well before the "
+                           "record ends")
 
 
 def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
