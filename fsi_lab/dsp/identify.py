@@ -313,7 +313,9 @@ class ModeIdentification:
         were widened by for the start's sensitivity (:func:`_start_sensitivity`);
         ``noise_a``, ``noise_beta``: those for the noise's spread through the filters'
         padding (:func:`_noise_spread`); ``residual_rho``: the lag-1 correlation of the
-        preferred law's whitened residuals (:func:`_residual_correlation`).
+        preferred law's whitened residuals (:func:`_residual_correlation`); ``band_noise``:
+        the band's noise measured after its decays over the white noise's share in it, where
+        measured (:func:`_band_noise_ratio`).
     warnings
         Sentences on how far to trust the numbers; empty when every check passed.
     """
@@ -610,7 +612,7 @@ def _steady_line(x: np.ndarray, fs: float, segments: list[tuple[int, int]], freq
     two periods of its dominant oscillation (``f_dom``, Hz) before it first reaches
     :data:`ONSET_LEVEL` of its largest sample; a mode has not rung there, a line has."""
     share, late = _steady_share(x, fs, segments, frequency, sigma)
-    if share < STEADY_SHARE:
+    if not STEADY_SHARE <= share <= 1.0 / STEADY_SHARE:     # falls, or grows: no line
         return None
     onset = int(np.argmax(np.abs(x) >= ONSET_LEVEL * float(np.max(np.abs(x)))))
     before = x[:max(0, onset - int(2.0 * fs / f_dom))]
@@ -909,6 +911,34 @@ class _Mode:
     tail_samples: int = 0
 
 
+def _noise_before(modes: list[_Mode], record: np.ndarray, fs: float, bands: ModeBands,
+                  f_dom: float, integrate: bool) -> None:
+    """Each mode's band of the record before its excitation (up to two periods of ``f_dom``,
+    Hz, before it first reaches :data:`ONSET_LEVEL` of its largest sample), added to the
+    noise measured after its decays (``tail_power``): the band's own noise, measured where no
+    mode rings. A band whose noise is coloured (a motion relative to a base whose
+    accelerometer's noise grows at low frequencies) holds it above its white floor through
+    the whole decay, and nothing is measured after it."""
+    onset = int(np.argmax(np.abs(record) >= ONSET_LEVEL * float(np.max(np.abs(record)))))
+    end = onset - int(2.0 * fs / f_dom)
+    if end < MIN_WINDOW:
+        return
+    parts = split(record[:end], fs, bands, integrate=integrate)
+    for mode in modes:
+        before = parts[mode.band]
+        mode.tail_power += float(np.dot(before, before))
+        mode.tail_samples += before.size
+
+
+def _band_noise_ratio(mode: _Mode, fs: float) -> float | None:
+    """A mode's band noise (RMS, measured before the excitation and after its decays) over
+    the white noise's share in its band, or None with fewer than :data:`TAIL_PERIODS`
+    periods to measure it on."""
+    if mode.tail_samples * mode.frequency < TAIL_PERIODS * fs:
+        return None
+    return math.sqrt(mode.tail_power / mode.tail_samples) / max(mode.noise, 1e-300)
+
+
 def _band_noise_excess(mode: _Mode, fs: float) -> float | None:
     """How many times the white noise's share its band's own noise is, for a mode none of
     whose decays keeps :data:`MIN_CYCLES` cycles above :data:`FIRST_FLOOR` times that noise
@@ -921,10 +951,8 @@ def _band_noise_excess(mode: _Mode, fs: float) -> float | None:
     the wet bench driven at 0.02 V s. The floors of the modes kept are not raised (the 17 Hz
     mode's band there holds 2 to 3 times the white noise, and its C_f erred twice as much
     with a floor raised as much): their fits weigh the extrema by the scatter they show."""
-    if mode.tail_samples * mode.frequency < TAIL_PERIODS * fs:
-        return None
-    ratio = math.sqrt(mode.tail_power / mode.tail_samples) / max(mode.noise, 1e-300)
-    if ratio <= TAIL_EXCESS:
+    ratio = _band_noise_ratio(mode, fs)
+    if ratio is None or ratio <= TAIL_EXCESS:
         return None
     band_noise = ratio * mode.noise
     for d in mode.decays:
@@ -1651,6 +1679,14 @@ def _warnings(m: ModeIdentification) -> list[str]:
             elif hi - lo > 2.0 * POOR_PRECISION * value:
                 out.append(f"{label} is poorly determined: its 95 % interval is "
                            f"+-{50.0 * (hi - lo) / value:.0f} % of the value")
+    coloured = m.start_drift.get("band_noise", 0.0)
+    if coloured > TAIL_EXCESS:
+        out.append(f"the noise in this mode's band is {coloured:.1f} times the record's white "
+                   "noise there (measured before the excitation and after its decays: noise that "
+                   "is not white, as in a motion relative to a base whose accelerometer noise "
+                   "is integrated): the "
+                   "intervals take its size, not how it correlates from cycle to cycle, and "
+                   "may be too narrow")
     low, high = m.band_hz
     if not low <= m.frequency_hz <= high:
         out.append(f"the natural frequency {m.frequency_hz:.4g} Hz lies outside the mode's band "
@@ -1874,6 +1910,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     # Steps 3 and 4: extrema of each mode in each window, from where the mode is free (its
     # band of the base acceleration has calmed down too, when the reference is given).
     base_free = _band_quiet(reference, fs, bands) if reference is not None else None
+    _noise_before(modes, record, fs, bands, f_dom, integrate)
     for w, (start, free, stop) in enumerate(windows):
         if stop - start < MIN_WINDOW:         # (a short window at a reduced rate)
             continue
@@ -1909,9 +1946,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             dropped.append(m)
             notes.append(f"the spectral peak at {m.frequency:.4g} Hz has no free decay of "
                          f"{MIN_CYCLES} cycles above its band's own noise, {excess:.1f} times "
-                         "the record's white noise there (measured after the decays: noise "
-                         "that is not white, as in a motion relative to the base): not a mode "
-                         "of the record")
+                         "the record's white noise there (measured before the excitation and "
+                         "after the decays: noise that is not white, as in a motion relative to "
+                         "the base): not a mode of the record")
             m.decays = []
     modes = [m for m in modes if m.decays]
     if not modes:
@@ -1974,6 +2011,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         mode.drift = _stable_start(mode, follow, laws)
         mode.drift.update(_one_law(mode, follow))
         mode.drift.update(_noise_spread(mode))
+        if (ratio := _band_noise_ratio(mode, fs)) is not None:
+            mode.drift["band_noise"] = ratio
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])
