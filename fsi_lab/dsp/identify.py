@@ -923,7 +923,11 @@ def _noise_before(modes: list[_Mode], record: np.ndarray, fs: float, bands: Mode
     end = onset - int(2.0 * fs / f_dom)
     if end < MIN_WINDOW:
         return
-    parts = split(record[:end], fs, bands, integrate=integrate)
+    from scipy.signal import detrend
+
+    # Its own offset and trend off: the record's mean is the whole record's, and a drifting
+    # sensor's slope is no noise of any band.
+    parts = split(detrend(record[:end]), fs, bands, integrate=integrate)
     for mode in modes:
         before = parts[mode.band]
         mode.tail_power += float(np.dot(before, before))
@@ -1925,12 +1929,15 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             t, v, c = _extrema(parts[mode.band], fs, mode.frequency, 0, first - start,
                                max(FIRST_FLOOR / FLOOR * mode.floor, resolution))
             # The band after the decay has fallen under the floor: its second half (the
-            # decay's remainder far below it) measures the band's own noise.
+            # decay's remainder far below it) measures the band's own noise, when it holds
+            # half the periods that measure needs (a decay cut by the window's end leaves a
+            # few samples of itself and of the band filters' end).
             after = int(math.ceil(t[-1] * fs)) if t.size else max(first - start, 0)
             rest = parts[mode.band][after:]
             rest = rest[rest.size // 2:]
-            mode.tail_power += float(np.dot(rest, rest))
-            mode.tail_samples += rest.size
+            if rest.size * mode.frequency >= 0.5 * TAIL_PERIODS * fs:
+                mode.tail_power += float(np.dot(rest, rest))
+                mode.tail_samples += rest.size
             t = t + start / fs
             c = c + start / fs
             if t.size >= 2 * MIN_CYCLES:
