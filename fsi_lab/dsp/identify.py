@@ -1688,7 +1688,8 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.append(f"the noise in this mode's band is {coloured:.1f} times the record's white "
                    "noise there (measured before the excitation and after its decays: noise that "
                    "is not white, as in a motion relative to a base whose accelerometer noise "
-                   "is integrated): the "
+                   "is integrated, or a line such as mains hum too close to the mode to be "
+                   "told apart): the "
                    "intervals take its size, not how it correlates from cycle to cycle, and "
                    "may be too narrow")
     low, high = m.band_hz
