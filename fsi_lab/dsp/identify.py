@@ -608,17 +608,23 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
 def _steady_line(x: np.ndarray, fs: float, segments: list[tuple[int, int]], frequency: float,
                  sigma: float, f_dom: float) -> float | None:
     """The share of :func:`_steady_share` when the peak at ``frequency`` (Hz) is a steady line
-    (see :data:`STEADY_SHARE`), None when it is not. Before the excitation: the record up to
-    two periods of its dominant oscillation (``f_dom``, Hz) before it first reaches
-    :data:`ONSET_LEVEL` of its largest sample; a mode has not rung there, a line has."""
+    (see :data:`STEADY_SHARE`), None when it is not. Before the excitation
+    (:func:`_before_excitation`, ``f_dom`` the dominant frequency, Hz) a mode has not rung, a
+    line has."""
     share, late = _steady_share(x, fs, segments, frequency, sigma)
     if not STEADY_SHARE <= share <= 1.0 / STEADY_SHARE:     # falls, or grows: no line
         return None
-    onset = int(np.argmax(np.abs(x) >= ONSET_LEVEL * float(np.max(np.abs(x)))))
-    before = x[:max(0, onset - int(2.0 * fs / f_dom))]
+    before = x[:_before_excitation(x, fs, f_dom)]
     if before.size * frequency < STEADY_CYCLES * fs:
         return share if share >= STRICT_SHARE else None
     return share if _amplitude_at(before, fs, frequency) >= BEFORE_SHARE * late else None
+
+
+def _before_excitation(x: np.ndarray, fs: float, f_dom: float) -> int:
+    """Samples of ``x`` before its excitation: up to two periods of its dominant oscillation
+    (``f_dom``, Hz) before it first reaches :data:`ONSET_LEVEL` of its largest sample."""
+    onset = int(np.argmax(np.abs(x) >= ONSET_LEVEL * float(np.max(np.abs(x)))))
+    return max(0, onset - int(2.0 * fs / f_dom))
 
 
 def _amplitude_at(part: np.ndarray, fs: float, frequency: float) -> float:
@@ -645,15 +651,12 @@ def _steady_share(x: np.ndarray, fs: float, segments: list[tuple[int, int]],
         if third * frequency < STEADY_CYCLES * fs:
             continue
         w = np.hanning(third)
+        # Powers of the tapered DFT: amplitude x half the taper's sum, squared.
+        scale = (0.5 * float(np.sum(w))) ** 2
         noise += sigma * sigma * float(np.dot(w, w))
-        gain += (0.5 * float(np.sum(w))) ** 2
-        for part, target in ((x[a:a + third], "early"), (x[c - third:c], "late")):
-            phase = np.exp(-2j * math.pi * frequency / fs * np.arange(third))
-            power = abs(complex(np.dot((part - part.mean()) * w, phase))) ** 2
-            if target == "early":
-                early += power
-            else:
-                late += power
+        gain += scale
+        early += scale * _amplitude_at(x[a:a + third], fs, frequency) ** 2
+        late += scale * _amplitude_at(x[c - third:c], fs, frequency) ** 2
     if early <= 0.0 or late < NOISE_MARGIN ** 2 * noise:
         return 0.0, 0.0
     return math.sqrt(late / early), math.sqrt(late / gain)
@@ -913,18 +916,16 @@ class _Mode:
 
 def _noise_before(modes: list[_Mode], record: np.ndarray, fs: float, bands: ModeBands,
                   f_dom: float, integrate: bool) -> None:
-    """Each mode's band of the record before its excitation (up to two periods of ``f_dom``,
-    Hz, before it first reaches :data:`ONSET_LEVEL` of its largest sample), added to the
-    noise measured after its decays (``tail_power``): the band's own noise, measured where no
-    mode rings. A band whose noise is coloured (a motion relative to a base whose
+    """Each mode's band of the record before its excitation (:func:`_before_excitation`),
+    added to the noise measured after its decays (``tail_power``): the band's own noise,
+    measured where no mode rings. A band whose noise is coloured (a motion relative to a base whose
     accelerometer's noise grows at low frequencies) holds it above its white floor through
     the whole decay, and nothing is measured after it."""
-    onset = int(np.argmax(np.abs(record) >= ONSET_LEVEL * float(np.max(np.abs(record)))))
-    end = onset - int(2.0 * fs / f_dom)
-    if end < MIN_WINDOW:
-        return
     from scipy.signal import detrend
 
+    end = _before_excitation(record, fs, f_dom)
+    if end < MIN_WINDOW:
+        return
     # Its own offset and trend off: the record's mean is the whole record's, and a drifting
     # sensor's slope is no noise of any band.
     parts = split(detrend(record[:end]), fs, bands, integrate=integrate)
