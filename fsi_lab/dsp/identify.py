@@ -122,10 +122,11 @@ VALLEY = 0.5
 SPECTRUM_BINS = 32
 #: Samples a free-decay window needs to be analysed.
 MIN_WINDOW = 32
-#: A band's noise is measured on this many of its periods or more after its decays (the
-#: second half of what follows them), and counts when it exceeds the white noise's share in
-#: that band by this factor (an RMS over 4 periods of band noise errs by about 40 %; the
-#: phantoms this catches show 4 to 20 times the white share: :func:`_band_noise_excess`).
+#: A band's noise is measured on this many of its periods or more, before the excitation
+#: and after its decays (the second half of what follows them), and counts when it exceeds
+#: the white noise's share in that band by this factor (an RMS over 4 periods of band noise
+#: errs by about 40 %; the phantoms this catches show 4 to 20 times the white share:
+#: :func:`_band_noise_excess`).
 TAIL_PERIODS, TAIL_EXCESS = 4.0, 2.0
 #: A mode whose damping terms are jointly within DECAY_Z standard errors of 0 (their Wald
 #: statistic below DECAY_Z^2 per term: no decay shown) and whose extrema scatter about its
@@ -314,8 +315,8 @@ class ModeIdentification:
         ``noise_a``, ``noise_beta``: those for the noise's spread through the filters'
         padding (:func:`_noise_spread`); ``residual_rho``: the lag-1 correlation of the
         preferred law's whitened residuals (:func:`_residual_correlation`); ``band_noise``:
-        the band's noise measured after its decays over the white noise's share in it, where
-        measured (:func:`_band_noise_ratio`).
+        the band's noise, measured before the excitation and after the decays, over the white
+        noise's share in it, where measured (:func:`_band_noise_ratio`).
     warnings
         Sentences on how far to trust the numbers; empty when every check passed.
     """
@@ -678,16 +679,9 @@ def _without_lines(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]]
             if half.size * f < STEADY_CYCLES * fs:
                 continue
             t = np.arange(half.size) / fs
-            taper = np.hanning(half.size)
             span = fs / half.size
-
-            def power(freq: float, part: np.ndarray = half, times: np.ndarray = t,
-                      w: np.ndarray = taper) -> float:
-                return -abs(complex(np.dot((part - part.mean()) * w,
-                                           np.exp(-2j * math.pi * freq * times))))
-
-            f_fit = float(minimize_scalar(power, bounds=(f - span, f + span),
-                                          method="bounded").x)
+            f_fit = float(minimize_scalar(lambda freq, part=half: -_amplitude_at(part, fs, freq),
+                                          bounds=(f - span, f + span), method="bounded").x)
             basis = np.column_stack((np.cos(2 * math.pi * f_fit * t),
                                      np.sin(2 * math.pi * f_fit * t), np.ones_like(t)))
             (c, s, _), *_ = np.linalg.lstsq(basis, half, rcond=None)
@@ -910,14 +904,14 @@ class _Mode:
     noise: float = 0.0
     wild: int = 0
     drift: dict[str, float] = field(default_factory=dict)
-    tail_power: float = 0.0
-    tail_samples: int = 0
+    noise_power: float = 0.0
+    noise_samples: int = 0
 
 
 def _noise_before(modes: list[_Mode], record: np.ndarray, fs: float, bands: ModeBands,
                   f_dom: float, integrate: bool) -> None:
     """Each mode's band of the record before its excitation (:func:`_before_excitation`),
-    added to the noise measured after its decays (``tail_power``): the band's own noise,
+    added to the noise measured after its decays (``noise_power``): the band's own noise,
     measured where no mode rings. A band whose noise is coloured (a motion relative to a base whose
     accelerometer's noise grows at low frequencies) holds it above its white floor through
     the whole decay, and nothing is measured after it."""
@@ -931,26 +925,25 @@ def _noise_before(modes: list[_Mode], record: np.ndarray, fs: float, bands: Mode
     parts = split(detrend(record[:end]), fs, bands, integrate=integrate)
     for mode in modes:
         before = parts[mode.band]
-        mode.tail_power += float(np.dot(before, before))
-        mode.tail_samples += before.size
+        mode.noise_power += float(np.dot(before, before))
+        mode.noise_samples += before.size
 
 
 def _band_noise_ratio(mode: _Mode, fs: float) -> float | None:
     """A mode's band noise (RMS, measured before the excitation and after its decays) over
     the white noise's share in its band, or None with fewer than :data:`TAIL_PERIODS`
     periods to measure it on."""
-    if mode.tail_samples * mode.frequency < TAIL_PERIODS * fs:
+    if mode.noise_samples * mode.frequency < TAIL_PERIODS * fs:
         return None
-    return math.sqrt(mode.tail_power / mode.tail_samples) / max(mode.noise, 1e-300)
+    return math.sqrt(mode.noise_power / mode.noise_samples) / max(mode.noise, 1e-300)
 
 
 def _band_noise_excess(mode: _Mode, fs: float) -> float | None:
     """How many times the white noise's share its band's own noise is, for a mode none of
     whose decays keeps :data:`MIN_CYCLES` cycles above :data:`FIRST_FLOOR` times that noise
-    and rises above :data:`FLOOR` times it;
-    None when one does, or when the band's noise is not measured (fewer than
-    :data:`TAIL_PERIODS` periods of the band after its decays, ``tail_power``) or within
-    :data:`TAIL_EXCESS` of the white share. The record's noise is measured as white; in a band
+    and rises above :data:`FLOOR` times it; None when one does, or when the band's noise is
+    not measured (:func:`_band_noise_ratio`) or within :data:`TAIL_EXCESS` of the white
+    share. The record's noise is measured as white; in a band
     where it is not (a motion relative to the base, whose integrated noise grows as 1 / f below
     the modes) noise passes for decays above the white floor: phantom modes at 4 to 10 Hz on
     the wet bench driven at 0.02 V s. The floors of the modes kept are not raised (the 17 Hz
@@ -1690,9 +1683,8 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    "noise there (measured before the excitation and after its decays: noise that "
                    "is not white, as in a motion relative to a base whose accelerometer noise "
                    "is integrated, or a line such as mains hum too close to the mode to be "
-                   "told apart): the "
-                   "intervals take its size, not how it correlates from cycle to cycle, and "
-                   "may be too narrow")
+                   "told apart): the intervals take its size, not how it correlates from "
+                   "cycle to cycle, and may be too narrow")
     low, high = m.band_hz
     if not low <= m.frequency_hz <= high:
         out.append(f"the natural frequency {m.frequency_hz:.4g} Hz lies outside the mode's band "
@@ -1938,8 +1930,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             rest = parts[mode.band][after:]
             rest = rest[rest.size // 2:]
             if rest.size * mode.frequency >= 0.5 * TAIL_PERIODS * fs:
-                mode.tail_power += float(np.dot(rest, rest))
-                mode.tail_samples += rest.size
+                mode.noise_power += float(np.dot(rest, rest))
+                mode.noise_samples += rest.size
             t = t + start / fs
             c = c + start / fs
             if t.size >= 2 * MIN_CYCLES:
@@ -1987,16 +1979,19 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     for mode in modes:
         mode.fits = {}
         _fit_all(mode, follow, laws)
-    undecayed = [m for m in modes if _scatter_without_decay(m) is not None]
-    for m in undecayed:
+    kept = []
+    for m in modes:
+        scatter = _scatter_without_decay(m)
+        if scatter is None:
+            kept.append(m)
+            continue
         notes.append(f"the spectral peak at {m.frequency:.4g} Hz shows no free decay: its "
                      "extrema neither fall (their damping terms do not differ from 0 by "
                      f"{DECAY_Z:g} standard errors, or make them grow) nor follow a smooth "
-                     f"envelope (they scatter {_scatter_without_decay(m):.1f} times as far "
-                     "as the record's white noise explains): noise that is not white (a "
-                     "motion relative to the base, whose integrated noise grows at low "
-                     "frequencies), not a mode")
-    modes = [m for m in modes if all(m is not u for u in undecayed)]
+                     f"envelope (they scatter {scatter:.1f} times as far as the record's "
+                     "white noise explains): noise that is not white (a motion relative to "
+                     "the base, whose integrated noise grows at low frequencies), not a mode")
+    modes = kept
     if not modes:
         raise fail(func, "no spectral peak shows a free decay; " + "; ".join(notes))
     # Step 6: filter correction, the last pass with the record's noise.
