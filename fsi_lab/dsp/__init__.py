@@ -24,6 +24,8 @@ backbone, damping, equivalent_damping
     Backbone and damping curves; C_i and C_f by harmonic balance (the paper's Eqs. 24-25).
 frf
     H1 / H2 transfer functions; natural frequencies and damping ratios of their peaks.
+joint_fit
+    Free decays of close modes fitted together to the record's samples, with HAC intervals.
 modal_fit
     A mode fitted to an FRF peak through the Welch estimate's leakage, with a jackknife
     interval.

@@ -475,20 +475,54 @@ def test_a_lightly_damped_mode_that_still_decays_is_not_taken_for_a_line(
     assert mode.laws.fits["viscous"].value("a") == pytest.approx(a, rel=tolerance)
 
 
-def test_two_close_modes_are_kept_apart_and_a_miss_is_warned():
+def test_two_close_modes_are_fitted_together_to_the_record_s_samples():
     """Modes at 17 and 22 Hz (ratio 1.3): the heavily damped first cycles of the lower one
-    spread over both bands. Both are found; where C_i or C_f misses the targets (2 %, 5 %)
-    the mode carries a warning."""
-    case = Case("two", (Mode(WET_F, c_f=WET_C_F, x0=1e-3), Mode(1.3 * WET_F, c_i=1.0, x0=5e-4)),
-                duration=4.0, noise=0.002)
-    for seed in (2, 3):
-        found = identify(trial(case, seed), case.fs)
-        low, high = sorted(found.modes, key=lambda m: m.frequency_hz)
-        assert [round(m.frequency_hz) for m in (low, high)] == [17, 22]
-        c_i = 2 * WET_MASS * low.quadratic.value("a")
-        c_f = WET_MASS * low.quadratic.value("beta")
-        if abs(c_i / WET_C_I - 1) > 0.02 or abs(c_f / WET_C_F - 1) > 0.05:
-            assert low.warnings, (c_i, c_f)
+    spread over both bands, whose smear correction left C_i 5 to 60 % off. Fitted together to
+    the record's samples, both modes come out right: at 0.2 % noise within the targets (C_i
+    2 %, C_f 5 %; the upper mode's C_i, its only damping, 3 %) and inside their 95 %
+    intervals; at 1 % noise within three standard errors (a 95 % interval misses one trial in
+    twenty). A note says how they were fitted, and no warning says the result leans on a
+    smeared model."""
+    for noise, seeds, width in ((0.002, (2, 3), 1.0), (0.01, (0, 1), 3.0 / 1.96)):
+        case = Case("two", (Mode(WET_F, c_f=WET_C_F, x0=1e-3),
+                            Mode(1.3 * WET_F, c_i=1.0, x0=5e-4)), duration=4.0, noise=noise)
+        for seed in seeds:
+            found = identify(trial(case, seed), case.fs)
+            low, high = sorted(found.modes, key=lambda m: m.frequency_hz)
+            assert low.frequency_hz == pytest.approx(WET_F, rel=1e-3)
+            assert high.frequency_hz == pytest.approx(1.3 * WET_F, rel=1e-3)
+            for mode, name, truth in ((low, "a", WET_C_I / (2 * WET_MASS)),
+                                      (low, "beta", WET_C_F / WET_MASS),
+                                      (high, "a", 1.0 / (2 * WET_MASS))):
+                quad = mode.quadratic
+                lo, hi = quad.interval(name)
+                value = quad.value(name)
+                assert abs(value - truth) <= width * 0.5 * (hi - lo), (noise, seed, name)
+                if noise < 0.005:
+                    target = 0.05 if name == "beta" else 0.02 if mode is low else 0.03
+                    assert value == pytest.approx(truth, rel=target), (seed, name)
+            for mode in (low, high):
+                assert mode.start_drift["joint_modes"] == 2
+                assert mode.start_drift["joint_residual"] < 1.5
+                assert not any("smear" in w for w in mode.warnings)
+            assert any("fitted together to the record's samples" in n for n in found.notes)
+
+
+def test_close_modes_the_joint_model_cannot_describe_keep_their_band_fits():
+    """The lower of two close modes damped by dry friction, which the quadratic law cannot
+    follow: fitted together, the decays leave several times the record's noise unexplained,
+    so the band fits stay, with their warnings, and a note says why."""
+    case = Case("dry", (Mode(WET_F, c_i=0.3, friction=0.4, x0=1e-3),
+                        Mode(1.3 * WET_F, c_i=1.0, x0=5e-4)), duration=3.0, noise=0.002)
+    found = identify(trial(case, 0), case.fs)
+    assert len(found.modes) == 2
+    (note,) = [n for n in found.notes if "fitted together" in n]
+    ratio = float(re.search(r"leave ([\d.]+) times its white noise unexplained", note)[1])
+    assert ratio > 1.5
+    assert "band fits are kept" in note
+    for mode in found.modes:
+        assert "joint_modes" not in mode.start_drift
+        assert mode.warnings
 
 
 def test_noise_alone_is_refused_with_a_reason():
