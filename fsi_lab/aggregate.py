@@ -193,7 +193,7 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
                 "c_i": c_i, "c_i_ci95": [ci * a_lo, ci * a_hi],
                 "c_f": c_f, "c_f_ci95": [cf * b_lo, cf * b_hi],
                 "decays": union.decays, "extrema": union.extrema,
-                "preferred_law": union.comparison.preferred,
+                "preferred_law": union.comparison.preferred, "pooled_by": union.pooled,
                 "delta_aicc": {k: float(v) for k, v in union.comparison.delta.items()},
                 "widened": {
                     "runs": [float(f) for f in union.widenings],
@@ -327,6 +327,11 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
                          f"({_interval(entry['c_i_ci95'])}), C_f = {entry['c_f']:.4g} kg/m^2 "
                          f"({_interval(entry['c_f_ci95'])}), preferred law: "
                          f"{entry['preferred_law']}{_widening(entry)}")
+            if entry.get("pooled_by") == "weighted mean":
+                lines.append(f"{indent}  (the runs' own C_i and C_f averaged with their "
+                             "inverse covariances: their modes were fitted together with a "
+                             "close mode to the records' samples, and their extrema are "
+                             "smeared)")
         else:
             lines.append(f"{indent}  C_i and C_f not fitted: {entry['fit_error']}")
         if entry["runs"] > 1:

@@ -74,6 +74,9 @@ class ModeExtract:
         Displacement amplitude of its largest and smallest extremum used, m (measured).
     warnings
         The identification's warnings on the mode.
+    joint
+        Whether its ``params`` come from a fit together with a close mode to the record's
+        samples (:mod:`fsi_lab.dsp.joint_fit`), not from its extrema.
     """
 
     channel: str
@@ -100,6 +103,7 @@ class ModeExtract:
     amplitude_range: tuple[float, float]
     widening: float = 1.0
     warnings: list[str] = field(default_factory=list)
+    joint: bool = False
 
     def run_decays(self):
         """The mode's decays for the union fit (:class:`~fsi_lab.aggregate_fit.RunDecays`)."""
@@ -107,7 +111,7 @@ class ModeExtract:
 
         return RunDecays(self.decays, self.bands.correlation(self.band), self.noise_floor,
                          self.w0, self.alpha, self.quantity, self.params, self.cov,
-                         self.widening)
+                         self.widening, self.joint)
 
     def coefficients(self, level: float = 0.95) -> dict[str, Any]:
         """The run's own C_i (kg/(m s)) and C_f (kg/m^2) with their intervals."""
@@ -195,7 +199,9 @@ def _mode(channel: str, k: int, ident, context, eq_params: dict[str, Any], mass:
         damping_zeta=np.concatenate(zetas) if zetas else np.empty(0),
         damping_frequency=np.concatenate(freqs) if freqs else np.empty(0),
         amplitude_range=(float(extrema.max()), float(extrema.min())),
-        warnings=list(mode.warnings))
+        warnings=list(mode.warnings), joint="joint_modes" in mode.start_drift)
+    if extract.joint:      # (its own fit used no extrema: nothing to compare a refit with)
+        return extract
     try:
         extract.widening = run_widening(extract.run_decays())
     except AnalysisError:  # its own fit holds; a refit that fails says nothing against it

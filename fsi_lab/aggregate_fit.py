@@ -29,6 +29,7 @@ systematic errors, which every run shares, so its interval is never narrower tha
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -71,6 +72,9 @@ class RunDecays:
     widening
         How much wider the run's intervals are than its extrema's scatter alone makes them
         (>= 1, :func:`run_widening`).
+    joint
+        Whether the run's ``params`` come from its mode fitted together with a close mode to
+        the record's samples, not from these extrema (:mod:`fsi_lab.dsp.joint_fit`).
     """
 
     decays: Sequence[DecayExtrema]
@@ -82,6 +86,7 @@ class RunDecays:
     params: np.ndarray
     cov: np.ndarray
     widening: float = 1.0
+    joint: bool = False
 
 
 @dataclass(frozen=True)
@@ -115,6 +120,11 @@ class UnionFit:
         What was fitted.
     w0, alpha
         The oscillator of the fit (medians of the runs').
+    pooled
+        ``"union"``, or ``"weighted mean"`` when a run's mode was fitted together with a close
+        mode to its record's samples (:attr:`RunDecays.joint`): its extrema are smeared by the
+        band filters, so ``a`` and ``beta`` are then the runs' own estimates averaged with
+        their inverse covariances (the union's fits still rank the laws).
     """
 
     fit: LawFit
@@ -130,6 +140,7 @@ class UnionFit:
     extrema: int
     w0: float
     alpha: float
+    pooled: str = "union"
 
     def value(self, name: str) -> float:
         """``a`` (1/s) or ``beta`` (1/U)."""
@@ -201,6 +212,10 @@ def fit_union(runs: Sequence[RunDecays]) -> UnionFit:
     total = sum(weighted)
     noise_factor = math.sqrt(sum(f * f * x for f, x in zip(widening, weighted)) / total) \
         if total > 0 else 1.0
+    pooled = "union"
+    if any(run.joint for run in runs):
+        quad = _weighted_mean(quad, runs)
+        noise_factor, pooled = 1.0, "weighted mean"
     chi2 = np.full(2, math.nan)
     spread_factor = np.ones(2)
     if len(runs) > 1:
@@ -231,4 +246,17 @@ def fit_union(runs: Sequence[RunDecays]) -> UnionFit:
                     noise_factor=noise_factor, spread_factor=spread_factor, spread_chi2=chi2,
                     accuracy_factor=accuracy_factor,
                     runs=len(runs), decays=len(amps), extrema=int(sum(a.size for a in amps)),
-                    w0=w0, alpha=alpha)
+                    w0=w0, alpha=alpha, pooled=pooled)
+
+
+def _weighted_mean(quad: LawFit, runs: Sequence[RunDecays]) -> LawFit:
+    """``quad`` with the runs' own ``(a, beta)`` averaged by their inverse covariances in
+    place of its parameters, and the mean's covariance in place of its own."""
+    precision = np.zeros((2, 2))
+    weighted = np.zeros(2)
+    for run in runs:
+        inverse = np.linalg.pinv(np.asarray(run.cov, dtype=np.float64))
+        precision += inverse
+        weighted += inverse @ np.asarray(run.params, dtype=np.float64)
+    cov = np.linalg.pinv(precision)
+    return dataclasses.replace(quad, params=cov @ weighted, cov=cov)

@@ -514,6 +514,9 @@ def _pooled_component(index: int, mode: Mapping[str, Any]) -> dict[str, Any]:
                          f"C_f = {mode['c_f']:.4g} kg/m^2 (95 %: {c:.4g} to {d:.4g}) from "
                          f"{mode['decays']} decays in {mode['segments']} segment"
                          f"{'s' * (mode['segments'] != 1)}")
+        if mode.get("pooled_by") == "weighted mean":
+            out["pooled"] += ("; the segments' own C_i and C_f averaged (their modes were "
+                              "fitted together with a close mode to the samples)")
         accuracy = (mode.get("widened") or {}).get("accuracy") or {}
         if any(f is None or f > 1.05 for f in accuracy.values()):
             out["pooled"] += f"; the method's accuracy ({method_accuracy.describe()}) included"

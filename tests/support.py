@@ -161,11 +161,13 @@ def run_main(*args: str) -> tuple[int, str, str]:
 
 def write_decay_run(path: Path, a: float = 0.5, beta: float = 2.0, frequency: float = 20.0,
                     start: float = 0.3, noise: float = 1e-3, seed: int = 0,
-                    duration: float = 4.0, rate: float = 1000.0) -> Path:
+                    duration: float = 4.0, rate: float = 1000.0,
+                    others: tuple = ()) -> Path:
     """An imported run file (no profile) of one mode's free decay with known damping: the
     velocity of ``x'' + 2 a x' + beta |x'| x' + w0^2 x = 0`` from an extremum ``start`` (m/s)
     at 0.1 s after a short forced build-up, plus white noise of RMS ``noise`` (m/s). With
-    ``--mass-per-length m`` its analysis gives C_i = 2 m a and C_f = m beta."""
+    ``--mass-per-length m`` its analysis gives C_i = 2 m a and C_f = m beta. ``others``:
+    ``(a, beta, frequency, start)`` of more modes, each built up and released the same way."""
     import math
 
     import numpy as np
@@ -174,10 +176,13 @@ def write_decay_run(path: Path, a: float = 0.5, beta: float = 2.0, frequency: fl
     from fsi_lab.dsp.laws import simulate_decay
 
     t = np.arange(int(duration * rate)) / rate
-    w0 = 2 * math.pi * frequency
-    v = simulate_decay("quadratic", [a, beta], w0, start, 0.1, t)
     early = t < 0.1
-    v[early] = start * np.cos(w0 * (t[early] - 0.1)) * np.sin(np.pi * t[early] / 0.2)
+    v = np.zeros(t.size)
+    for a_k, beta_k, frequency_k, start_k in ((a, beta, frequency, start), *others):
+        w0 = 2 * math.pi * frequency_k
+        v_k = simulate_decay("quadratic", [a_k, beta_k], w0, start_k, 0.1, t)
+        v_k[early] = start_k * np.cos(w0 * (t[early] - 0.1)) * np.sin(np.pi * t[early] / 0.2)
+        v += v_k
     v = v + noise * np.random.default_rng(seed).standard_normal(t.size)
     csv = path.with_suffix(".csv")
     csv.write_text("time [s],tip [m/s]\n" + "\n".join(f"{x:.6f},{y:.9g}" for x, y in zip(t, v)))

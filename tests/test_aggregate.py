@@ -211,3 +211,43 @@ def test_a_union_of_many_runs_is_never_more_precise_than_the_method(extracts, mo
     assert "for the method's accuracy (+-0.3 % on C_i, +-2 % on C_f)" in text
     assert "method's accuracy" not in format_aggregate(
         {**agg, "modes": [plain]})
+
+
+def test_runs_whose_modes_were_fitted_jointly_are_averaged_not_refitted(extracts):
+    """A run whose mode was fitted together with a close mode to its samples carries C_i and
+    C_f its smeared extrema do not give: the union then averages the runs' own (a, beta) with
+    their inverse covariances (its value, to 1e-9, and covariance before widening), and says
+    so in ``pooled``; runs fitted from their extrema keep the union fit."""
+    import dataclasses
+
+    from fsi_lab.aggregate_fit import fit_union
+
+    runs = [extracts[f"level{k}"].modes[0].run_decays() for k in range(3)]
+    assert fit_union(runs).pooled == "union"
+    shifted = [dataclasses.replace(r, joint=(k == 1), params=r.params * (1.0 + 0.02 * k),
+                                   cov=r.cov * (1.0 + k)) for k, r in enumerate(runs)]
+    pooled = fit_union(shifted)
+    assert pooled.pooled == "weighted mean"
+    precision = sum(np.linalg.inv(r.cov) for r in shifted)
+    mean = np.linalg.solve(precision, sum(np.linalg.inv(r.cov) @ r.params for r in shifted))
+    np.testing.assert_allclose(pooled.fit.params, mean, rtol=1e-9)
+    np.testing.assert_allclose(pooled.fit.cov, np.linalg.inv(precision), rtol=1e-9)
+    assert pooled.noise_factor == 1.0
+    assert abs(pooled.value("beta") / fit_union(runs).value("beta") - 1.0) > 0.005
+
+
+def test_fsi_lab_aggregate_of_runs_with_close_modes_averages_their_joint_fits(tmp_path):
+    """Two runs of a 20 Hz mode beside a 26 Hz one: each run's identification fits the two
+    together to its samples, and the aggregate averages those fits (``pooled_by``), C_i and
+    C_f within 3 and 6 % and inside their intervals."""
+    others = ((0.8, 0.0, 26.0, 0.15),)
+    paths = [write_decay_run(tmp_path / f"close{k}.h5", start=0.2 + 0.1 * k, seed=20 + k,
+                             others=others) for k in range(2)]
+    runs = [extract_run(ExtractTask(str(p), (), MASS, p.stem)) for p in paths]
+    assert all(any(m.joint for m in r.modes) for r in runs)
+    agg = aggregate_extracts(runs)
+    (mode,) = [m for m in agg["modes"] if abs(m["frequency_hz"] - 20.0) < 1.0]
+    assert mode["pooled_by"] == "weighted mean"
+    assert mode["c_i"] == pytest.approx(C_I, rel=0.03) and covers(mode["c_i_ci95"], C_I)
+    assert mode["c_f"] == pytest.approx(C_F, rel=0.06) and covers(mode["c_f_ci95"], C_F)
+    assert "averaged with their inverse covariances" in format_aggregate(agg)
