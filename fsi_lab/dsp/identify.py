@@ -217,6 +217,8 @@ JOINT_RESIDUAL = 1.5
 #: The joint fit's spans end this many periods of the group's lowest mode after its last
 #: extremum above the noise floor.
 JOINT_TAIL = 3.0
+#: The joint fit keeps cubic stiffnesses only when they lower N ln(RSS) by this much per mode.
+STIFFNESS_GAIN = 50.0
 #: Seed of the simulated noise: the same record always gives the same numbers.
 NOISE_SEED = 20261123
 #: Confidence level of the intervals.
@@ -1160,19 +1162,29 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
            record: np.ndarray, fs: float, follow: str, quantity: str, sigma: float,
            referenced: bool) -> list[str]:
     """Step 6a: close modes fitted together to the record's samples
-    (:func:`.joint_fit.fit_decays_jointly`), from their band fits. Each window's span starts
-    where its excitation is over, or with a reference (``referenced``), at the latest first
-    extremum of the group's modes (each counts once the base has calmed in its band), and
-    ends :data:`JOINT_TAIL` periods after their last extremum above the floor (or at the
-    window's end); the other modes' fitted decays are taken off it. A fit that describes the
-    record to :data:`JOINT_RESIDUAL` times its white noise is kept in ``mode.joint``, to
-    replace the band fit's quadratic law and linear frequency. Returns notes."""
+    (:func:`.joint_fit.fit_decays_jointly`), from their band fits. Each window where every
+    mode of the group has a free decay gives a span, which starts where its excitation is
+    over, or with a reference (``referenced``), at the latest first extremum of the group's
+    modes (each counts once the base has calmed in its band), and ends :data:`JOINT_TAIL`
+    periods after their last extremum above the floor (or at the window's end); the other
+    modes' fitted decays are taken off it. A fit that describes the record to
+    :data:`JOINT_RESIDUAL` times its white noise is kept in ``mode.joint``, to replace the
+    band fit's quadratic law, linear frequency and cubic stiffness (0 unless fitting one
+    lowers N ln(RSS) by :data:`STIFFNESS_GAIN` per mode). Returns notes."""
     notes = []
     reach = [bands.reach(k) for k in range(bands.count)]
     for group in _clusters(modes):
         members = {id(m) for m in group}
+        names = " and ".join(f"{m.w0 / (2.0 * math.pi):.4g}" for m in group) + " Hz"
         others = [m for m in modes if id(m) not in members]
-        used = sorted({d["w"] for m in group for d in m.decays})
+        # Only the windows where every mode of the group has a free decay: where one falls
+        # short of its floor (a window cut at a beat of the two), it is still in the record,
+        # and no model of the group would hold it.
+        used = sorted(set.intersection(*({d["w"] for d in m.decays} for m in group)))
+        if not used:
+            notes.append(f"the modes at {names} lie close together, but no free decay holds "
+                         "all of them above the noise floor: their band fits are kept")
+            continue
         period = 2.0 * math.pi / min(m.w0 for m in group)
         target = np.array(record, dtype=np.float64)
         spans = []
@@ -1196,14 +1208,26 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
                 DecayStart(used.index(d["w"]),
                            math.copysign(float(fit.starts[j]), float(d["values"][0])),
                            float(d.get("anchor", d["times"][0])))
-                for j, d in enumerate(m.decays)], alpha=m.alpha))
-        names = " and ".join(f"{m.w0 / (2.0 * math.pi):.4g}" for m in group) + " Hz"
-        try:
-            found = fit_decays_jointly(target, fs, spans, guesses, quantity=follow,
-                                       output=quantity)
-        except AnalysisError as exc:
+                for j, d in enumerate(m.decays) if d["w"] in used], alpha=m.alpha))
+        # Linear springs, and cubic stiffnesses fitted from the band fits': the cubic ones
+        # only where they explain clearly more of the record. A close mode's smear makes the
+        # band fits find a stiffness: held fixed, one left two modes' damping swapped; fitted
+        # freely, one traded itself against the damping (C_f +84 %) for no better fit.
+        fits = []
+        failure = ""
+        for guess, free in (([dataclasses.replace(g, alpha=0.0) for g in guesses], False),
+                            (guesses, True)):
+            try:
+                fits.append(fit_decays_jointly(target, fs, spans, guess, quantity=follow,
+                                               output=quantity, stiffness=free))
+            except AnalysisError as exc:
+                failure = str(exc)
+        found = fits[0] if fits else None
+        if len(fits) == 2 and _stiffness_gain(fits[0], fits[1]) > STIFFNESS_GAIN * len(group):
+            found = fits[1]
+        if found is None:
             notes.append(f"the modes at {names} lie close together; fitting them together to "
-                         f"the record's samples failed ({exc}): their band fits are kept")
+                         f"the record's samples failed ({failure}): their band fits are kept")
             continue
         scale = max(sigma, PRECISION * max(float(np.max(np.abs(target[a:b])))
                                            for a, b in spans))
@@ -1218,6 +1242,7 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
             continue
         for k, m in enumerate(group):
             m.joint = {"params": found.params[k], "cov": found.cov[k], "w0": float(found.w0[k]),
+                       "alpha": float(found.alpha[k]),
                        "dof": found.dof,
                        "residual": ratio, "modes": len(group), "widening": found.widening[k]}
         notes.append(f"the modes at {names} lie within a factor {CLOSE_RATIO:g} of each "
@@ -1227,8 +1252,16 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
     return notes
 
 
+def _stiffness_gain(linear, cubic) -> float:
+    """How much better the joint fit with cubic stiffnesses describes the record than the
+    linear one: ``N ln(RSS_linear / RSS_cubic)`` (AIC's likelihood term, N samples)."""
+    return linear.samples * 2.0 * math.log(max(linear.residual_rms, 1e-300)
+                                           / max(cubic.residual_rms, 1e-300))
+
+
 def _take_joint(mode: _Mode) -> None:
-    """The joint fit (step 6a) replaces the band fit's quadratic law and linear frequency.
+    """The joint fit (step 6a) replaces the band fit's quadratic law, linear frequency and
+    cubic stiffness.
     The start and range checks of the band fit (step 8) measured its extrema, which the
     joint fit does not use: their entries leave ``drift``, and the joint fit's own enter it
     (``joint_modes``, ``joint_residual``, ``joint_widening_a``, ``joint_widening_beta``)."""
@@ -1236,9 +1269,9 @@ def _take_joint(mode: _Mode) -> None:
     quad = mode.fits["quadratic"]
     mode.fits["quadratic"] = dataclasses.replace(
         quad, params=np.asarray(joint["params"], dtype=np.float64),
-        cov=np.asarray(joint["cov"])[:-1, :-1], dof=int(joint["dof"]))
-    mode.w0 = joint["w0"]
-    mode.w0_se = math.sqrt(max(float(joint["cov"][-1, -1]), 0.0))
+        cov=np.asarray(joint["cov"])[:-2, :-2], dof=int(joint["dof"]), alpha=joint["alpha"])
+    mode.w0, mode.alpha = joint["w0"], joint["alpha"]
+    mode.w0_se = math.sqrt(max(float(joint["cov"][-2, -2]), 0.0))
     mode.w0_dof = int(joint["dof"])
     band_checks = ("a", "beta", "dropped", "untested")
     mode.drift = {k: v for k, v in mode.drift.items()

@@ -11,6 +11,7 @@ span of the record that holds free decays. Nothing is filtered, so nothing is sm
 largest cycles, which carry the quadratic damping, count as fully as the rest. Each span
 also gets an offset and a slope of its own: a record whose mean was taken off (a decay's
 velocity has a mean of minus its start displacement over the record's length) or that drifts.
+Each mode's cubic stiffness is fitted as well (``stiffness``), from its guess, or held at it.
 
 The parameters' covariance is the least-squares one for white noise, widened where the
 residuals say the noise is not white: the sandwich ``A^-1 J^T S J A^-1`` (``A = J^T J``,
@@ -68,7 +69,8 @@ class DecayStart:
 
 @dataclass(frozen=True)
 class JointMode:
-    """One mode's starting guess: its law, parameters, linear angular frequency and decays."""
+    """One mode's starting guess: its law, parameters, linear angular frequency, decays and
+    cubic stiffness (all fitted but the law)."""
 
     law: str
     params: Sequence[float]
@@ -87,8 +89,10 @@ class JointFit:
         Per mode: the law's parameters (order of :data:`.laws.LAWS`).
     w0
         Per mode: the linear natural angular frequency, rad/s.
+    alpha
+        Per mode: the cubic stiffness per unit mass, 1/(U^2 s^2).
     cov
-        Per mode: covariance of ``(params..., w0)``.
+        Per mode: covariance of ``(params..., w0, alpha)``.
     starts, times
         Per mode: each decay's fitted start extremum (signed, U or U/s) and its time, s.
     residual_rms
@@ -98,13 +102,14 @@ class JointFit:
         starts and the spans' offsets and slopes).
     widening
         Per mode: the factors (>= 1) the sandwich widened the standard errors of
-        ``(params..., w0)`` by over the white-noise ones.
+        ``(params..., w0, alpha)`` by over the white-noise ones.
     converged
         Whether the least squares met its tolerance within :data:`MAX_EVALUATIONS`.
     """
 
     params: list[np.ndarray]
     w0: np.ndarray
+    alpha: np.ndarray
     cov: list[np.ndarray]
     starts: list[np.ndarray]
     times: list[np.ndarray]
@@ -117,7 +122,7 @@ class JointFit:
 
 def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]],
                        modes: Sequence[JointMode], *, quantity: str = "velocity",
-                       output: str | None = None) -> JointFit:
+                       output: str | None = None, stiffness: bool = True) -> JointFit:
     """Fit the free decays of several modes together to a record's samples.
 
     Parameters
@@ -137,6 +142,9 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
     output
         The record's quantity (default ``quantity``): ``"displacement"``, ``"velocity"`` or
         ``"acceleration"``.
+    stiffness
+        Whether each mode's cubic stiffness is fitted (else held at its guess; its variance
+        is then 0).
 
     Returns
     -------
@@ -189,12 +197,13 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
     times = [np.arange(a, b) / fs for a, b in spans]
     data = np.concatenate([x[a:b] for a, b in spans])
     offsets = np.cumsum([0] + [b - a for a, b in spans])
-    counts = [len(LAWS[m.law]) + 1 for m in modes]
+    counts = [len(LAWS[m.law]) + 1 + stiffness for m in modes]      # law, w0[, alpha]
     shared = int(sum(counts))
     decay_index = [(k, j) for k, m in enumerate(modes) for j in range(len(m.decays))]
     lines = shared + 2 * len(decay_index)         # each span's offset and slope from here
     centred = [t - 0.5 * (t[0] + t[-1]) for t in times]
-    theta0 = np.array([v for m in modes for v in (*m.params, m.w0)]
+    theta0 = np.array([v for m in modes
+                       for v in (*m.params, m.w0, *([m.alpha] if stiffness else []))]
                       + [v for m in modes for d in m.decays for v in (d.value, d.time)]
                       + [0.0] * (2 * len(spans)), dtype=np.float64)
     if data.size <= theta0.size:
@@ -203,7 +212,9 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
     period = 2.0 * math.pi / min(m.w0 for m in modes)
     typical = np.concatenate(
         [np.r_[np.maximum(np.abs(np.asarray(m.params, dtype=float)),
-                          1e-3 * math.pi * 2.0 / period), m.w0] for m in modes]
+                          1e-3 * math.pi * 2.0 / period), m.w0,
+               *([_alpha_scale(m, quantity)] if stiffness else [])]
+         for m in modes]
         + [np.r_[abs(d.value), period] for m in modes for d in m.decays]
         + [np.r_[1.0, 1.0 / max(t[-1] - t[0], 1.0 / fs)]
            * max(float(np.std(x[a:b])), 1e-300) for t, (a, b) in zip(times, spans)])
@@ -214,8 +225,10 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
         p = theta[first[k]:first[k + 1]]
         i = shared + 2 * decay_index.index((k, j))
         d = m.decays[j]
-        return simulate_decay(m.law, p[:-1], float(p[-1]), float(theta[i]), float(theta[i + 1]),
-                              times[d.span], alpha=m.alpha, quantity=quantity, output=output)
+        law, w0, alpha = (p[:-2], p[-2], p[-1]) if stiffness else (p[:-1], p[-1], m.alpha)
+        return simulate_decay(m.law, law, float(w0), float(theta[i]), float(theta[i + 1]),
+                              times[d.span], alpha=float(alpha), quantity=quantity,
+                              output=output)
 
     def model(theta: np.ndarray) -> np.ndarray:
         out = np.zeros(data.size)
@@ -263,20 +276,32 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
     factor = np.sqrt(np.maximum(np.divide(np.diag(hac), var_white, out=np.ones_like(var_white),
                                           where=var_white > 0.0), 1.0))
     cov = white * np.outer(factor, factor)
-    params, w0, covs, widen, starts, start_times = [], [], [], [], [], []
+    params, w0, alpha, covs, widen, starts, start_times = [], [], [], [], [], [], []
     for k, m in enumerate(modes):
         sl = slice(first[k], first[k + 1])
-        params.append(theta[sl][:-1].copy())
-        w0.append(float(theta[sl][-1]))
-        covs.append(cov[sl, sl].copy())
-        widen.append(factor[sl].copy())
+        # (params..., w0, alpha), alpha's variance 0 where it was held
+        own = np.pad(theta[sl], (0, 0 if stiffness else 1), constant_values=m.alpha)
+        params.append(own[:-2].copy())
+        w0.append(float(own[-2]))
+        alpha.append(float(own[-1]))
+        covs.append(np.pad(cov[sl, sl], (0, 0 if stiffness else 1)))
+        widen.append(np.pad(factor[sl], (0, 0 if stiffness else 1), constant_values=1.0))
         idx = [shared + 2 * decay_index.index((k, j)) for j in range(len(m.decays))]
         starts.append(theta[idx].copy())
         start_times.append(theta[np.array(idx) + 1].copy())
-    return JointFit(params=params, w0=np.array(w0), cov=covs, starts=starts, times=start_times,
+    return JointFit(params=params, w0=np.array(w0), alpha=np.array(alpha), cov=covs,
+                    starts=starts, times=start_times,
                     residual_rms=float(np.sqrt(np.mean(resid ** 2))), samples=int(data.size),
                     dof=int(data.size - theta.size),
                     widening=widen, converged=bool(sol.status > 0))
+
+
+def _alpha_scale(mode: JointMode, quantity: str) -> float:
+    """A cubic stiffness's typical size for the fit's steps: its start, or one that moves the
+    frequency by 1 % at the largest start amplitude."""
+    largest = max(abs(d.value) for d in mode.decays)
+    amplitude = largest / mode.w0 if quantity == "velocity" else largest
+    return max(abs(mode.alpha), 0.01 * 8.0 / 3.0 * mode.w0 ** 2 / max(amplitude, 1e-300) ** 2)
 
 
 def _covariances(jac: np.ndarray, resid: np.ndarray, sizes: Sequence[int]
@@ -285,6 +310,12 @@ def _covariances(jac: np.ndarray, resid: np.ndarray, sizes: Sequence[int]
     ``A^-1 J^T S J A^-1`` of the parameters, ``S`` the residuals' covariance as an
     autoregressive model of them gives it (:func:`_noise_spectrum`), each span (given by
     their ``sizes``) on its own."""
+    # In columns scaled to unit norm, scaled back at the end: the parameters' sizes span
+    # twenty decades (a cubic stiffness against a damping rate), beyond what J^T J holds in
+    # double precision.
+    norms = np.linalg.norm(jac, axis=0)
+    norms[norms == 0.0] = 1.0
+    jac = jac / norms
     a_inv = np.linalg.pinv(jac.T @ jac)
     s2 = float(resid @ resid) / max(resid.size - jac.shape[1], 1)
     edges = np.cumsum([0, *sizes])
@@ -299,7 +330,8 @@ def _covariances(jac: np.ndarray, resid: np.ndarray, sizes: Sequence[int]
             weight[-1] = 1.0
         jf = scipy.fft.rfft(jac[lo:hi], n, axis=0)
         middle += ((jf.conj() * (weight * density)[:, None]).T @ jf).real / n
-    return s2 * a_inv, a_inv @ middle @ a_inv
+    unscale = np.outer(norms, norms)
+    return s2 * a_inv / unscale, a_inv @ middle @ a_inv / unscale
 
 
 def _noise_spectrum(resid: np.ndarray, edges: np.ndarray):
