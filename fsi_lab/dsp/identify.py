@@ -81,7 +81,7 @@ from fsi_lab.dsp._signal import _band_limited, as_record, check_rate, fail, smoo
 from fsi_lab.dsp.bands import ModeBands, reduce_rate, reduction_factor, split
 from fsi_lab.dsp.decays import decay_segments, first_decay_peak, quiet_times
 from fsi_lab.dsp.instantaneous import HalfCycles, half_cycles
-from fsi_lab.dsp.joint_fit import DecayStart, JointMode, fit_decays_jointly
+from fsi_lab.dsp.joint_fit import DecayStart, JointFit, JointMode, fit_decays_jointly
 from fsi_lab.dsp.laws import (
     LAWS,
     LawComparison,
@@ -1252,7 +1252,7 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
     return notes
 
 
-def _stiffness_gain(linear, cubic) -> float:
+def _stiffness_gain(linear: JointFit, cubic: JointFit) -> float:
     """How much better the joint fit with cubic stiffnesses describes the record than the
     linear one: ``N ln(RSS_linear / RSS_cubic)`` (AIC's likelihood term, N samples)."""
     return linear.samples * 2.0 * math.log(max(linear.residual_rms, 1e-300)
@@ -1262,8 +1262,8 @@ def _stiffness_gain(linear, cubic) -> float:
 def _take_joint(mode: _Mode) -> None:
     """The joint fit (step 6a) replaces the band fit's quadratic law, linear frequency and
     cubic stiffness.
-    The start and range checks of the band fit (step 8) measured its extrema, which the
-    joint fit does not use: their entries leave ``drift``, and the joint fit's own enter it
+    The start check of the band fit (step 8) measured its extrema, which the joint fit does
+    not use: its entries leave ``drift``, and the joint fit's own enter it
     (``joint_modes``, ``joint_residual``, ``joint_widening_a``, ``joint_widening_beta``)."""
     joint = mode.joint
     quad = mode.fits["quadratic"]
@@ -1275,7 +1275,7 @@ def _take_joint(mode: _Mode) -> None:
     mode.w0_dof = int(joint["dof"])
     band_checks = ("a", "beta", "dropped", "untested")
     mode.drift = {k: v for k, v in mode.drift.items()
-                  if k not in band_checks and not k.startswith(("split_", "start_", "noise_"))}
+                  if k not in band_checks and not k.startswith("start_")}
     mode.drift.update({"joint_modes": float(joint["modes"]),
                        "joint_residual": float(joint["residual"]),
                        **{f"joint_widening_{name}": float(f)
@@ -2174,9 +2174,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     results = []
     for mode in modes:
         mode.drift = _stable_start(mode, follow, laws)
-        mode.drift.update(_one_law(mode, follow))
-        mode.drift.update(_noise_spread(mode))
-        if mode.joint is not None:
+        if mode.joint is None:
+            mode.drift.update(_one_law(mode, follow))
+            mode.drift.update(_noise_spread(mode))
+        else:               # (the band fit's range checks would only widen what it replaces)
             _take_joint(mode)
         if (ratio := _band_noise_ratio(mode, fs)) is not None:
             mode.drift["band_noise"] = ratio
