@@ -51,7 +51,8 @@ number. The steps:
    samples (:mod:`.joint_fit`): each band holds the other's first cycles, which no correction
    takes off well. Where their decays describe the record to its noise
    (:data:`JOINT_RESIDUAL`), that fit gives their quadratic law and linear frequency
-   (:func:`_joint`).
+   (:func:`_joint`), and their candidate laws are compared on the same samples
+   (:func:`_joint_laws`).
 7. **Backbone.** Frequency ``1 / (t[i+1] - t[i-1])`` at each zero crossing against the
    displacement amplitude (the geometric mean of the two neighbouring extrema). The natural
    frequency is the backbone's small-amplitude limit: the fitted model (its damping law, and
@@ -1160,7 +1161,7 @@ def _clusters(modes: list[_Mode]) -> list[list[_Mode]]:
 
 def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeBands,
            record: np.ndarray, fs: float, follow: str, quantity: str, sigma: float,
-           referenced: bool) -> list[str]:
+           referenced: bool, laws: Sequence[str]) -> list[str]:
     """Step 6a: close modes fitted together to the record's samples
     (:func:`.joint_fit.fit_decays_jointly`), from their band fits. Each window where every
     mode of the group has a free decay gives a span, which starts where its excitation is
@@ -1213,18 +1214,20 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
         # only where they explain clearly more of the record. A close mode's smear makes the
         # band fits find a stiffness: held fixed, one left two modes' damping swapped; fitted
         # freely, one traded itself against the damping (C_f +84 %) for no better fit.
-        fits = []
+        fits = {}
         failure = ""
         for guess, free in (([dataclasses.replace(g, alpha=0.0) for g in guesses], False),
                             (guesses, True)):
             try:
-                fits.append(fit_decays_jointly(target, fs, spans, guess, quantity=follow,
-                                               output=quantity, stiffness=free))
+                fits[free] = fit_decays_jointly(target, fs, spans, guess, quantity=follow,
+                                                output=quantity, stiffness=free)
             except AnalysisError as exc:
                 failure = str(exc)
-        found = fits[0] if fits else None
-        if len(fits) == 2 and _stiffness_gain(fits[0], fits[1]) > STIFFNESS_GAIN * len(group):
-            found = fits[1]
+        cubic = len(fits) == 2 and _stiffness_gain(fits[False], fits[True]) \
+            > STIFFNESS_GAIN * len(group)
+        if len(fits) == 1:
+            cubic = True in fits
+        found = fits.get(cubic)
         if found is None:
             notes.append(f"the modes at {names} lie close together; fitting them together to "
                          f"the record's samples failed ({failure}): their band fits are kept")
@@ -1244,12 +1247,63 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
             m.joint = {"params": found.params[k], "cov": found.cov[k], "w0": float(found.w0[k]),
                        "alpha": float(found.alpha[k]),
                        "dof": found.dof,
-                       "residual": ratio, "modes": len(group), "widening": found.widening[k]}
+                       "residual": ratio, "modes": len(group), "widening": found.widening[k],
+                       "laws": _joint_laws(group, k, found, guesses, target, fs, spans,
+                                           follow, quantity, cubic, laws)}
         notes.append(f"the modes at {names} lie within a factor {CLOSE_RATIO:g} of each "
                      "other, so each one's band holds the other's first cycles: their C_i, C_f "
                      "and natural frequencies come from their decays fitted together to the "
                      f"record's samples (residual {ratio:.2f} times the record's white noise)")
     return notes
+
+
+def _joint_laws(group: list[_Mode], k: int, found: JointFit, guesses: list[JointMode],
+                target: np.ndarray, fs: float, spans: list[tuple[int, int]], follow: str,
+                quantity: str, cubic: bool, laws: Sequence[str]) -> dict[str, dict] | None:
+    """The other candidate laws of mode ``k`` of a jointly fitted group, fitted the same way:
+    the group refitted to the record's samples with that mode's law replaced (from its band
+    fit and the group's fitted decays). Each law gets its parameters, covariance, degrees of
+    freedom and AICc on the record's samples, the quadratic law too, so that the laws are
+    compared on what the quadratic law was taken from; None if a refit fails.
+
+    The samples' noise is coloured where the joint fit widened its intervals: the likelihood
+    of white noise would then count each sample as independent evidence. The sample count
+    in the AICc is divided by the square of the widening of beta, so that the viscous law's
+    AICc gap is about the square of C_f's z-score with its widened standard error, as the
+    interval says, not the white noise's."""
+    samples = found.samples
+    effective = samples / max(float(found.widening[k][1]) ** 2, 1.0)
+
+    def aicc(fit: JointFit) -> float:
+        p = fit.samples - fit.dof
+        rss = max(fit.residual_rms, 1e-300) ** 2 * samples
+        return (effective * math.log(rss / samples) + 2.0 * p
+                + 2.0 * p * (p + 1) / max(effective - p - 1, 1.0))
+
+    own = len(LAWS["quadratic"])
+    out = {"quadratic": {"params": found.params[k], "cov": found.cov[k][:own, :own],
+                         "dof": found.dof, "aicc": aicc(found)}}
+    fitted = [JointMode("quadratic", found.params[j], float(found.w0[j]),
+                        [DecayStart(d.span, float(v), float(t)) for d, v, t in
+                         zip(g.decays, found.starts[j], found.times[j])],
+                        alpha=float(found.alpha[j]))
+              for j, g in enumerate(guesses)]
+    for law in laws:
+        if law == "quadratic" or law not in group[k].fits:
+            continue
+        modes = list(fitted)
+        modes[k] = dataclasses.replace(modes[k], law=law, params=group[k].fits[law].params)
+        try:
+            fit = fit_decays_jointly(target, fs, spans, modes, quantity=follow, output=quantity,
+                                     stiffness=cubic)
+        except AnalysisError:
+            return None
+        n = len(LAWS[law])
+        if not (np.all(np.isfinite(fit.cov[k])) and np.all(np.isfinite(fit.params[k]))):
+            return None
+        out[law] = {"params": fit.params[k], "cov": fit.cov[k][:n, :n], "dof": fit.dof,
+                    "aicc": aicc(fit)}
+    return out
 
 
 def _stiffness_gain(linear: JointFit, cubic: JointFit) -> float:
@@ -1270,6 +1324,12 @@ def _take_joint(mode: _Mode) -> None:
     mode.fits["quadratic"] = dataclasses.replace(
         quad, params=np.asarray(joint["params"], dtype=np.float64),
         cov=np.asarray(joint["cov"])[:-2, :-2], dof=int(joint["dof"]), alpha=joint["alpha"])
+    if joint["laws"] is not None:
+        for law, fit in joint["laws"].items():
+            mode.fits[law] = dataclasses.replace(
+                mode.fits[law], params=np.asarray(fit["params"], dtype=np.float64),
+                cov=np.asarray(fit["cov"]), dof=int(fit["dof"]), aicc=float(fit["aicc"]),
+                alpha=joint["alpha"])
     mode.w0, mode.alpha = joint["w0"], joint["alpha"]
     mode.w0_se = math.sqrt(max(float(joint["cov"][-2, -2]), 0.0))
     mode.w0_dof = int(joint["dof"])
@@ -2169,7 +2229,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                                  / np.maximum(m.fits["quadratic"].se, 1e-300)))
                     for m, b in zip(modes, before))
     notes += _joint(modes, windows, bands, record, fs, follow, quantity, sigma,
-                    base_free is not None)
+                    base_free is not None, laws)
     # Steps 7 and 8: where the laws start to hold; backbones and natural frequencies.
     results = []
     for mode in modes:
@@ -2184,7 +2244,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])
-        mode.drift["residual_rho"] = _residual_correlation(mode, comparison)
+        # A joint fit's residual is judged on the record's samples (JOINT_RESIDUAL), not on
+        # the band extrema it does not use.
+        mode.drift["residual_rho"] = (_residual_correlation(mode, comparison)
+                                      if mode.joint is None else math.nan)
         decays = [DecayExtrema(window=(full_windows[d["w"]][0], full_windows[d["w"]][2]),
                                times=d["times"], values=d["values"], amplitude=d["amplitude"],
                                crossings=d["crossings"][(d["crossings"] >= d["times"][0])
