@@ -15,7 +15,10 @@ record), with no knowledge of the excitation, so it works as well on imported da
   envelope is no excitation);
 - it does start only when that rise is abrupt (:data:`ABRUPT`): an excitation (an impulse)
   lifts the amplitude far faster than the decay after it lets it down, whereas two modes
-  beating, or a resonance passed during a sweep, swell about as slowly as they fade;
+  beating, or a resonance passed during a sweep, swell about as slowly as they fade. A rise
+  that stays below the previous decay's peak may be a beat (free decays never sum to more
+  than their earlier peak): its swell is counted from the low itself, so that a beat whose
+  rise spans only a block or two is not taken for an impulse;
 - the previous decay ends at its lowest amplitude before the rise (that point included; the
   last of equally low ones, as where amplitudes below a noise floor count as the floor);
 - a decay's peak is its largest amplitude, and its free part runs from the peak plus
@@ -219,16 +222,24 @@ def _abrupt_lows(mean: np.ndarray, lows: list[int], abrupt: float, rise: float) 
     count as a slow rise.
     """
     keep = []
+    before = 0
     for lo, hi in zip(lows, [*lows[1:], mean.size - 1]):
         seg = mean[lo:hi + 1]
         excess = np.maximum(seg - seg[0], 0.0)
         pk = int(np.argmax(excess))
         low = np.flatnonzero(seg <= rise * seg[0])
-        first = int(low[low < pk].max()) + 1 if np.any(low < pk) else 1
+        # A rise that stays below the last decay's peak may be two modes beating (the sum
+        # of free decays never exceeds its earlier peak): its swell counts from the low
+        # itself, not from where it crosses ``rise`` times the low, which on blocks of half
+        # a period of the dominant mode would leave a beat's rise one block long, as
+        # abrupt as an impulse's.
+        beat = seg[pk] <= float(np.max(mean[before:lo + 1]))
+        first = 1 if beat else int(low[low < pk].max()) + 1 if np.any(low < pk) else 1
         after = low[low > pk]
         last = int(after.min()) if after.size else seg.size
         if float(np.sum(excess[first:pk])) < abrupt * float(np.sum(excess[pk + 1:last])):
             keep.append(lo)
+            before = lo
     return keep
 
 

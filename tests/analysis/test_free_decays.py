@@ -383,6 +383,16 @@ def test_decay_segments_split_a_train_but_not_two_beating_modes():
     t = time_axis(10.0, fs)
     beat = decaying_tone(t, 1.0, 12.5, 0.002, 0.0)[0] + decaying_tone(t, 1.0, 13.5, 0.002, 1.0)[0]
     assert decay_segments(beat, fs, 1 / 13.0) == [(0, t.size)]
+    # A 17 Hz mode that dies out fast beating with a slow 24.65 Hz one (ratio 1.45), on blocks
+    # of half a period of the upper mode, as identify splits: a beat's rise spans one or two
+    # blocks, as an impulse's does, but it never lifts the sum of the decays above its
+    # earlier peak, so it is judged from the low itself and is no new decay.
+    t = time_axis(4.0, 2000.0)
+    for zeta, upper in ((0.04, 0.7), (0.02, 0.8)):
+        pair = (decaying_tone(t, 1.0, 17.0, zeta, 0.0)[0]
+                + decaying_tone(t, upper, 24.65, 0.005, 0.0)[0])
+        assert decay_segments(noisy(pair, 1e-3, seed=1), 2000.0, 0.5 / 24.65, 1e-2,
+                              confirm=2) == [(0, t.size)]
 
 
 def test_a_train_shows_one_spectral_peak_per_mode_and_hvd_cutoffs_of_one_decay():
