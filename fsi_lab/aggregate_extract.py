@@ -77,6 +77,8 @@ class ModeExtract:
     joint
         Whether its ``params`` come from a fit together with a close mode to the record's
         samples (:mod:`fsi_lab.dsp.joint_fit`), not from its extrema.
+    delta_aicc
+        Its identification's AICc of each damping law less the lowest.
     """
 
     channel: str
@@ -104,6 +106,7 @@ class ModeExtract:
     widening: float = 1.0
     warnings: list[str] = field(default_factory=list)
     joint: bool = False
+    delta_aicc: dict[str, float] = field(default_factory=dict)
 
     def run_decays(self):
         """The mode's decays for the union fit (:class:`~fsi_lab.aggregate_fit.RunDecays`)."""
@@ -111,7 +114,7 @@ class ModeExtract:
 
         return RunDecays(self.decays, self.bands.correlation(self.band), self.noise_floor,
                          self.w0, self.alpha, self.quantity, self.params, self.cov,
-                         self.widening, self.joint)
+                         self.widening, self.joint, dict(self.delta_aicc))
 
     def coefficients(self, level: float = 0.95) -> dict[str, Any]:
         """The run's own C_i (kg/(m s)) and C_f (kg/m^2) with their intervals."""
@@ -199,7 +202,8 @@ def _mode(channel: str, k: int, ident, context, eq_params: dict[str, Any], mass:
         damping_zeta=np.concatenate(zetas) if zetas else np.empty(0),
         damping_frequency=np.concatenate(freqs) if freqs else np.empty(0),
         amplitude_range=(float(extrema.max()), float(extrema.min())),
-        warnings=list(mode.warnings), joint="joint_modes" in mode.start_drift)
+        warnings=list(mode.warnings), joint="joint_modes" in mode.start_drift,
+        delta_aicc={law: float(v) for law, v in mode.laws.delta.items()})
     if extract.joint:      # (its own fit used no extrema: nothing to compare a refit with)
         return extract
     try:

@@ -32,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.stats as sstats
@@ -75,6 +75,9 @@ class RunDecays:
     joint
         Whether the run's ``params`` come from its mode fitted together with a close mode to
         the record's samples, not from these extrema (:mod:`fsi_lab.dsp.joint_fit`).
+    delta_aicc
+        The run's own AICc of each law less the lowest (its identification's law comparison;
+        empty when not known).
     """
 
     decays: Sequence[DecayExtrema]
@@ -87,6 +90,7 @@ class RunDecays:
     cov: np.ndarray
     widening: float = 1.0
     joint: bool = False
+    delta_aicc: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -124,7 +128,9 @@ class UnionFit:
         ``"union"``, or ``"weighted mean"`` when a run's mode was fitted together with a close
         mode to its record's samples (:attr:`RunDecays.joint`): its extrema are smeared by the
         band filters, so ``a`` and ``beta`` are then the runs' own estimates averaged with
-        their inverse covariances (the union's fits still rank the laws).
+        their inverse covariances, and the laws are ranked by the sum of the runs' own AICc
+        (each compared its laws on what its law was fitted to; the runs' records are
+        independent), not by the union's fits of the smeared extrema.
     """
 
     fit: LawFit
@@ -213,9 +219,11 @@ def fit_union(runs: Sequence[RunDecays]) -> UnionFit:
     noise_factor = math.sqrt(sum(f * f * x for f, x in zip(widening, weighted)) / total) \
         if total > 0 else 1.0
     pooled = "union"
+    comparison = compare_laws(list(fits.values()))
     if any(run.joint for run in runs):
         quad = _weighted_mean(quad, runs)
         noise_factor, pooled = 1.0, "weighted mean"
+        comparison = _summed_comparison(fits, runs, comparison)
     chi2 = np.full(2, math.nan)
     spread_factor = np.ones(2)
     if len(runs) > 1:
@@ -241,12 +249,23 @@ def fit_union(runs: Sequence[RunDecays]) -> UnionFit:
     exact = variance == 0.0  # (a noise-free union fitted exactly: its interval is the floor)
     cov[exact, exact] = floor[exact] ** 2
     accuracy_factor[exact & (floor > 0)] = math.inf
-    return UnionFit(fit=quad, cov=cov, comparison=compare_laws(list(fits.values())),
+    return UnionFit(fit=quad, cov=cov, comparison=comparison,
                     widenings=np.array([run.widening for run in runs]),
                     noise_factor=noise_factor, spread_factor=spread_factor, spread_chi2=chi2,
                     accuracy_factor=accuracy_factor,
                     runs=len(runs), decays=len(amps), extrema=int(sum(a.size for a in amps)),
                     w0=w0, alpha=alpha, pooled=pooled)
+
+
+def _summed_comparison(fits: dict[str, LawFit], runs: Sequence[RunDecays],
+                       union: LawComparison) -> LawComparison:
+    """The laws of ``fits`` ranked by the sum over the runs of their own AICc (less each
+    run's lowest: the same ranking), or ``union`` when a run does not give them all."""
+    if not all(set(fits) <= set(run.delta_aicc) for run in runs):
+        return union
+    ranked = [dataclasses.replace(fit, aicc=sum(float(run.delta_aicc[law]) for run in runs))
+              for law, fit in fits.items()]
+    return compare_laws(ranked)
 
 
 def _weighted_mean(quad: LawFit, runs: Sequence[RunDecays]) -> LawFit:

@@ -234,6 +234,14 @@ def test_runs_whose_modes_were_fitted_jointly_are_averaged_not_refitted(extracts
     np.testing.assert_allclose(pooled.fit.cov, np.linalg.inv(precision), rtol=1e-9)
     assert pooled.noise_factor == 1.0
     assert abs(pooled.value("beta") / fit_union(runs).value("beta") - 1.0) > 0.005
+    # The laws are ranked by the runs' own AICc gaps, summed: two runs that each found the
+    # viscous law 1.5 below the quadratic one make it preferred by 3 (a tie, 2, per run).
+    ranked = [dataclasses.replace(r, delta_aicc={"quadratic": 1.5 * (k > 0), "viscous": 0.0,
+                                                 "coulomb": 9.0})
+              for k, r in enumerate(shifted)]
+    comparison = fit_union(ranked).comparison
+    assert comparison.preferred == "viscous"
+    assert comparison.delta == pytest.approx({"quadratic": 3.0, "viscous": 0.0})
 
 
 def test_fsi_lab_aggregate_of_runs_with_close_modes_averages_their_joint_fits(tmp_path):
@@ -248,6 +256,10 @@ def test_fsi_lab_aggregate_of_runs_with_close_modes_averages_their_joint_fits(tm
     agg = aggregate_extracts(runs)
     (mode,) = [m for m in agg["modes"] if abs(m["frequency_hz"] - 20.0) < 1.0]
     assert mode["pooled_by"] == "weighted mean"
+    own = [m.delta_aicc["viscous"] for r in runs for m in r.modes
+           if abs(m.frequency_hz - 20.0) < 1.0]
+    assert mode["preferred_law"] == "quadratic"
+    assert mode["delta_aicc"]["viscous"] == pytest.approx(sum(own), rel=1e-9)
     assert mode["c_i"] == pytest.approx(C_I, rel=0.03) and covers(mode["c_i_ci95"], C_I)
     assert mode["c_f"] == pytest.approx(C_F, rel=0.06) and covers(mode["c_f_ci95"], C_F)
     assert "averaged with their inverse covariances" in format_aggregate(agg)
