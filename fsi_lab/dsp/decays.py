@@ -16,9 +16,9 @@ record), with no knowledge of the excitation, so it works as well on imported da
 - it does start only when that rise is abrupt (:data:`ABRUPT`): an excitation (an impulse)
   lifts the amplitude far faster than the decay after it lets it down, whereas two modes
   beating, or a resonance passed during a sweep, swell about as slowly as they fade. Modes
-  far enough apart beat as fast as an impulse rises; a rise that stays below the previous
-  decay's peak (free decays never sum to more than their earlier peak) and out of a low the
-  amplitude fell into as steeply is such a beat (:data:`BEAT`), not a new decay;
+  far enough apart beat as fast as an impulse rises; a short rise that only regains the
+  level the amplitude fell from just before its low is such a beat (:data:`BEAT`), not a
+  new decay;
 - the previous decay ends at its lowest amplitude before the rise (that point included; the
   last of equally low ones, as where amplitudes below a noise floor count as the floor);
 - a decay's peak is its largest amplitude, and its free part runs from the peak plus
@@ -52,17 +52,17 @@ CONFIRM = 3
 #: cycles through the HVD filters) and fades over many; two modes beating, or a resonance
 #: passed during a sweep, swell about as slowly as they fade (a ratio of about 1 or more).
 ABRUPT = 0.5
-#: A rise that stays below the last decay's peak is two modes beating, not an excitation, when
-#: the amplitude fell into its low, over as many points as it takes to rise to its peak, by at
-#: least BEAT times as much as it rises (areas above the low). A beat's null is as steep on
-#: both sides (0.6 to 1.4 on 17 Hz beside 24.65 or 27 Hz modes, on blocks of half a period,
-#: where its rise is as short as an impulse's); an impulse lifts a decay that had been
-#: falling slowly (0.14 to 0.3 in impulse trains 0.25 and 0.18 s apart).
-BEAT = 0.45
+#: A short rise is two modes beating, not an excitation, when it regains no more than the
+#: level the amplitude fell from just before its low: at least BEAT times the new peak within
+#: as many points before the low as the rise takes, plus one. A beat's null is a narrow V
+#: between two peaks, the earlier one the higher (the modes decay): 1.2 to 1.6 on 17 Hz
+#: beside 24.65 or 27 Hz modes, on blocks of half a period, where the rise is as short as an
+#: impulse's. An impulse lifts a decay far above where it had slowly fallen to: 0.4 to 0.73
+#: in impulse trains 0.25 and 0.18 s apart.
+BEAT = 0.9
 #: The beat test is for rises this many points long or shorter, those the ABRUPT test takes
 #: for impulses (modes 1.3 or more times apart beat within about two blocks); longer ones
-#: it judges well, and on them a slowly falling stretch of noise before the low would pass
-#: for a beat's fall.
+#: it judges well, and on them a stretch of noise before a slow rise would pass for a beat.
 BEAT_POINTS = 3
 #: Most blocks :func:`decay_segments` splits a record into (longer blocks than a period of
 #: the dominant frequency on very long records keep the split fast).
@@ -253,14 +253,13 @@ def _abrupt_lows(mean: np.ndarray, lows: list[int], abrupt: float, rise: float) 
 
 def _beat(mean: np.ndarray, before: int, lo: int, pk: int) -> bool:
     """Whether the rise from the low ``mean[lo]`` to its peak ``pk`` points later is two modes
-    beating (see :data:`BEAT`): it is short (:data:`BEAT_POINTS`), stays below the last
-    decay's peak (from ``before`` on), and the amplitude fell into the low as fast as it
-    rises out of it."""
-    if not 1 <= pk <= BEAT_POINTS or mean[lo + pk] > float(np.max(mean[before:lo + 1])):
+    beating (see :data:`BEAT`): it is short (:data:`BEAT_POINTS`) and regains no more than
+    the level the amplitude fell from just before the low (from ``before`` on, the start
+    of the last decay)."""
+    if not 1 <= pk <= BEAT_POINTS or lo <= before:
         return False
-    swell = float(np.sum(mean[lo + 1:lo + pk + 1] - mean[lo]))
-    fall = float(np.sum(np.maximum(mean[max(before, lo - pk):lo] - mean[lo], 0.0)))
-    return fall >= BEAT * swell
+    fell_from = float(np.max(mean[max(before, lo - pk - 1):lo]))
+    return fell_from >= BEAT * float(mean[lo + pk])
 
 
 def decay_runs(labels: Any, size: int, func: str = "decay_runs") -> list[slice]:
