@@ -285,8 +285,11 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
             jac[offsets[s]:offsets[s + 1], lines + 2 * s + 1] = t
         return jac
 
-    sol = sopt.least_squares(residuals, theta0, jac=jacobian, x_scale=typical,
-                             method="trf", max_nfev=MAX_EVALUATIONS)
+    # A fit driven where the model decays explode overflows inside the solver; it is then
+    # reported as not converged or with a non-finite covariance, which the caller refuses.
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        sol = sopt.least_squares(residuals, theta0, jac=jacobian, x_scale=typical,
+                                 method="trf", max_nfev=MAX_EVALUATIONS)
     theta = sol.x
     resid = sol.fun
     jac = jacobian(theta)
