@@ -150,10 +150,11 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
     average
         Samples per block: the record and the model are compared as means of blocks of this
         many samples (each span cut to whole blocks), the model computed at every sample
-        and averaged alike, so that nothing is biased. A record sampled far above its modes
-        is fitted as fast as one sampled a few times above them, with the same information
-        on the decays; the white noise of a block mean is that of a sample over the square
-        root of ``average``.
+        and averaged alike, so that nothing is biased. The least squares of a record sampled
+        far above its modes then works on as many values as one sampled a few times above
+        them, with the same information on the decays (the model is still computed at every
+        sample); the white noise of a block mean is that of a sample over the square root of
+        ``average``.
 
     Returns
     -------
