@@ -1233,9 +1233,9 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
                                                 average=average)
             except AnalysisError as exc:
                 failure = str(exc)
-        cubic = len(fits) == 2 and _stiffness_gain(fits[False], fits[True]) \
-            > STIFFNESS_GAIN * len(group)
-        if len(fits) == 1:
+        if len(fits) == 2:
+            cubic = _stiffness_gain(fits[False], fits[True]) > STIFFNESS_GAIN * len(group)
+        else:
             cubic = True in fits
         found = fits.get(cubic)
         if found is None:
@@ -1254,12 +1254,18 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
                          + ("" if found.converged else "(the fit did not converge) ")
                          + "unexplained: their band fits are kept")
             continue
+        # The group as fitted, the start of each refit with one mode's law replaced.
+        fitted = [JointMode("quadratic", found.params[j], float(found.w0[j]),
+                            [DecayStart(d.span, float(v), float(t)) for d, v, t in
+                             zip(g.decays, found.starts[j], found.times[j])],
+                            alpha=float(found.alpha[j]))
+                  for j, g in enumerate(guesses)]
         for k, m in enumerate(group):
             m.joint = {"params": found.params[k], "cov": found.cov[k], "w0": float(found.w0[k]),
                        "alpha": float(found.alpha[k]),
                        "dof": found.dof,
                        "residual": ratio, "modes": len(group), "widening": found.widening[k],
-                       "laws": _joint_laws(group, k, found, guesses, target, fs, spans,
+                       "laws": _joint_laws(group, k, found, fitted, target, fs, spans,
                                            follow, quantity, cubic, laws, average)}
         notes.append(f"the modes at {names} lie within a factor {CLOSE_RATIO:g} of each "
                      "other, so each one's band holds the other's first cycles: their C_i, C_f "
@@ -1268,15 +1274,16 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
     return notes
 
 
-def _joint_laws(group: list[_Mode], k: int, found: JointFit, guesses: list[JointMode],
+def _joint_laws(group: list[_Mode], k: int, found: JointFit, fitted: list[JointMode],
                 target: np.ndarray, fs: float, spans: list[tuple[int, int]], follow: str,
                 quantity: str, cubic: bool, laws: Sequence[str], average: int
                 ) -> dict[str, dict] | None:
     """The other candidate laws of mode ``k`` of a jointly fitted group, fitted the same way:
     the group refitted to the record's samples with that mode's law replaced (from its band
-    fit and the group's fitted decays). Each law gets its parameters, covariance, degrees of
-    freedom and AICc on the record's samples, the quadratic law too, so that the laws are
-    compared on what the quadratic law was taken from; None if a refit fails.
+    fit and ``fitted``, the group's joint fit as starting values). Each law gets its
+    parameters, covariance, degrees of freedom and AICc on the record's samples, the
+    quadratic law too, so that the laws are compared on what the quadratic law was taken
+    from; None if a refit fails.
 
     The samples' noise is coloured where the joint fit widened its intervals: the likelihood
     of white noise would then count each sample as independent evidence. The sample count
@@ -1295,11 +1302,6 @@ def _joint_laws(group: list[_Mode], k: int, found: JointFit, guesses: list[Joint
     own = len(LAWS["quadratic"])
     out = {"quadratic": {"params": found.params[k], "cov": found.cov[k][:own, :own],
                          "dof": found.dof, "aicc": aicc(found)}}
-    fitted = [JointMode("quadratic", found.params[j], float(found.w0[j]),
-                        [DecayStart(d.span, float(v), float(t)) for d, v, t in
-                         zip(g.decays, found.starts[j], found.times[j])],
-                        alpha=float(found.alpha[j]))
-              for j, g in enumerate(guesses)]
     for law in laws:
         if law == "quadratic" or law not in group[k].fits:
             continue
