@@ -1,9 +1,12 @@
 """Import of data recorded elsewhere: a CSV file becomes a run file.
 
-The header row names each column ``name [unit]``; the unit (m, m/s, m/s^2, g or V) gives the
-quantity. An optional ``time [s]`` column replaces the sample rate given on the command line.
-Values in g are converted to m/s^2. What a run file gets from its profile and instruments and a
-CSV cannot say is given on import: the base acceleration column (``reference``) and the sensors'
+The header row names each column ``name [unit]`` (or ``name (unit)``); the unit (m, m/s,
+m/s^2, g or V, with a prefix mm, um, mV...) gives the quantity. An optional ``time [s]`` (or
+``[ms]``) column replaces the sample rate given on the command line. Values are converted to SI
+(g to m/s^2, mm/s to m/s). Files exported where the decimal mark is a comma separate their
+columns with semicolons (or tabs): their ``1,5`` reads as 1.5. Lines starting with ``#`` before
+or among the rows are comments. What a run file gets from its profile and instruments and a CSV
+cannot say is given on import: the base acceleration column (``reference``) and the sensors'
 signal delays, so that the analysis of exported data gives the run's results.
 """
 
@@ -12,6 +15,7 @@ from __future__ import annotations
 import csv
 import io
 import re
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping
 
@@ -22,79 +26,131 @@ from fsi_lab.inputfiles import read_text
 from fsi_lab.profile import CHANNEL_NAME
 from fsi_lab.runcheck import CHANNEL_RATES_HZ, MAX_T0_S
 from fsi_lab.runfile import RunFileWriter, new_run_path, software_version, utc_now
-from fsi_lab.units import QUANTITY_OF_UNIT, to_si
+from fsi_lab.units import QUANTITY_OF_UNIT, TIME_UNITS, parse_unit, to_si
 
-_HEADER = re.compile(r"^\s*(?P<name>[^\[\]]+?)\s*\[(?P<unit>[^\[\]]*)\]\s*$")
+_HEADER = re.compile(r"^\s*(?P<name>[^\[\]()]+?)\s*(?:\[(?P<unit>[^\[\]]*)\]"
+                     r"|\((?P<paren>[^()]*)\))\s*$")
 TIME_TOLERANCE = 1e-3  # relative spread of the time steps accepted as uniform sampling
-EXPECTED = "a UTF-8 CSV file with a header row of 'name [unit]' cells and rows of numbers"
+EXPECTED = ("a UTF-8 CSV file with a header row of 'name [unit]' cells and rows of numbers, "
+            "separated by commas (or by semicolons or tabs, with a decimal comma or point)")
+#: The units accepted, in words, for the messages.
+ACCEPTED_UNITS = ("m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n on m, m/s, m/s^2 and V "
+                  "(mm/s, um, mV), or s or ms for the time column")
+#: Column separators recognised in the header row, most telling first.
+SEPARATORS = (";", "\t", ",")
+_SEPARATOR_NAMES = {";": "semicolons", "\t": "tabs", ",": "commas"}
 
 
-def _parse_header(path: Path, cells: list[str]) -> list[tuple[str, str]]:
+@dataclass(frozen=True)
+class Column:
+    """A column of the file: its channel ``name``, the ``unit`` it is written in, the unit of
+    :data:`~fsi_lab.units.QUANTITY_OF_UNIT` (or ``s``) it is one of and the factor to it, and
+    the name the header wrote (spaces become ``_`` in the channel name)."""
+
+    name: str
+    unit: str
+    base: str
+    factor: float
+    written: str
+
+    @property
+    def is_time(self) -> bool:
+        return self.name.lower() == "time"
+
+
+def _parse_header(path: Path, cells: list[str]) -> list[Column]:
     columns = []
-    accepted = ", ".join(list(QUANTITY_OF_UNIT) + ["s (time column)"])
     for number, cell in enumerate(cells, start=1):
         match = _HEADER.match(cell)
         if not match:
             raise InputFileError(
-                f"{path}: header column {number} is {cell!r}; expected 'name [unit]' with unit "
-                f"one of {accepted}"
+                f"{path}: header column {number} is {cell!r}; expected 'name [unit]' (or "
+                f"'name (unit)') with unit {ACCEPTED_UNITS}"
             )
-        name, unit = match["name"].strip(), match["unit"].strip()
+        written = match["name"].strip()
+        unit = (match["unit"] if match["unit"] is not None else match["paren"]).strip()
+        name = re.sub(r"\s+", "_", written)
         if not CHANNEL_NAME.fullmatch(name):  # the names a profile accepts
             raise InputFileError(
-                f"{path}: header column {number}: name {name!r} is not accepted; expected a "
-                "letter followed by letters, digits, '_' or '-' (e.g. tip_velocity)"
+                f"{path}: header column {number}: name {written!r} is not accepted; expected a "
+                "letter followed by letters, digits, '_', '-' or spaces (e.g. tip_velocity)"
             )
-        is_time = name.lower() == "time"
-        if (is_time and unit != "s") or (not is_time and unit not in QUANTITY_OF_UNIT):
+        if name.lower() == "time":
+            parsed = ("s", TIME_UNITS[unit]) if unit in TIME_UNITS else None
+        else:
+            parsed = parse_unit(unit)
+        if parsed is None:
             raise InputFileError(
-                f"{path}: header column {number} ({name}): unit {unit!r} is not accepted; "
-                f"expected one of {accepted}"
+                f"{path}: header column {number} ({written}): unit {unit!r} is not accepted; "
+                f"expected {ACCEPTED_UNITS}"
             )
-        columns.append((name, unit))
-    names = [n for n, _ in columns]
+        columns.append(Column(name, unit, parsed[0], parsed[1], written))
+    names = [c.name for c in columns]
     duplicate = next((n for n in names if names.count(n) > 1), None)
     if duplicate:
         raise InputFileError(f"{path}: column name {duplicate!r} appears twice in the header")
     return columns
 
 
-def read_csv(path: str | Path) -> tuple[list[tuple[str, str]], np.ndarray]:
-    """Columns ``(name, unit)`` and the values (rows x columns) of a CSV file."""
+def _separator(header: str) -> str:
+    """The column separator of a file whose header line is ``header``: a semicolon or a tab
+    when the line holds one (files written with a decimal comma), else a comma."""
+    return next((sep for sep in SEPARATORS if sep in header), ",")
+
+
+def read_csv(path: str | Path) -> tuple[list[Column], np.ndarray, np.ndarray]:
+    """Columns, the values (rows x columns, in each column's written unit) and each row's line
+    number in the file, of a CSV file.
+
+    The separator is found on the header row (:func:`_separator`); with semicolons or tabs, a
+    comma in a value is its decimal mark.
+    """
     path = Path(path)
-    reader = csv.reader(io.StringIO(read_text(path, EXPECTED), newline=""))
+    text = read_text(path, EXPECTED)
+    lines = [(number, line) for number, line in enumerate(text.splitlines(), start=1)
+             if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise InputFileError(f"{path}: empty; expected a header row 'name [unit],...' and data")
+    separator = _separator(lines[0][1])
+    reader = csv.reader(io.StringIO("\n".join(line for _, line in lines), newline=""),
+                        delimiter=separator)
     try:
         rows = list(reader)
     except csv.Error as exc:
-        raise InputFileError(f"{path}: line {reader.line_num}: {exc}; expected {EXPECTED}") \
-            from None
-    rows = [r for r in rows if any(cell.strip() for cell in r)]
-    if not rows:
-        raise InputFileError(f"{path}: empty; expected a header row 'name [unit],...' and data")
+        raise InputFileError(f"{path}: line {lines[reader.line_num - 1][0]}: {exc}; expected "
+                             f"{EXPECTED}") from None
+    if len(rows) != len(lines):  # a quoted cell spanning lines: not a table of numbers
+        raise InputFileError(f"{path}: a quoted value spans several lines; expected {EXPECTED}")
+    # An export's rows often end with the separator: an empty last cell on every line.
+    if len(rows[0]) > 1 and not rows[0][-1].strip():
+        rows = [row[:-1] if row and not row[-1].strip() else row for row in rows]
     columns = _parse_header(path, rows[0])
+    decimal_comma = separator != ","
     data = np.empty((len(rows) - 1, len(columns)))
-    for line, row in enumerate(rows[1:], start=2):
+    for index, ((line, _), row) in enumerate(zip(lines[1:], rows[1:])):
         if len(row) != len(columns):
             raise InputFileError(
-                f"{path}: line {line} has {len(row)} values; the header has {len(columns)} columns"
+                f"{path}: line {line} has {len(row)} values; the header has {len(columns)} "
+                f"columns (separated by {_SEPARATOR_NAMES[separator]})"
             )
         for col, cell in enumerate(row):
+            number = cell.strip().replace(",", ".") if decimal_comma else cell
             try:
-                value = float(cell)
+                value = float(number)
             except ValueError:
                 raise InputFileError(
-                    f"{path}: line {line}, column {col + 1} ({columns[col][0]}): {cell!r} is "
+                    f"{path}: line {line}, column {col + 1} ({columns[col].written}): {cell!r} is "
                     "not a number"
                 ) from None
             if not np.isfinite(value):
                 raise InputFileError(
-                    f"{path}: line {line}, column {col + 1} ({columns[col][0]}): {cell!r}; "
+                    f"{path}: line {line}, column {col + 1} ({columns[col].written}): {cell!r}; "
                     "expected a finite number"
                 )
-            data[line - 2, col] = value
+            data[index, col] = value
     if data.shape[0] < 2:
         raise InputFileError(f"{path}: fewer than two data rows")
-    return columns, data
+    return columns, data, np.array([line for line, _ in lines[1:]])
 
 
 def _check_rate(rate: float, where: str) -> float:
@@ -106,7 +162,8 @@ def _check_rate(rate: float, where: str) -> float:
     return rate
 
 
-def _rate_from_time(path: Path, time: np.ndarray) -> float:
+def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray) -> float:
+    """The sample rate (Hz) of the time column's values ``time`` (s) on file lines ``lines``."""
     steps = np.diff(time)
     step = float(np.median(steps))
     if step <= 0:
@@ -117,7 +174,7 @@ def _rate_from_time(path: Path, time: np.ndarray) -> float:
         worst = int(np.argmax(np.abs(steps - step)))
         raise InputFileError(
             f"{path}: the time column is not uniformly sampled (step {steps[worst]:.6g} s at "
-            f"line {worst + 3} against a median of {step:.6g} s); expected uniform sampling "
+            f"line {lines[worst + 1]} against a median of {step:.6g} s); expected uniform sampling "
             f"within {TIME_TOLERANCE:.1%}"
         )
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
@@ -133,11 +190,10 @@ def _rate_from_time(path: Path, time: np.ndarray) -> float:
 MAX_DELAY_S = 1.0
 
 
-def _check_analysis_inputs(path: Path, columns: list[tuple[str, str]], reference: str | None,
+def _check_analysis_inputs(path: Path, columns: list[Column], reference: str | None,
                            delays: Mapping[str, float]) -> None:
     """The reference must be an acceleration column and each delay name a data column."""
-    quantities = {name: QUANTITY_OF_UNIT[unit] for name, unit in columns
-                  if name.lower() != "time"}
+    quantities = {c.name: QUANTITY_OF_UNIT[c.base] for c in columns if not c.is_time}
     listing = ", ".join(quantities)
     if reference is not None and quantities.get(reference) != "acceleration":
         found = (f"a {quantities[reference]} column" if reference in quantities
@@ -160,7 +216,7 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     Parameters
     ----------
     path
-        CSV file with header ``name [unit]``.
+        CSV file with header ``name [unit]`` (:func:`read_csv`).
     out
         Run file to create; must not exist (nothing is ever overwritten).
     rate
@@ -175,9 +231,9 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     """
     path, out = Path(path), Path(out)
     delays = dict(delays or {})
-    columns, data = read_csv(path)
+    columns, data, lines = read_csv(path)
     _check_analysis_inputs(path, columns, reference, delays)
-    times = [i for i, (name, _) in enumerate(columns) if name.lower() == "time"]
+    times = [i for i, column in enumerate(columns) if column.is_time]
     if len(times) > 1:
         raise InputFileError(f"{path}: header columns {times[0] + 1} and {times[1] + 1} are both "
                              "time columns; expected at most one 'time [s]' column")
@@ -186,26 +242,28 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
                              "beside it")
     t0 = 0.0
     if times:
-        rate = _rate_from_time(path, data[:, times[0]])
-        t0 = float(data[0, times[0]])
+        time = data[:, times[0]] * columns[times[0]].factor
+        rate = _rate_from_time(path, time, lines)
+        t0 = float(time[0])
         if abs(t0) > MAX_T0_S:
-            raise InputFileError(f"{path}: line 2: the time column starts at {t0:g} s; "
+            raise InputFileError(f"{path}: line {lines[0]}: the time column starts at {t0:g} s; "
                                  f"expected a start within {MAX_T0_S:g} s of 0")
     elif rate is None:
         raise InputFileError(f"{path}: no 'time [s]' column; give the sample rate with --rate HZ")
     else:
         _check_rate(rate, f"--rate {rate:g}")
     values = {}
-    for col, (name, unit) in enumerate(columns):
+    for col, column in enumerate(columns):
         if col in times:
             continue
-        si_unit, factor = to_si(unit)
+        si_unit, factor = to_si(column.base)
         with np.errstate(over="ignore"):
-            values[name] = data[:, col] * factor
-        if not np.all(np.isfinite(values[name])):
-            line = int(np.argmax(~np.isfinite(values[name]))) + 2
-            raise InputFileError(f"{path}: line {line}, column {col + 1} ({name}): too large "
-                                 f"to convert from {unit} to {si_unit}; expected a finite value")
+            values[column.name] = data[:, col] * (column.factor * factor)
+        if not np.all(np.isfinite(values[column.name])):
+            line = lines[int(np.argmax(~np.isfinite(values[column.name])))]
+            raise InputFileError(f"{path}: line {line}, column {col + 1} ({column.written}): too "
+                                 f"large to convert from {column.unit} to {si_unit}; expected a "
+                                 "finite value")
     if out.exists():
         raise InputFileError(f"{out}: already exists; choose another output file")
     _, run_uuid, started = new_run_path(out.parent)
@@ -215,14 +273,16 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
         **({"reference": reference} if reference else {}),
     })
     try:
-        for name, unit in columns:
+        for column in columns:
+            name = column.name
             if name not in values:
                 continue
             writer.create_channel(name, {
-                "units": to_si(unit)[0], "quantity": QUANTITY_OF_UNIT[unit],
+                "units": to_si(column.base)[0], "quantity": QUANTITY_OF_UNIT[column.base],
                 "sample_rate": rate, "t0": t0 - delays.get(name, 0.0), "sensitivity": 1.0,
-                "source_instrument": f"imported from {path.name}", "original_units": unit,
-                "sensor_delay_s": delays.get(name, 0.0),
+                "source_instrument": f"imported from {path.name}",
+                "original_units": column.unit, "sensor_delay_s": delays.get(name, 0.0),
+                **({"original_name": column.written} if column.written != name else {}),
             })
             writer.append(name, values[name])
         writer.set_attrs({"exit_status": "completed", "stop_time": utc_now()})

@@ -49,8 +49,11 @@ def test_time_column_replaces_rate(tmp_path):
 
 
 @pytest.mark.parametrize("header, rows, args, fragment", [
-    (["tip [mm/s]"], [[1], [2]], ["--rate", "10"],
-     "header column 1 (tip): unit 'mm/s' is not accepted; expected one of m, m/s, m/s^2, g, V"),
+    (["tip [in/s]"], [[1], [2]], ["--rate", "10"],
+     "header column 1 (tip): unit 'in/s' is not accepted; expected m, m/s, m/s^2, g or V, "
+     "with a prefix m, u (µ) or n"),
+    (["time [min]", "tip [m/s]"], [[0, 1], [1, 2]], [],
+     "header column 1 (time): unit 'min' is not accepted; expected m, m/s"),
     (["tip"], [[1], [2]], ["--rate", "10"], "header column 1 is 'tip'; expected 'name [unit]'"),
     (["tip [m/s]", "tip [m]"], [[1, 2], [2, 3]], ["--rate", "10"],
      "column name 'tip' appears twice"),
@@ -65,7 +68,9 @@ def test_time_column_replaces_rate(tmp_path):
     (["tip [m/s]"], [[1], ["nan"]], ["--rate", "10"], "expected a finite number"),
     (["tip/velocity [m/s]"], [[1], [2]], ["--rate", "10"],
      "header column 1: name 'tip/velocity' is not accepted; expected a letter followed by "
-     "letters, digits, '_' or '-'"),
+     "letters, digits, '_', '-' or spaces"),
+    (["tip velocity [m/s]", "tip_velocity [m/s]"], [[1, 2], [2, 3]], ["--rate", "10"],
+     "column name 'tip_velocity' appears twice"),
     # time steps of 5e-324 s would store sample_rate = inf
     (["time [s]", "tip [m/s]"], [[0, 1], ["5e-324", 2], ["1e-323", 3]], [],
      "the time column (steps of 4.94066e-324 s) gives: a sample rate of inf Hz; expected "
@@ -90,6 +95,84 @@ def test_bad_csv_is_refused_with_file_and_place(tmp_path, header, rows, args, fr
     assert proc.returncode == 2
     assert fragment in proc.stderr
     assert not out.exists()
+
+
+def _imported(csv_path, *args):
+    out = csv_path.with_suffix(".h5")
+    proc = cli("import", str(csv_path), "-o", str(out), *args)
+    assert proc.returncode == 0, proc.stderr
+    return read_run(out)
+
+
+def test_an_export_with_decimal_commas_reads_as_the_same_record(tmp_path):
+    """A signal analyser's export where the decimal mark is a comma: a preamble of comments,
+    semicolon-separated 'name (unit)' columns in ms, mm/s and m/s², a trailing semicolon on
+    every line. It gives the same channels, in SI, as the comma-separated file of the values."""
+    rng = np.random.default_rng(5)
+    t = 0.25 + np.arange(300) / 2000.0
+    v = 0.02 * np.exp(-2.0 * t) * np.sin(2 * np.pi * 17 * t) + 1e-5 * rng.standard_normal(t.size)
+    a = 3.0 * rng.standard_normal(t.size)
+    plain = _write(tmp_path / "plain.csv", ["time [s]", "tip_velocity [m/s]", "base [m/s^2]"],
+                   zip(t.tolist(), v.tolist(), a.tolist()))
+
+    def comma(x):
+        return repr(float(x)).replace(".", ",")
+
+    lines = ["# Exported by the signal analyser", "# Sample rate: 2000 Hz",
+             "Time (ms);tip velocity (mm/s);base (m/s²);"]
+    lines += [f"{comma(1e3 * ti)};{comma(1e3 * vi)};{comma(ai)};" for ti, vi, ai in zip(t, v, a)]
+    local = tmp_path / "local.csv"
+    local.write_text("\r\n".join(lines) + "\r\n", encoding="utf-8-sig")
+    expected, found = _imported(plain), _imported(local)
+    assert found.channels["tip_velocity"].sample_rate == pytest.approx(2000.0, rel=1e-9)
+    assert found.channels["tip_velocity"].t0 == pytest.approx(0.25, rel=1e-12)
+    np.testing.assert_allclose(found.channels["tip_velocity"].data,
+                               expected.channels["tip_velocity"].data, rtol=1e-12)
+    np.testing.assert_allclose(found.channels["base"].data, expected.channels["base"].data,
+                               rtol=1e-15)
+    assert found.channels["tip_velocity"].unit == "m/s"
+    attrs = found.channel_attrs["tip_velocity"]
+    assert (attrs["original_units"], attrs["original_name"]) == ("mm/s", "tip velocity")
+    assert "original_name" not in found.channel_attrs["base"]
+
+
+@pytest.mark.parametrize("unit, value, si_unit, si_value", [
+    ("mm", "2.5", "m", 2.5e-3), ("um", "4", "m", 4e-6), ("µm/s", "7", "m/s", 7e-6),
+    ("mm/s^2", "3", "m/s^2", 3e-3), ("m/s2", "3", "m/s^2", 3.0), ("mV", "12", "V", 0.012),
+    ("g", "1", "m/s^2", STANDARD_GRAVITY), ("nm", "5", "m", 5e-9),
+])
+def test_units_with_a_prefix_are_converted_to_si(tmp_path, unit, value, si_unit, si_value):
+    run = _imported(_write(tmp_path / "u.csv", [f"x [{unit}]"], [[value], [value]]),
+                    "--rate", "100")
+    assert run.channels["x"].unit == si_unit
+    np.testing.assert_allclose(run.channels["x"].data, [si_value, si_value], rtol=1e-15)
+
+
+def test_tab_separated_values_with_a_decimal_point(tmp_path):
+    path = tmp_path / "tabs.tsv"
+    path.write_text("tip [m/s]\tbase [g]\n0.5\t-1.25e-3\n1.5\t2\n")
+    run = _imported(path, "--rate", "10")
+    np.testing.assert_array_equal(run.channels["tip"].data, [0.5, 1.5])
+    np.testing.assert_allclose(run.channels["base"].data,
+                               np.array([-1.25e-3, 2.0]) * STANDARD_GRAVITY, rtol=1e-15)
+
+
+@pytest.mark.parametrize("text, fragment", [
+    # the line numbers are the file's, comments counted
+    ("# preamble\ntime [s];x [m]\n0;1\n0,1;2\n0,2;3\n# note\n0,35;4\n",
+     "step 0.15 s at line 7 against a median of 0.1 s"),
+    ("x [m];y [m]\n1,5;2\n1,5\n", "line 3 has 1 values; the header has 2 columns (separated by "
+     "semicolons)"),
+    ("x [m];y [m]\n1.000,5;2\n1;2\n", "line 2, column 1 (x): '1.000,5' is not a number"),
+    ("# only a comment\n", "empty; expected a header row"),
+])
+def test_a_separated_export_s_errors_name_its_lines(tmp_path, text, fragment):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    proc = cli("import", str(path), "-o", str(tmp_path / "bad.h5"), "--rate", "10")
+    assert proc.returncode == 2
+    assert fragment in proc.stderr
+    assert not (tmp_path / "bad.h5").exists()
 
 
 def test_existing_output_is_never_overwritten(tmp_path):
