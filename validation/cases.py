@@ -84,6 +84,15 @@ class Case:
     def truth(self) -> Mode:
         return self.modes[0]
 
+    @property
+    def second_truth(self) -> float:
+        """The truth of the law's second coefficient, the matrix's C_f column: C_f (kg/m^2)
+        of the quadratic law, the friction force per length (N/m) of the Coulomb law; 0 for
+        the viscous law, which has none."""
+        if self.law == "coulomb":
+            return self.mass * self.truth.friction
+        return self.truth.c_f if self.law == "quadratic" else 0.0
+
 
 def _force(mode: Mode, impulses, t: float) -> float:
     """The impulses' force on the mode per unit mass, m/s^2."""
@@ -220,7 +229,8 @@ def other_cases() -> list[Case]:
                                       Mode(1.3 * WET_F, c_i=1.0, x0=0.5e-3)), duration=4.0),
         Case("two modes, ratio 2.0", (Mode(WET_F, c_f=WET_C_F, x0=1e-3),
                                       Mode(2.0 * WET_F, c_i=1.0, x0=0.3e-3)), duration=4.0),
-        Case("viscous + Coulomb", (Mode(WET_F, c_i=0.3, friction=0.4, x0=1e-3),),
+        Case("viscous + Coulomb (C_f column: friction force)",
+             (Mode(WET_F, c_i=0.3, friction=0.4, x0=1e-3),),
              duration=3.0, law="coulomb"),
         # Other modes than the wet beam's second: a high one sampled at 10 samples per cycle,
         # and a low one whose linear damping alone is 7.7 % of critical.

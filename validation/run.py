@@ -47,11 +47,20 @@ def fsi_lab_estimate(case: Case, x: np.ndarray) -> Estimate:
     mode = min(found.modes, key=lambda m: abs(math.log(m.frequency_hz / truth)))
     if abs(mode.frequency_hz / truth - 1.0) > 0.2:
         return Estimate(refused=f"no mode near {truth:g} Hz")
-    quad = mode.quadratic
     m = case.mass
-    (a_lo, a_hi), (b_lo, b_hi) = quad.interval("a"), quad.interval("beta")
-    return Estimate(c_i=2 * m * quad.value("a"), c_i_ci=(2 * m * a_lo, 2 * m * a_hi),
-                    c_f=m * quad.value("beta"), c_f_ci=(m * b_lo, m * b_hi),
+    # A dry-friction record is read as a user reads it: the law fsi-lab prefers gives C_i and
+    # the friction force (a friction force the preferred law has not is no number, counted as
+    # not covered). The quadratic law nests the viscous one: a viscous record's C_i is its.
+    fit = mode.quadratic
+    if case.law == "coulomb" and mode.laws.preferred != "quadratic":
+        fit = mode.laws.fits[mode.laws.preferred]
+    second = "gamma" if case.law == "coulomb" else "beta"
+    (a_lo, a_hi) = fit.interval("a")
+    c_f, (b_lo, b_hi) = math.nan, (math.nan, math.nan)
+    if second in fit.names:
+        c_f, (b_lo, b_hi) = m * fit.value(second), fit.interval(second)
+    return Estimate(c_i=2 * m * fit.value("a"), c_i_ci=(2 * m * a_lo, 2 * m * a_hi),
+                    c_f=c_f, c_f_ci=(m * b_lo, m * b_hi),
                     frequency=mode.frequency_hz, frequency_ci=tuple(mode.frequency_ci),
                     law=mode.laws.preferred, warned=bool(mode.warnings))
 
@@ -134,7 +143,7 @@ class Row:
 
     def stats(self, which: str, quantity: str) -> dict[str, float]:
         """Bias and RMS error (% of truth), coverage, over the trials that gave a number."""
-        truth = {"c_i": self.case.truth.c_i, "c_f": self.case.truth.c_f,
+        truth = {"c_i": self.case.truth.c_i, "c_f": self.case.second_truth,
                  "frequency": self.case.truth.frequency}[quantity]
         ests = [e for e in (self.ours if which == "ours" else self.peer) if not e.refused]
         values = np.array([getattr(e, quantity) for e in ests], dtype=float)

@@ -1715,8 +1715,8 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
             **_start_sensitivity(mode, follow, tried, shortest)}
 
 
-def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
-                       ) -> dict[str, float]:
+def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int,
+                       law: str = "quadratic") -> dict[str, float]:
     """Step 8a: how much the quadratic law's coefficients depend on the start kept. The law
     is refitted with the decays starting at the next :data:`START_ALTERNATIVES` starts of
     :data:`START_COUNTS`; a coefficient may move between two starts as much as the extrema
@@ -1725,8 +1725,10 @@ def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
     kept extrema sees: its square is added to the coefficient's variance. The drift test of
     :func:`_stable_start` asks whether a start is stable; this measures what remains when it
     passes with little power (a short decay in noise whose first cycles are still smeared).
-    Returns ``start_a`` and ``start_beta``: the factors the standard errors were widened by."""
-    base = mode.fits["quadratic"]
+    Returns ``start_a`` and ``start_beta``: the factors the standard errors were widened by.
+    ``law`` names another law to treat the same way (the preferred one, when it is not the
+    quadratic: its coefficients are the ones the record supports)."""
+    base = mode.fits[law]
     variance = np.diag(base.cov).copy()
     extra = np.zeros(variance.size)
     for count in [c for c in START_COUNTS if c > tried][:START_ALTERNATIVES]:
@@ -1737,10 +1739,10 @@ def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
             break
         trial = dataclasses.replace(mode, decays=decays, fits={})
         try:
-            _fit_all(trial, follow, ("quadratic",))
+            _fit_all(trial, follow, (law,))
         except AnalysisError:
             break
-        later = trial.fits["quadratic"]
+        later = trial.fits[law]
         with np.errstate(invalid="ignore"):  # inf - inf: NaN, which the check below refuses
             allowed = np.maximum(np.diag(later.cov) - variance, 0.0)
         moved = (later.params - base.params) ** 2
@@ -1749,11 +1751,11 @@ def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int
             and np.all(variance > 0.0)):
         return {}
     factor = np.sqrt((variance + extra) / variance)
-    mode.fits["quadratic"] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
+    mode.fits[law] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
     return {f"start_{name}": float(f) for name, f in zip(base.names, factor)}
 
 
-def _noise_spread(mode: _Mode) -> dict[str, float]:
+def _noise_spread(mode: _Mode, law: str = "quadratic") -> dict[str, float]:
     """Step 8c: the spread of the quadratic law's coefficients over the noisy model records of
     the correction (step 6): each realization's extremum errors, put through the fit's
     whitening and its first-order influence (:attr:`.laws.LawFit.influence`), move the
@@ -1762,8 +1764,9 @@ def _noise_spread(mode: _Mode) -> dict[str, float]:
     extrema err together (the prediction that pads a window is fitted to noisy cycles), which
     in short decays moves C_i and C_f more than that. Where the realizations spread a
     coefficient more than its covariance says, its variance is raised to theirs. Returns
-    ``noise_a`` and ``noise_beta``: the factors the standard errors were widened by."""
-    base = mode.fits["quadratic"]
+    ``noise_a`` and ``noise_beta``: the factors the standard errors were widened by (of
+    ``law``'s, when another law than the quadratic is named)."""
+    base = mode.fits[law]
     devs = [d.get("noise_dev") for d in mode.decays]
     if base.influence is None or any(v is None for v in devs) \
             or min(v.shape[0] for v in devs) < 4:
@@ -1780,8 +1783,21 @@ def _noise_spread(mode: _Mode) -> dict[str, float]:
             and np.all(variance > 0.0)):
         return {}
     factor = np.sqrt(np.maximum(spread / variance, 1.0))
-    mode.fits["quadratic"] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
+    mode.fits[law] = dataclasses.replace(base, cov=base.cov * np.outer(factor, factor))
     return {f"noise_{name}": float(f) for name, f in zip(base.names, factor)}
+
+
+def _other_law_spread(mode: _Mode, follow: str, laws: Sequence[str]) -> None:
+    """Steps 8a and 8c for the preferred law when it is not the quadratic one: its
+    coefficients (a viscous C_i, a dry friction force) are then the ones the record supports,
+    and their intervals need what the quadratic law's get."""
+    preferred = compare_laws([mode.fits[law] for law in laws]).preferred
+    if preferred == "quadratic":
+        return
+    tried = int(mode.drift.get("dropped", 0))
+    shortest = min(d["amplitude"].size for d in mode.decays) + tried
+    _start_sensitivity(mode, follow, tried, shortest, preferred)
+    _noise_spread(mode, preferred)
 
 
 def _halves(decays: list[dict]) -> tuple[list[dict], list[dict]] | None:
@@ -2251,6 +2267,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         if mode.joint is None:
             mode.drift.update(_one_law(mode, follow))
             mode.drift.update(_noise_spread(mode))
+            _other_law_spread(mode, follow, laws)
         else:               # (the band fit's range checks would only widen what it replaces)
             _take_joint(mode)
         if (ratio := _band_noise_ratio(mode, fs)) is not None:

@@ -104,12 +104,8 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
     model = np.concatenate(quad.model)
     r2 = 1.0 - float(np.sum((amp - model) ** 2)) / max(float(np.sum((amp - amp.mean()) ** 2)),
                                                        1e-300)
-    laws = {}
-    for name, fit in mode.laws.fits.items():
-        laws[name] = {"delta_aicc": float(mode.laws.delta[name]),
-                      **{p: float(v) for p, v in zip(fit.names, fit.params)},
-                      **{f"{p}_se": float(s) if math.isfinite(s) else None
-                         for p, s in zip(fit.names, fit.se)}}
+    laws = {name: _law_coefficients(fit, float(mode.laws.delta[name]), mass, scale, level)
+            for name, fit in mode.laws.fits.items()}
     entry = {"c_i": 2.0 * mass * a, "c_f": mass * beta * scale,
              "c_i_ci95": [2.0 * mass * a_lo, 2.0 * mass * a_hi],
              "c_f_ci95": [mass * scale * b_lo, mass * scale * b_hi],
@@ -118,10 +114,32 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
              "decay_starts_s": [float(d.times[0]) for d in mode.decays],
              "decay_ends_s": [float(d.times[-1]) for d in mode.decays],
              "preferred_law": mode.laws.preferred, "laws": laws}
-    coulomb = mode.laws.fits.get("coulomb")
-    if coulomb is not None and mode.laws.preferred == "coulomb":
-        # gamma is a friction force per unit mass in the measured coordinate.
-        entry["friction_force_per_length"] = mass * coulomb.value("gamma") * scale
+    if mode.laws.preferred == "coulomb":
+        coulomb = laws["coulomb"]
+        entry["friction_force_per_length"] = coulomb["friction_force_per_length"]
+        entry["friction_force_per_length_ci95"] = coulomb["friction_force_per_length_ci95"]
+    return entry
+
+
+def _law_coefficients(fit: Any, delta_aicc: float, mass: float, scale: float, level: float
+                      ) -> dict[str, Any]:
+    """One law's entry of ``laws``: its AICc gap, parameters and standard errors (measured
+    coordinate), and the coefficients per length they stand for with their intervals: C_i
+    (kg/(m s)) from ``a``, C_f (kg/m^2) from ``beta``, the friction force (N/m) from
+    ``gamma`` (a friction force per unit mass in the measured coordinate)."""
+    entry: dict[str, Any] = {
+        "delta_aicc": delta_aicc,
+        **{p: float(v) for p, v in zip(fit.names, fit.params)},
+        **{f"{p}_se": float(s) if math.isfinite(s) else None
+           for p, s in zip(fit.names, fit.se)}}
+    per_length = {"a": ("c_i", 2.0 * mass), "beta": ("c_f", mass * scale),
+                  "gamma": ("friction_force_per_length", mass * scale)}
+    for name in fit.names:
+        key, factor = per_length[name]
+        low, high = fit.interval(name, level)
+        finite = math.isfinite(low) and math.isfinite(high)
+        entry[key] = factor * fit.value(name)
+        entry[f"{key}_ci95"] = [factor * low, factor * high] if finite else None
     return entry
 
 

@@ -89,4 +89,24 @@ def fsi_lab_summary_lines(component):
         bounds = eq.get(f"{name}_ci95")
         if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
             text += f"; {name[0].upper()}{name[1:]} is not resolved (its interval contains 0)"
-    return SummaryText(keys=("equivalent_damping",), inline=text)
+    return SummaryText(keys=("equivalent_damping",), inline=text,
+                       lines=_preferred_law_line(eq))
+
+
+#: How the summary names each law whose coefficients it prints on a line of their own.
+_LAW_WORDS = {"viscous": "viscous law", "coulomb": "viscous + Coulomb law"}
+
+
+def _preferred_law_line(eq: dict) -> tuple[str, ...]:
+    """The coefficients of the preferred law when it is not the quadratic one (the numbers
+    the record supports, beside the C_i and C_f that assume the quadratic law)."""
+    law = (eq.get("laws") or {}).get(eq.get("preferred_law"))
+    if eq.get("preferred_law") not in _LAW_WORDS or not isinstance(law, dict) \
+            or law.get("c_i") is None:
+        return ()
+    text = (f"{_LAW_WORDS[eq['preferred_law']]} (preferred): C_i = {law['c_i']:.4g} kg/(m s) "
+            f"{_interval(law.get('c_i_ci95'))}")
+    if law.get("friction_force_per_length") is not None:
+        text += (f", friction force = {law['friction_force_per_length']:.4g} N/m "
+                 f"{_interval(law.get('friction_force_per_length_ci95'))}")
+    return (text.rstrip(),)

@@ -6,6 +6,7 @@ Ground truth: the oscillators of ``validation.cases`` integrated by scipy's DOP8
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import warnings
@@ -290,6 +291,58 @@ def test_a_coulomb_decay_prefers_friction_and_says_c_f_does_not_apply():
     assert any("Coulomb" in w for w in mode.warnings)
     gamma = mode.laws.fits["coulomb"].value("gamma")
     assert gamma == pytest.approx(0.4, rel=0.1)
+
+
+def test_a_coulomb_decay_s_own_coefficients_carry_intervals_that_mean_95_percent():
+    """Where dry friction is the law the record supports, its C_i and friction force are the
+    numbers to read: their intervals get what the quadratic law's get (the start's and the
+    filters' padding's spread). Over 20 records at 1 % noise they cover the truth in 19 and 18
+    (before: 17 and 15, their z-scores spread 2.0 and 1.9 times too wide)."""
+    case = release(noise=0.01, c_f=0.0, c_i=0.3, friction=0.4)
+    z = {"a": [], "gamma": []}
+    truth = {"a": 0.3 / (2 * WET_MASS), "gamma": 0.4}
+    for seed in range(20):
+        mode = identify(trial(case, seed), case.fs).modes[0]
+        assert mode.laws.preferred == "coulomb"
+        fit = mode.laws.fits["coulomb"]
+        for name in z:
+            low, high = fit.interval(name)
+            z[name].append((fit.value(name) - truth[name]) / ((high - low) / 3.92))
+    for name, scores in z.items():
+        scores = np.array(scores)
+        assert np.mean(np.abs(scores) <= 1.96) >= 0.9, (name, scores)
+        assert math.sqrt(np.mean(scores ** 2)) < 1.4, (name, scores)
+
+
+def test_a_dry_friction_record_reports_the_friction_law_s_coefficients_with_intervals(tmp_path):
+    """`fsi-lab analyze` of a record imported from CSV that dry friction damps: the JSON's
+    ``laws`` hold each law's C_i (and the friction force) with 95 % intervals, these cover
+    the truth, and the text summary prints them on a line of their own beside the warned
+    quadratic C_i and C_f."""
+    from support import run_main
+
+    case = release(noise=0.005, c_f=0.0, c_i=0.3, friction=0.4)
+    path = tmp_path / "friction.csv"
+    path.write_text("tip [m/s]\n" + "\n".join(map(repr, trial(case, 2).tolist())) + "\n")
+    run = tmp_path / "friction.h5"
+    assert run_main("import", str(path), "--rate", str(case.fs), "-o", str(run))[0] == 0
+    mass = f"{WET_MASS!r}"
+    code, out, err = run_main("analyze", str(run), "--json", "--mass-per-length", mass)
+    assert code == 0, err
+    (component,) = json.loads(out)["channels"]["tip"]["components"]
+    eq = component["equivalent_damping"]
+    assert eq["preferred_law"] == "coulomb"
+    coulomb = eq["laws"]["coulomb"]
+    low, high = coulomb["c_i_ci95"]
+    assert low <= 0.3 <= high and high - low < 0.1
+    low, high = eq["friction_force_per_length_ci95"]
+    assert low <= 0.4 * WET_MASS <= high
+    assert coulomb["friction_force_per_length_ci95"] == [low, high]
+    assert eq["laws"]["viscous"]["c_i_ci95"][0] < eq["laws"]["viscous"]["c_i"]
+    code, text, err = run_main("analyze", str(run), "--mass-per-length", mass)
+    line = next(x for x in text.splitlines() if "viscous + Coulomb law (preferred)" in x)
+    assert f"C_i = {coulomb['c_i']:.4g} kg/(m s)" in line
+    assert f"friction force = {eq['friction_force_per_length']:.4g} N/m (95 %: " in line
 
 
 @pytest.mark.parametrize("fs", [2000.0, 10000.0])
