@@ -13,9 +13,11 @@ signal delays, so that the analysis of exported data gives the run's results.
 from __future__ import annotations
 
 import csv
-import io
+import itertools
+import math
 import re
 from dataclasses import dataclass
+from decimal import Decimal, InvalidOperation
 from pathlib import Path
 from typing import Mapping
 
@@ -58,14 +60,18 @@ class Column:
         return self.name.lower() == "time"
 
 
-def _parse_header(path: Path, cells: list[str]) -> list[Column]:
+def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
     columns = []
     for number, cell in enumerate(cells, start=1):
         match = _HEADER.match(cell)
         if not match:
+            found = f"{cell!r}" if cell.strip() else (
+                "empty (a table's index column? export without it, e.g. pandas' "
+                "to_csv(index=False))")
             raise InputFileError(
-                f"{path}: header column {number} is {cell!r}; expected 'name [unit]' (or "
-                f"'name (unit)') with unit {ACCEPTED_UNITS}"
+                f"{path}: line {line}, header column {number} is {found}; expected 'name "
+                f"[unit]' (or 'name (unit)') with unit {ACCEPTED_UNITS}. The first line that "
+                "is not a '#' comment is the header row: begin any lines above it with '#'"
             )
         written = match["name"].strip()
         unit = (match["unit"] if match["unit"] is not None else match["paren"]).strip()
@@ -75,14 +81,17 @@ def _parse_header(path: Path, cells: list[str]) -> list[Column]:
                 f"{path}: header column {number}: name {written!r} is not accepted; expected a "
                 "letter followed by letters, digits, '_', '-' or spaces (e.g. tip_velocity)"
             )
-        if name.lower() == "time":
+        is_time = name.lower() == "time"
+        if is_time:
             parsed = ("s", TIME_UNITS[unit]) if unit in TIME_UNITS else None
         else:
             parsed = parse_unit(unit)
         if parsed is None:
+            hint = (f"; a time column is named 'time' (e.g. 'time [{unit}]')"
+                    if unit in TIME_UNITS and not is_time else "")
             raise InputFileError(
                 f"{path}: header column {number} ({written}): unit {unit!r} is not accepted; "
-                f"expected {ACCEPTED_UNITS}"
+                f"expected {ACCEPTED_UNITS}{hint}"
             )
         columns.append(Column(name, unit, parsed[0], parsed[1], written))
     names = [c.name for c in columns]
@@ -94,63 +103,151 @@ def _parse_header(path: Path, cells: list[str]) -> list[Column]:
 
 def _separator(header: str) -> str:
     """The column separator of a file whose header line is ``header``: a semicolon or a tab
-    when the line holds one (files written with a decimal comma), else a comma."""
-    return next((sep for sep in SEPARATORS if sep in header), ",")
+    when the line holds one (files written with a decimal comma), else a comma; a header of
+    one column separates nothing, and its values may carry a decimal comma."""
+    return next((sep for sep in SEPARATORS if sep in header),
+                "," if _HEADER.match(header) is None else ";")
 
 
-def read_csv(path: str | Path) -> tuple[list[Column], np.ndarray, np.ndarray]:
-    """Columns, the values (rows x columns, in each column's written unit) and each row's line
-    number in the file, of a CSV file.
+def _plural(count: int, noun: str) -> str:
+    return f"{count} {noun}{'' if count == 1 else 's'}"
+
+
+@dataclass
+class Table:
+    """A CSV file read: its columns, the values (rows x columns, in each column's written
+    unit), each row's line number in the file, and how far each time value may lie from the
+    time it stands for (half a unit of its last printed digit, in its written unit; zeros
+    without a time column)."""
+
+    columns: list[Column]
+    data: np.ndarray
+    lines: np.ndarray
+    time_rounding: np.ndarray
+
+
+class _Printing:
+    """How a time column was printed, learnt from its cells: to a fixed number of decimals
+    (``%.6f``: every cell may be off by 5e-7) or of significant digits (``%g``: ``3.99961``
+    by 5e-6, ``0.000390625`` far less), trailing zeros dropped or not. A value's rounding is
+    the larger of the two the column's longest cells show."""
+
+    def __init__(self, rows: int) -> None:
+        self.magnitude = np.full(rows, np.nan)      # floor(log10 |t|) of each cell
+        self.decimals = 0
+        self.digits = 1
+
+    def add(self, row: int, text: str) -> None:
+        try:
+            value = Decimal(text)
+        except InvalidOperation:
+            return
+        _, digits, exponent = value.as_tuple()
+        if not isinstance(exponent, int):
+            return
+        self.decimals = max(self.decimals, -exponent)
+        if value:
+            self.magnitude[row] = value.adjusted()
+            self.digits = max(self.digits, len(digits))
+
+    def rounding(self, rows: int) -> np.ndarray:
+        """Half a unit of the last digit each of the first ``rows`` cells stands for."""
+        fixed = 0.5 * 10.0 ** -self.decimals
+        significant = 0.5 * 10.0 ** (self.magnitude[:rows] - self.digits + 1)
+        return np.fmax(fixed, significant)
+
+
+def read_csv(path: str | Path) -> Table:
+    """The columns and values of a CSV file (:class:`Table`).
 
     The separator is found on the header row (:func:`_separator`); with semicolons or tabs, a
-    comma in a value is its decimal mark.
+    comma in a value is its decimal mark, and a file that holds both a decimal comma and a
+    point (a thousands separator?) is refused rather than read a thousand times off.
     """
     path = Path(path)
-    text = read_text(path, EXPECTED)
-    lines = [(number, line) for number, line in enumerate(text.splitlines(), start=1)
-             if line.strip() and not line.lstrip().startswith("#")]
-    if not lines:
+    lines = read_text(path, EXPECTED, utf16=True).splitlines()
+    numbers: list[int] = []          # the file's line number of each line the reader took
+
+    def table():
+        for number, line in enumerate(lines, start=1):
+            if line.strip() and not line.lstrip().startswith("#"):
+                numbers.append(number)
+                yield line
+
+    rows = table()
+    header = next(rows, None)
+    if header is None:
         raise InputFileError(f"{path}: empty; expected a header row 'name [unit],...' and data")
-    separator = _separator(lines[0][1])
-    reader = csv.reader(io.StringIO("\n".join(line for _, line in lines), newline=""),
-                        delimiter=separator)
+    separator = _separator(header)
+    reader = csv.reader(itertools.chain([header], rows), delimiter=separator)
     try:
-        rows = list(reader)
-    except csv.Error as exc:
-        raise InputFileError(f"{path}: line {lines[reader.line_num - 1][0]}: {exc}; expected "
-                             f"{EXPECTED}") from None
-    if len(rows) != len(lines):  # a quoted cell spanning lines: not a table of numbers
-        raise InputFileError(f"{path}: a quoted value spans several lines; expected {EXPECTED}")
-    # An export's rows often end with the separator: an empty last cell on every line.
-    if len(rows[0]) > 1 and not rows[0][-1].strip():
-        rows = [row[:-1] if row and not row[-1].strip() else row for row in rows]
-    columns = _parse_header(path, rows[0])
-    decimal_comma = separator != ","
-    data = np.empty((len(rows) - 1, len(columns)))
-    for index, ((line, _), row) in enumerate(zip(lines[1:], rows[1:])):
-        if len(row) != len(columns):
-            raise InputFileError(
-                f"{path}: line {line} has {len(row)} values; the header has {len(columns)} "
-                f"columns (separated by {_SEPARATOR_NAMES[separator]})"
-            )
-        for col, cell in enumerate(row):
-            number = cell.strip().replace(",", ".") if decimal_comma else cell
-            try:
-                value = float(number)
-            except ValueError:
+        cells = next(reader)
+        # An export's rows often end with the separator: an empty last cell on every line.
+        if len(cells) > 1 and not cells[-1].strip():
+            cells = cells[:-1]
+        columns = _parse_header(path, cells, numbers[0])
+        time = next((i for i, c in enumerate(columns) if c.is_time), None)
+        data = np.empty((len(lines), len(columns)))
+        printing = _Printing(len(lines))
+        count = 0
+        marks: dict[str, tuple[int, str]] = {}   # the first value with each decimal mark
+        for row in reader:
+            line = numbers[-1]
+            if reader.line_num != count + 2:         # the header, then one line a row
+                raise InputFileError(f"{path}: line {numbers[count + 1]}: a quoted value spans "
+                                     f"several lines; expected {EXPECTED}")
+            if len(row) == len(columns) + 1 and not row[-1].strip():
+                row = row[:-1]
+            if len(row) != len(columns):
                 raise InputFileError(
-                    f"{path}: line {line}, column {col + 1} ({columns[col].written}): {cell!r} is "
-                    "not a number"
-                ) from None
-            if not np.isfinite(value):
-                raise InputFileError(
-                    f"{path}: line {line}, column {col + 1} ({columns[col].written}): {cell!r}; "
-                    "expected a finite number"
+                    f"{path}: line {line} has {_plural(len(row), 'value')}; the header has "
+                    f"{_plural(len(columns), 'column')} (separated by "
+                    f"{_SEPARATOR_NAMES[separator]})"
                 )
-            data[index, col] = value
-    if data.shape[0] < 2:
+            for col, cell in enumerate(row):
+                value_text = cell.strip()
+                if separator != ",":
+                    for mark in ",.":
+                        if mark in value_text and mark not in marks:
+                            marks[mark] = (line, cell)
+                    value_text = value_text.replace(",", ".")
+                data[count, col] = _number(path, line, col, columns[col], cell, value_text)
+                if col == time:
+                    printing.add(count, value_text)
+            count += 1
+    except csv.Error as exc:
+        raise InputFileError(f"{path}: line {numbers[reader.line_num - 1]}: {exc}; expected "
+                             f"{EXPECTED}") from None
+    if len(marks) == 2:
+        (comma_line, comma), (point_line, point) = marks[","], marks["."]
+        raise InputFileError(
+            f"{path}: line {comma_line} has {comma!r} (a decimal comma) and line {point_line} "
+            f"{point!r} (a point: a thousands separator?); expected one decimal mark in the "
+            "whole file and no thousands separators"
+        )
+    if count < 2:
         raise InputFileError(f"{path}: fewer than two data rows")
-    return columns, data, np.array([line for line, _ in lines[1:]])
+    rounding = printing.rounding(count) if time is not None else np.zeros(count)
+    return Table(columns, data[:count], np.array(numbers[1:count + 1]), rounding)
+
+
+def _number(path: Path, line: int, col: int, column: Column, cell: str, text: str) -> float:
+    """The finite value of ``cell`` (read as ``text``) on file line ``line``."""
+    try:
+        value = float(text)
+    except ValueError:
+        hint = (" (a decimal comma in a comma-separated file? separate the columns with "
+                "semicolons)" if "," in cell else "")
+        raise InputFileError(
+            f"{path}: line {line}, column {col + 1} ({column.written}): {cell!r} is not a "
+            f"number{hint}"
+        ) from None
+    if not math.isfinite(value):
+        raise InputFileError(
+            f"{path}: line {line}, column {col + 1} ({column.written}): {cell!r}; expected a "
+            "finite number"
+        )
+    return value
 
 
 def _check_rate(rate: float, where: str) -> float:
@@ -162,28 +259,50 @@ def _check_rate(rate: float, where: str) -> float:
     return rate
 
 
-def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray) -> float:
-    """The sample rate (Hz) of the time column's values ``time`` (s) on file lines ``lines``."""
+def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: np.ndarray,
+                    given: float | None) -> float:
+    """The sample rate (Hz) of the time column's values ``time`` (s) on file lines ``lines``,
+    each within ``rounding`` (s) of the time it stands for: ``given`` (``--rate``) when the
+    column agrees with it."""
     steps = np.diff(time)
-    step = float(np.median(steps))
-    if step <= 0:
-        raise InputFileError(f"{path}: the time column does not increase")
     with np.errstate(over="ignore", invalid="ignore"):
-        spread = float(np.max(np.abs(steps - step))) / step
-    if spread > TIME_TOLERANCE:
-        worst = int(np.argmax(np.abs(steps - step)))
+        span = float(time[-1] - time[0])
+    step = span / steps.size
+    if not np.all(steps > 0):
+        raise InputFileError(f"{path}: the time column does not increase (line "
+                             f"{lines[int(np.argmin(steps > 0)) + 1]})")
+    # A column printed to a few digits moves each step by up to a unit of the last one
+    # (2560 Hz to 6 decimals: steps of 0.000390 and 0.000391 s).
+    with np.errstate(over="ignore", invalid="ignore"):
+        excess = np.abs(steps - step) - np.maximum(TIME_TOLERANCE * step,
+                                                   (rounding[:-1] + rounding[1:]) * (1 + 1e-9))
+    if not float(np.max(excess)) <= 0.0:
+        worst = int(np.nanargmax(np.where(np.isnan(excess), np.inf, excess)))
         raise InputFileError(
             f"{path}: the time column is not uniformly sampled (step {steps[worst]:.6g} s at "
-            f"line {lines[worst + 1]} against a median of {step:.6g} s); expected uniform sampling "
-            f"within {TIME_TOLERANCE:.1%}"
+            f"line {lines[worst + 1]} against a mean of {step:.6g} s); expected uniform "
+            f"sampling, within {TIME_TOLERANCE:.1%} of a step or the rounding of the digits "
+            "printed"
         )
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        rate = (time.size - 1) / float(time[-1] - time[0])
-    # A time column printed in decimal misses the sample clock by its rounding (10 kHz read
-    # back as 10000.0000000011 Hz); no clock is stable to 10 significant digits.
-    if np.isfinite(rate):
+        rate = (time.size - 1) / span
+        # the rate's uncertainty from the rounding of the two ends
+        spread = rate * float(rounding[0] + rounding[-1]) / span
+    where = f"{path}: the time column (steps of {step:.6g} s) gives"
+    if given is not None:
+        if not abs(given - rate) <= max(spread, 1e-9 * given):
+            raise InputFileError(
+                f"--rate {given:g}: the time column of {path} gives {rate:.10g} Hz; leave out "
+                "--rate (the time column sets the rate) or give the rate the column shows"
+            )
+        return _check_rate(given, f"--rate {given:g}")
+    if np.isfinite(rate) and abs(rate - round(rate)) <= spread:
+        rate = float(round(rate))        # a whole number of Hz within the rounding
+    elif np.isfinite(rate):
+        # A time column printed in decimal misses the sample clock by its rounding (10 kHz
+        # read back as 10000.0000000011 Hz); no clock is stable to 10 significant digits.
         rate = float(f"{rate:.10g}")
-    return _check_rate(rate, f"{path}: the time column (steps of {step:.6g} s) gives")
+    return _check_rate(rate, where)
 
 
 #: Largest sensor delay accepted on import, s (a vibrometer's is about a millisecond).
@@ -220,7 +339,10 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     out
         Run file to create; must not exist (nothing is ever overwritten).
     rate
-        Sample rate, Hz; ignored (and may be None) when the file has a ``time [s]`` column.
+        Sample rate, Hz; may be None when the file has a ``time [s]`` column, which then sets
+        it; given beside one, it must agree with the column (within the column's printed
+        digits) and is stored as given (a column printed to 6 decimals at 2560 Hz reads
+        2560.0007 Hz; a whole number of Hz within that rounding is taken without it).
     reference
         The base acceleration column, stored as the root attribute ``reference``:
         ``fsi-lab analyze`` uses it as the profile's ``[analysis] reference`` (base motion
@@ -231,7 +353,8 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     """
     path, out = Path(path), Path(out)
     delays = dict(delays or {})
-    columns, data, lines = read_csv(path)
+    table = read_csv(path)
+    columns, data, lines = table.columns, table.data, table.lines
     _check_analysis_inputs(path, columns, reference, delays)
     times = [i for i, column in enumerate(columns) if column.is_time]
     if len(times) > 1:
@@ -242,8 +365,9 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
                              "beside it")
     t0 = 0.0
     if times:
-        time = data[:, times[0]] * columns[times[0]].factor
-        rate = _rate_from_time(path, time, lines)
+        factor = columns[times[0]].factor
+        time = data[:, times[0]] * factor
+        rate = _rate_from_time(path, time, lines, table.time_rounding * factor, rate)
         t0 = float(time[0])
         if abs(t0) > MAX_T0_S:
             raise InputFileError(f"{path}: line {lines[0]}: the time column starts at {t0:g} s; "

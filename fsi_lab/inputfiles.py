@@ -85,7 +85,7 @@ def require_regular_file(path: str | Path, expected: str,
 
 
 def read_text(path: str | Path, expected: str, max_bytes: int | None = None,
-              error: type[FsiLabError] = InputFileError) -> str:
+              error: type[FsiLabError] = InputFileError, utf16: bool = False) -> str:
     """The UTF-8 text of a regular file (a leading byte-order mark is dropped).
 
     Parameters
@@ -98,6 +98,9 @@ def read_text(path: str | Path, expected: str, max_bytes: int | None = None,
         Largest size accepted, bytes; None for no limit.
     error
         The exception class raised.
+    utf16
+        Also read UTF-16 text that starts with its byte-order mark (a spreadsheet's "Unicode
+        text" export).
 
     Raises
     ------
@@ -113,11 +116,18 @@ def read_text(path: str | Path, expected: str, max_bytes: int | None = None,
             raise error(f"{path}: cannot be read ({exc.strerror}); expected {expected}") from None
     if max_bytes is not None and len(data) > max_bytes:
         raise error(f"{path}: larger than {max_bytes:,} bytes; expected {expected}")
+    utf16_bom = data.startswith((b"\xff\xfe", b"\xfe\xff"))
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-16" if utf16 and utf16_bom else "utf-8")
     except UnicodeDecodeError as exc:
-        raise error(
-            f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
-            f"expected {expected} saved as UTF-8"
-        ) from None
+        if utf16_bom:
+            found = (f"damaged UTF-16 text (at offset {exc.start})" if utf16 else
+                     "UTF-16 text (a spreadsheet's 'Unicode text' export?)")
+        else:
+            found = f"not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}"
+            if data[exc.start] >= 0x80:
+                found += (": a Latin-1 or Windows-1252 character such as µ or ², written in "
+                          "one byte?")
+            found += ")"
+        raise error(f"{path}: {found}; expected {expected} saved as UTF-8") from None
     return text.removeprefix("\ufeff")

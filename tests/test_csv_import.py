@@ -59,7 +59,7 @@ def test_time_column_replaces_rate(tmp_path):
      "column name 'tip' appears twice"),
     (["tip [m/s]"], [[1], ["x"]], ["--rate", "10"], "line 3, column 1 (tip): 'x' is not a number"),
     (["tip [m/s]", "b [V]"], [[1, 2], [2]], ["--rate", "10"],
-     "line 3 has 1 values; the header has 2 columns"),
+     "line 3 has 1 value; the header has 2 columns"),
     (["tip [m/s]"], [[1], [2]], [], "no 'time [s]' column; give the sample rate with --rate HZ"),
     (["tip [m/s]"], [[1], [2]], ["--rate", "-5"],
      "--rate -5: a sample rate of -5 Hz; expected 0.001 to 1e+09 Hz"),
@@ -160,8 +160,8 @@ def test_tab_separated_values_with_a_decimal_point(tmp_path):
 @pytest.mark.parametrize("text, fragment", [
     # the line numbers are the file's, comments counted
     ("# preamble\ntime [s];x [m]\n0;1\n0,1;2\n0,2;3\n# note\n0,35;4\n",
-     "step 0.15 s at line 7 against a median of 0.1 s"),
-    ("x [m];y [m]\n1,5;2\n1,5\n", "line 3 has 1 values; the header has 2 columns (separated by "
+     "step 0.15 s at line 7 against a mean of 0.116667 s"),
+    ("x [m];y [m]\n1,5;2\n1,5\n", "line 3 has 1 value; the header has 2 columns (separated by "
      "semicolons)"),
     ("x [m];y [m]\n1.000,5;2\n1;2\n", "line 2, column 1 (x): '1.000,5' is not a number"),
     ("# only a comment\n", "empty; expected a header row"),
@@ -173,6 +173,96 @@ def test_a_separated_export_s_errors_name_its_lines(tmp_path, text, fragment):
     assert proc.returncode == 2
     assert fragment in proc.stderr
     assert not (tmp_path / "bad.h5").exists()
+
+
+@pytest.mark.parametrize("rate, style", [(2560, "%.6f"), (25600, "%.6f"), (8192, "%.6g"),
+                                         (6000, "%.5f"), (3333.25, "%.7f")])
+def test_a_time_column_printed_to_a_few_digits_gives_the_rate_it_was_written_at(tmp_path, rate,
+                                                                              style):
+    """A signal analyser prints its time column rounded (2560 Hz to 6 decimals: steps of
+    0.000390 and 0.000391 s). The steps are uniform within that rounding, and the rate is the
+    whole number of Hz the rounding allows (a rate that is no whole number is kept to the
+    column's precision)."""
+    t = np.arange(4000) / rate
+    path = tmp_path / "rounded.csv"
+    path.write_text("time [s],x [m/s]\n" + "".join(f"{style % ti},{k % 7}\n"
+                                                   for k, ti in enumerate(t)))
+    found = _imported(path).channels["x"].sample_rate
+    assert found == pytest.approx(rate, rel=1e-6)
+    if float(rate).is_integer():
+        assert found == rate
+    # --rate beside the column: taken as given when the column agrees
+    assert _imported(path.rename(tmp_path / "given.csv"), "--rate", str(rate)
+                     ).channels["x"].sample_rate == rate
+
+
+def test_a_rate_the_time_column_contradicts_is_refused(tmp_path):
+    path = _write(tmp_path / "t.csv", ["time [s]", "x [m]"],
+                  [[f"{k / 5000:.6f}", k] for k in range(50)])
+    proc = cli("import", str(path), "-o", str(tmp_path / "t.h5"), "--rate", "1000")
+    assert proc.returncode == 2
+    assert f"--rate 1000: the time column of {path} gives 5000 Hz; leave out --rate" \
+        in proc.stderr
+
+
+@pytest.mark.parametrize("text, values", [
+    ("x [m/s]\n0,0125\n-1,5E-03\n", [0.0125, -1.5e-3]),          # one column, decimal comma
+    ("time [s],x [m]\n0,1,\n0.1,2,\n", [1.0, 2.0]),                 # separator ending the rows
+    ("x [m]\ty [m]\n1\t2\n3\t4\n", [1.0, 3.0]),
+])
+def test_exports_from_other_tools_read_as_written(tmp_path, text, values):
+    path = tmp_path / "other.csv"
+    path.write_text(text)
+    np.testing.assert_allclose(_imported(path, "--rate", "10").channels["x"].data, values,
+                               rtol=1e-15)
+
+
+def test_a_utf16_export_with_its_byte_order_mark_is_read(tmp_path):
+    """A spreadsheet's "Unicode text" export: UTF-16 with a byte-order mark, tabs."""
+    path = tmp_path / "unicode.txt"
+    path.write_bytes("v [µm/s]\tbase [m/s²]\r\n1,5\t2\r\n2,5\t3\r\n".encode("utf-16"))
+    run = _imported(path, "--rate", "100")
+    np.testing.assert_allclose(run.channels["v"].data, [1.5e-6, 2.5e-6], rtol=1e-15)
+
+
+@pytest.mark.parametrize("text, fragment", [
+    # a point among decimal commas, a comma among points: thousands separators, never read
+    # a thousand times off
+    ("time [s];v [um/s]\n0;0\n0,0002;1.234\n0,0004;150.000\n",
+     "line 3 has '0,0002' (a decimal comma) and line 3 '1.234' (a point: a thousands "
+     "separator?); expected one decimal mark"),
+    ("time [s]\tv [um/s]\n0\t0\n0.0002\t1,234\n",
+     "line 3 has '1,234' (a decimal comma) and line 3 '0.0002' (a point"),
+    ("x [m],y [m]\n\"1,5\",2\n1,2\n", "'1,5' is not a number (a decimal comma in a "
+     "comma-separated file? separate the columns with semicolons)"),
+    ("Zeit [s];v [m/s]\n0;1\n1;2\n",
+     "unit 's' is not accepted; expected m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n on "
+     "m, m/s, m/s^2 and V (mm/s, um, mV), or s or ms for the time column; a time column is "
+     "named 'time' (e.g. 'time [s]')"),
+    (",x [m]\n0,1\n1,2\n", "line 1, header column 1 is empty (a table's index column? "
+     "export without it, e.g. pandas' to_csv(index=False))"),
+    ("Sample rate: 5000\nx [m]\n1\n2\n", "line 1, header column 1 is 'Sample rate: 5000'; "
+     "expected 'name [unit]'"),
+    ("Sample rate: 5000\nx [m]\n1\n2\n", "The first line that is not a '#' comment is the "
+     "header row: begin any lines above it with '#'"),
+    ("x [m]\n\"1\n2\"\n3\n", "line 2: a quoted value spans several lines"),
+])
+def test_an_export_read_wrong_is_refused_naming_why(tmp_path, text, fragment):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    proc = cli("import", str(path), "-o", str(tmp_path / "bad.h5"), "--rate", "10")
+    assert proc.returncode == 2
+    assert fragment in proc.stderr
+    assert not (tmp_path / "bad.h5").exists()
+
+
+def test_a_latin1_export_is_refused_naming_the_likely_encoding(tmp_path):
+    path = tmp_path / "latin.csv"
+    path.write_bytes("v [µm/s]\n1\n2\n".encode("latin-1"))
+    proc = cli("import", str(path), "-o", str(tmp_path / "latin.h5"), "--rate", "10")
+    assert proc.returncode == 2
+    assert "not UTF-8 text (byte 0xb5 at offset 3: a Latin-1 or Windows-1252 character such " \
+        "as µ or ², written in one byte?)" in proc.stderr
 
 
 def test_existing_output_is_never_overwritten(tmp_path):

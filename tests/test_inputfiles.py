@@ -19,9 +19,11 @@ def _refused(code, out, err, *fragments):
 
 
 @pytest.mark.parametrize("encode, fragment", [
-    (lambda text: text.encode("utf-16"), "not UTF-8 text (byte 0xff at offset 0)"),
+    (lambda text: text.encode("utf-16"),
+     "UTF-16 text (a spreadsheet's 'Unicode text' export?); expected"),
     (lambda text: text.replace("# ", "# caf\u00e9 ", 1).encode("latin-1"),
      "not UTF-8 text (byte 0xe9 at offset"),
+
 ])
 def test_a_profile_that_is_not_utf8_is_refused(tmp_path, encode, fragment):
     path = tmp_path / "p.toml"
