@@ -344,7 +344,11 @@ class ModeIdentification:
         padding (:func:`_noise_spread`); ``residual_rho``: the lag-1 correlation of the
         preferred law's whitened residuals (:func:`_residual_correlation`); ``band_noise``:
         the band's noise, measured before the excitation and after the decays, over the white
-        noise's share in it, where measured (:func:`_band_noise_ratio`).
+        noise's share in it, where measured (:func:`_band_noise_ratio`). A mode fitted with
+        its close neighbours to the record's samples (:func:`_take_joint`) has instead
+        ``joint_modes``, ``joint_residual`` (the fit's residual over the white noise),
+        ``joint_r2`` (the share of the record's variance over the fitted spans that the fit
+        explains) and ``joint_widening_a``, ``joint_widening_beta``.
     warnings
         Sentences on how far to trust the numbers; empty when every check passed.
     """
@@ -1260,10 +1264,12 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
                              zip(g.decays, found.starts[j], found.times[j])],
                             alpha=float(found.alpha[j]))
                   for j, g in enumerate(guesses)]
+        spread = np.concatenate([target[a:b] - np.mean(target[a:b]) for a, b in spans])
+        r2 = 1.0 - found.residual_rms ** 2 / max(float(np.mean(spread ** 2)), 1e-300)
         for k, m in enumerate(group):
             m.joint = {"params": found.params[k], "cov": found.cov[k], "w0": float(found.w0[k]),
                        "alpha": float(found.alpha[k]),
-                       "dof": found.dof,
+                       "dof": found.dof, "r2": r2,
                        "residual": ratio, "modes": len(group), "widening": found.widening[k],
                        "laws": _joint_laws(group, k, found, fitted, target, fs, spans,
                                            follow, quantity, cubic, laws, average)}
@@ -1332,7 +1338,8 @@ def _take_joint(mode: _Mode) -> None:
     cubic stiffness.
     The start check of the band fit (step 8) measured its extrema, which the joint fit does
     not use: its entries leave ``drift``, and the joint fit's own enter it
-    (``joint_modes``, ``joint_residual``, ``joint_widening_a``, ``joint_widening_beta``)."""
+    (``joint_modes``, ``joint_residual``, ``joint_r2``, ``joint_widening_a``,
+    ``joint_widening_beta``)."""
     joint = mode.joint
     quad = mode.fits["quadratic"]
     mode.fits["quadratic"] = dataclasses.replace(
@@ -1351,7 +1358,7 @@ def _take_joint(mode: _Mode) -> None:
     mode.drift = {k: v for k, v in mode.drift.items()
                   if k not in band_checks and not k.startswith("start_")}
     mode.drift.update({"joint_modes": float(joint["modes"]),
-                       "joint_residual": float(joint["residual"]),
+                       "joint_residual": float(joint["residual"]), "joint_r2": joint["r2"],
                        **{f"joint_widening_{name}": float(f)
                           for name, f in zip(quad.names, joint["widening"])}})
 

@@ -100,10 +100,12 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
             "grows under it); no coefficients are reported")
     a, beta = quad.value("a"), quad.value("beta")
     (a_lo, a_hi), (b_lo, b_hi) = quad.interval("a", level), quad.interval("beta", level)
-    amp = np.concatenate([d.amplitude for d in mode.decays])
-    model = np.concatenate(quad.model)
-    r2 = 1.0 - float(np.sum((amp - model) ** 2)) / max(float(np.sum((amp - amp.mean()) ** 2)),
-                                                       1e-300)
+    r2 = mode.start_drift.get("joint_r2")
+    if r2 is None:                   # (a mode fitted with its close neighbours has the joint fit's)
+        amp = np.concatenate([d.amplitude for d in mode.decays])
+        model = np.concatenate(quad.model)
+        r2 = 1.0 - float(np.sum((amp - model) ** 2)) / max(
+            float(np.sum((amp - amp.mean()) ** 2)), 1e-300)
     laws = {name: _law_coefficients(fit, float(mode.laws.delta[name]), mass, scale, level)
             for name, fit in mode.laws.fits.items()}
     entry = {"c_i": 2.0 * mass * a, "c_f": mass * beta * scale,

@@ -559,6 +559,9 @@ def test_two_close_modes_are_fitted_together_to_the_record_s_samples():
                 assert mode.start_drift["joint_modes"] == 2
                 assert mode.start_drift["joint_residual"] < 1.5
                 assert not any("smear" in w for w in mode.warnings)
+                # R^2 of the fit the coefficients come from: what the noise leaves unexplained
+                assert 1.0 - 0.1 * noise < mode.start_drift["joint_r2"] < 1.0
+            assert low.start_drift["joint_r2"] == high.start_drift["joint_r2"]
             assert any("fitted together to the record's samples" in n for n in found.notes)
 
 
