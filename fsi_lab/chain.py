@@ -23,6 +23,7 @@ from fsi_lab.contract import (
     ChannelData,
     Result,
     SharedRecord,
+    error_gist,
 )
 from fsi_lab.errors import FsiLabError, ParameterError
 from fsi_lab.events import EventBus, Progress
@@ -320,5 +321,5 @@ def _missing(kind: str, unavailable: Mapping[str, str], failed: Mapping[str, str
     provider = unavailable.get(kind) or (kind if kind in failed else None)
     if provider is not None:
         return (f"the {kind!r} result, which {provider} failed to give on this channel "
-                f"({failed.get(provider, 'failed')})")
+                f"({error_gist(failed.get(provider, 'failed'))})")
     return f"the {kind!r} result earlier in the chain on this channel, which did not run"

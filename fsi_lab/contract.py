@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import abc
 import importlib
+import re
 from collections.abc import Callable, Hashable, Iterator, Mapping, MutableMapping
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar, TypeVar
@@ -546,6 +547,22 @@ class Result(abc.ABC):
         """What the run file (datasets with units, attributes) and the summary keep of it."""
 
 
+#: Longest gist of an earlier analysis's error repeated in the errors of those that needed it.
+ERROR_GIST = 160
+
+
+def error_gist(message: str) -> str:
+    """The start of an analysis's error, for the message of an analysis that needed its
+    result: without its ``"<analysis> on channel '<name>': "`` prefix, to its first ``;``
+    or :data:`ERROR_GIST` characters (the whole message stands in the errors beside it)."""
+    prefix = re.match(r"[^:']* on channel '[^']*': ", message)
+    text = message[prefix.end():] if prefix else message
+    text = text.split("; ", 1)[0]
+    if len(text) > ERROR_GIST:
+        text = text[:ERROR_GIST].rsplit(" ", 1)[0] + " ..."
+    return text
+
+
 def kind_name(kind: str | type[Result]) -> str:
     """The name of a result kind given by name or by its :class:`Result` class.
 
@@ -738,7 +755,8 @@ class AnalysisContext:
         if provider is not None:
             raise AnalysisError(
                 f"{provider} failed earlier in the chain on this channel, so its {name!r} "
-                f"result is missing ({provider}: {self.failed.get(provider, 'failed')})")
+                f"result is missing ({provider}: "
+                f"{error_gist(self.failed.get(provider, 'failed'))})")
         return None
 
     def spectrum(self, window: str = "decay") -> RecordSpectrum:

@@ -23,12 +23,14 @@ from test_modal_model import registry as registry_with_modal_model
 from fsi_lab import hookspecs
 from fsi_lab.chain import check_chain, default_chain, run_chain
 from fsi_lab.contract import (
+    ERROR_GIST,
     AnalysisContext,
     AnalysisPlugin,
     AnalysisResult,
     ChannelData,
     Result,
     check_descriptor,
+    error_gist,
 )
 from fsi_lab.errors import ParameterError, ProfileError
 from fsi_lab.params import validate
@@ -206,10 +208,25 @@ def test_a_failed_provider_stops_what_requires_it_with_the_reason():
                      params={"hvd": {"band_hz": [400.0, 450.0]}})     # no mode there
     errors = {e["plugin"]: e["message"] for e in summary["tip"]["errors"]}
     assert errors["energy"].startswith("energy on channel 'tip': needs the 'components' result, "
-                                       "which hvd failed to give on this channel (hvd on "
-                                       "channel 'tip': identify: band 400 to 450 Hz")
+                                       "which hvd failed to give on this channel (identify: "
+                                       "band 400 to 450 Hz")
     assert errors["total"].startswith("total on channel 'tip': needs the 'energy' result, which "
-                                      "energy failed to give on this channel (energy on channel")
+                                      "energy failed to give on this channel (needs the "
+                                      "'components' result, which hvd failed")
+    assert errors["hvd"] not in errors["energy"]
+
+
+@pytest.mark.parametrize("message, gist", [
+    ("hvd on channel 'tip': identify: the base keeps moving; end the excitation earlier",
+     "identify: the base keeps moving"),
+    ("identify: " + "word " * 60, "identify: " + " ".join(["word"] * 30) + " ..."),
+])
+def test_an_analysis_that_needed_a_failed_result_repeats_only_the_gist_of_its_error(message,
+                                                                                     gist):
+    """The whole error stands in the channel's errors once; those of the analyses that needed
+    its result say which failed and why in a line, not all of it again."""
+    assert error_gist(message) == gist
+    assert len(error_gist(message)) <= ERROR_GIST + 4
 
 
 @pytest.mark.parametrize("declared, returned, message", [
