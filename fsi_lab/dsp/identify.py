@@ -648,6 +648,14 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                             else "") + ": a steady line (mains hum, a machine nearby); left "
                          "out, and subtracted from each free decay (fitted on its second "
                          "half)")
+    for fi, share in _late_lines(x, fs, segs, f_dom, sigma,
+                                 np.concatenate([f[keep], guards]).astype(np.float64)):
+        guards.append(fi)
+        steady.append(fi)
+        notes.append(f"the late parts of the free decays show a line at {fi:.4g} Hz that keeps "
+                     f"{100 * share:.0f} % of its amplitude over their first third, hidden there "
+                     "under a mode's peak: a steady line (mains hum, a machine nearby); left "
+                     "out, and subtracted from each free decay (fitted on its second half)")
     f, a = f[keep], a[keep]
     if f_dom * longest < MIN_CYCLES:
         notes.append(f"the free decays last at most {longest:.3g} s, fewer than {MIN_CYCLES} "
@@ -664,6 +672,36 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                                + (f" ({', '.join(f'{v:.4g}' for v in f)} Hz)" if f.size
                                   else "") + "; ask for fewer or use components = 'auto'")
     return f, a, notes, np.array(guards, dtype=np.float64), np.array(steady, dtype=np.float64)
+
+
+def _late_lines(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f_dom: float,
+                sigma: float, known: np.ndarray) -> list[tuple[float, float]]:
+    """Steady lines (:func:`_steady_line`) that the decays' spectrum does not show as peaks of
+    their own: mains hum at 50 Hz beside a heavily damped 45 Hz mode lies on that mode's peak,
+    and its band then holds the hum after the decay has died (C_i came out negative, C_f
+    doubled). Where the decays have fallen, in their last thirds, the line stands out alone.
+    Returns ``(frequency Hz, share)`` of each line found away from the ``known`` peaks (Hz,
+    more than two bins of the last thirds' spectrum)."""
+    found = []
+    for a, c in segments:                # (each on its own: one may still ring where
+        third = (c - a) // 3             # another has fallen)
+        if third < 64:
+            continue
+        freqs, amp = averaged_spectrum(x, fs, [(c - third, c)])
+        peaks = find_peaks_interpolated(freqs, amp, min_relative=0.01,
+                                        smoothing=PEAK_SMOOTHING, fmin=2.0 * fs / third,
+                                        _func="identify")
+        level = _spectrum_level(freqs, amp, peaks.frequencies, peaks.amplitudes)
+        apart = 2.0 * (freqs[1] - freqs[0])
+        for fi, ai in zip(peaks.frequencies, peaks.amplitudes):
+            if ai < NOISE_MARGIN * level or fs / fi < MIN_SAMPLES_PER_CYCLE or (
+                    known.size and float(np.min(np.abs(known - fi))) <= apart):
+                continue
+            share = _steady_line(x, fs, segments, float(fi), sigma, f_dom)
+            if share is not None:
+                found.append((float(fi), share))
+                known = np.append(known, fi)
+    return found
 
 
 def _steady_line(x: np.ndarray, fs: float, segments: list[tuple[int, int]], frequency: float,
