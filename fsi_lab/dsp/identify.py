@@ -84,6 +84,7 @@ from fsi_lab.dsp.decays import decay_segments, first_decay_peak, quiet_times
 from fsi_lab.dsp.instantaneous import HalfCycles, half_cycles
 from fsi_lab.dsp.joint_fit import DecayStart, JointFit, JointMode, fit_decays_jointly
 from fsi_lab.dsp.laws import (
+    AICC_TIE,
     LAWS,
     LawComparison,
     LawFit,
@@ -112,6 +113,12 @@ FORCED_LEVEL = 0.02
 #: excited by something that ends; it is still where its envelope's median is no more than
 #: NOISE_ENVELOPE times that noise (white noise's envelope has a median of 1.18 times it).
 PULSE_MARGIN, NOISE_ENVELOPE = 10.0, 1.5
+#: A steady line within this ratio of a mode may hide under the mode's peak in the decays'
+#: spectrum (a heavily damped mode's peak is that wide); it is looked for in their last
+#: thirds (:func:`_late_lines`).
+HIDDEN_RATIO = 1.5
+#: ... of a mode whose spectral peak reaches this share of the largest.
+HIDDEN_SHARE = 0.1
 #: The decays are split on the record low-passed at this multiple of its dominant frequency.
 SPLIT_BAND = 8.0
 #: A displacement record's first HOLD_SHARE of samples that stand still (their spread within
@@ -645,17 +652,21 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                          f"third of the free decays it keeps {100 * share:.0f} % of its "
                          "amplitude over their first third"
                          + (", and it is there before the excitation" if share < STRICT_SHARE
-                            else "") + ": a steady line (mains hum, a machine nearby); left "
+                            else "") + ": a steady line (mains hum, a machine nearby, a mode "
+                         "that hardly decays within the record); left "
                          "out, and subtracted from each free decay (fitted on its second "
                          "half)")
-    for fi, share in _late_lines(x, fs, segs, f_dom, sigma,
+    # (a line hides under a strong peak: a mode's at least a tenth of the largest)
+    strong = f[keep][a[keep] >= HIDDEN_SHARE * float(np.max(a[keep], initial=0.0))]
+    for fi, share in _late_lines(x, fs, segs, f_dom, sigma, strong,
                                  np.concatenate([f[keep], guards]).astype(np.float64)):
         guards.append(fi)
         steady.append(fi)
         notes.append(f"the late parts of the free decays show a line at {fi:.4g} Hz that keeps "
                      f"{100 * share:.0f} % of its amplitude over their first third, hidden there "
-                     "under a mode's peak: a steady line (mains hum, a machine nearby); left "
-                     "out, and subtracted from each free decay (fitted on its second half)")
+                     "under a mode's peak: a steady line (mains hum, a machine nearby, a mode "
+                     "that hardly decays within the record); left out, and subtracted from "
+                     "each free decay (fitted on its second half)")
     f, a = f[keep], a[keep]
     if f_dom * longest < MIN_CYCLES:
         notes.append(f"the free decays last at most {longest:.3g} s, fewer than {MIN_CYCLES} "
@@ -675,13 +686,17 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
 
 
 def _late_lines(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f_dom: float,
-                sigma: float, known: np.ndarray) -> list[tuple[float, float]]:
+                sigma: float, modes: np.ndarray, known: np.ndarray
+                ) -> list[tuple[float, float]]:
     """Steady lines (:func:`_steady_line`) that the decays' spectrum does not show as peaks of
     their own: mains hum at 50 Hz beside a heavily damped 45 Hz mode lies on that mode's peak,
     and its band then holds the hum after the decay has died (C_i came out negative, C_f
     doubled). Where the decays have fallen, in their last thirds, the line stands out alone.
     Returns ``(frequency Hz, share)`` of each line found away from the ``known`` peaks (Hz,
-    more than two bins of the last thirds' spectrum)."""
+    more than two bins of the last thirds' spectrum) and under the peak of one of the
+    ``modes`` (Hz: within :data:`HIDDEN_RATIO` of it; a slow mode far from the others, such as
+    a beam's first in water, rings on nearly steadily and is no line), the strong candidates
+    (:data:`HIDDEN_SHARE`)."""
     found = []
     for a, c in segments:                # (each on its own: one may still ring where
         third = (c - a) // 3             # another has fallen)
@@ -695,7 +710,9 @@ def _late_lines(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f_dom
         apart = 2.0 * (freqs[1] - freqs[0])
         for fi, ai in zip(peaks.frequencies, peaks.amplitudes):
             if ai < NOISE_MARGIN * level or fs / fi < MIN_SAMPLES_PER_CYCLE or (
-                    known.size and float(np.min(np.abs(known - fi))) <= apart):
+                    known.size and float(np.min(np.abs(known - fi))) <= apart) or not (
+                    modes.size and float(np.min(np.abs(np.log(modes / fi))))
+                    <= math.log(HIDDEN_RATIO)):
                 continue
             share = _steady_line(x, fs, segments, float(fi), sigma, f_dom)
             if share is not None:
@@ -1973,6 +1990,11 @@ def _off_peak(m: ModeIdentification) -> str:
             "be trusted")
 
 
+def _fold(factor: float) -> str:
+    """``"1.4-fold"``; a widening of a few percent as ``"1.03-fold"``, not ``"1.0-fold"``."""
+    return f"{factor:.2f}-fold" if factor < 1.095 else f"{factor:.1f}-fold"
+
+
 def _warnings(m: ModeIdentification) -> list[str]:
     """Sentences on how far to trust the mode's numbers."""
     out = []
@@ -1981,9 +2003,11 @@ def _warnings(m: ModeIdentification) -> list[str]:
         other = {"viscous": "viscous (linear) damping alone",
                  "coulomb": "viscous + Coulomb (dry friction) damping"}[cmp.preferred]
         gap = cmp.delta["quadratic"] - cmp.delta[cmp.preferred]
+        support = (f"AICc lower by {gap:.1f}" if gap > 0 else
+                   f"AICc within {AICC_TIE:g} of the quadratic law's, {-gap:.1f} higher, with "
+                   "fewer terms")
         out.append(f"the record supports {other} at least as well as linear + quadratic "
-                   f"damping (AICc {'lower' if gap > 0 else 'higher'} by {abs(gap):.1f}): C_i and "
-                   "C_f assume a law the record does not call for")
+                   f"damping ({support}): C_i and C_f assume a law the record does not call for")
     quad = cmp.fits.get("quadratic")
     if quad is not None:
         for name, label in (("a", "C_i"), ("beta", "C_f")):
@@ -2023,7 +2047,7 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.append(f"C_i and C_f move by up to {drift:.1f} standard errors when the first "
                    "cycles of each decay are left out: the decay's start is not a free decay "
                    "with this law (a base still moving, a law that misfits the large cycles); "
-                   f"their intervals are widened {drift / DRIFT_Z:.1f}-fold")
+                   f"their intervals are widened {_fold(drift / DRIFT_Z)}")
     if m.start_drift.get("untested"):
         short = 2 * MIN_CYCLES + 2
         count = sum(d.amplitude.size < short for d in m.decays)
@@ -2043,14 +2067,14 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.append("C_i and C_f depend on where the decay is taken to start by more than their "
                    "noise explains (its first cycles are not yet a free decay of this law: a "
                    "forced response or an unresolved close mode still dying out); their "
-                   f"intervals are widened up to {start:.1f}-fold for it")
+                   f"intervals are widened up to {_fold(start)} for it")
     split = max(abs(m.start_drift.get("split_a", 0.0)), abs(m.start_drift.get("split_beta", 0.0)))
     if split > DRIFT_Z:
         widened = split / max(drift, DRIFT_Z)
         out.append(f"the larger and the smaller half of the cycles give C_i and C_f that differ "
                    f"by up to {split:.1f} standard errors: the damping is not one law over "
                    "this amplitude range (coupling with other modes, an amplitude-dependent "
-                   "drag)" + (f"; their intervals are widened {widened:.1f}-fold"
+                   "drag)" + (f"; their intervals are widened {_fold(widened)}"
                               if widened > 1.0 else ""))
     # A mode fitted jointly to the record's samples (step 6a) uses no smeared extremum.
     if m.correction > CORRECTION_WARNING and "joint_modes" not in m.start_drift:
