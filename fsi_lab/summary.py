@@ -138,7 +138,7 @@ def _component_lines(registry, channel: str, info: dict[str, Any],
         text += f" at {component['frequency_hz']:.3f} Hz"
         bounds = component.get("frequency_ci95_hz")
         if bounds and None not in bounds:
-            text += f" (+-{0.5 * (bounds[1] - bounds[0]):.2g})"
+            text += f" (+-{0.5 * (bounds[1] - bounds[0]):.2g} Hz)"
     lines = [text + "".join(t.inline for t in texts)]
     lines.extend(f"    {key + ' ' if key else ''}warning: {w}"
                  for key, w in warnings_of(component))

@@ -140,7 +140,8 @@ def test_summary_text_says_whose_coefficients_the_modal_model_ran_with():
     lines = [line for line in text.splitlines() if "modal model" in line]
     assert len(lines) == 2
     for line in lines:
-        assert ("modal model (C_i = 0.6543, C_f = 30.55 from equivalent-damping component 0 "
+        assert ("modal model (C_i = 0.6543 kg/(m s), C_f = 30.55 kg/m^2 from equivalent-damping "
+                "component 0 "
                 "(mode 2)) vs measurement") in line
     assert "0.6895" not in lines[1]
 

@@ -106,7 +106,8 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
         model = np.concatenate(quad.model)
         r2 = 1.0 - float(np.sum((amp - model) ** 2)) / max(
             float(np.sum((amp - amp.mean()) ** 2)), 1e-300)
-    laws = {name: _law_coefficients(fit, float(mode.laws.delta[name]), mass, scale, level)
+    laws = {name: _law_entry_of(fit, float(mode.laws.delta[name]), mass, scale, level,
+                                name == mode.laws.preferred)
             for name, fit in mode.laws.fits.items()}
     entry = {"c_i": 2.0 * mass * a, "c_f": mass * beta * scale,
              "c_i_ci95": [2.0 * mass * a_lo, 2.0 * mass * a_hi],
@@ -123,17 +124,21 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
     return entry
 
 
-def _law_coefficients(fit: Any, delta_aicc: float, mass: float, scale: float, level: float
-                      ) -> dict[str, Any]:
+def _law_entry_of(fit: Any, delta_aicc: float, mass: float, scale: float, level: float,
+                  preferred: bool) -> dict[str, Any]:
     """One law's entry of ``laws``: its AICc gap, parameters and standard errors (measured
-    coordinate), and the coefficients per length they stand for with their intervals: C_i
-    (kg/(m s)) from ``a``, C_f (kg/m^2) from ``beta``, the friction force (N/m) from
-    ``gamma`` (a friction force per unit mass in the measured coordinate)."""
+    coordinate), and for the ``preferred`` law the coefficients per length they stand for
+    with their intervals: C_i (kg/(m s)) from ``a``, C_f (kg/m^2) from ``beta``, the friction
+    force (N/m) from ``gamma`` (a friction force per unit mass in the measured coordinate).
+    Another law's fit describes nothing the record supports (its coefficients may well be
+    negative): it is given for the comparison, not as coefficients to read."""
     entry: dict[str, Any] = {
         "delta_aicc": delta_aicc,
         **{p: float(v) for p, v in zip(fit.names, fit.params)},
         **{f"{p}_se": float(s) if math.isfinite(s) else None
            for p, s in zip(fit.names, fit.se)}}
+    if not preferred:
+        return entry
     per_length = {"a": ("c_i", 2.0 * mass), "beta": ("c_f", mass * scale),
                   "gamma": ("friction_force_per_length", mass * scale)}
     for name in fit.names:

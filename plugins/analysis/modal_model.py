@@ -75,6 +75,7 @@ def fsi_lab_summary_lines(summary, component):
     source = (summary.get("modal_model") or {}).get("c_source")
     origin = f" from {source}" if isinstance(source, str) and source else ""
     return SummaryText(keys=("modal_model",), lines=(
-        f"modal model (C_i = {model['c_i']:.4g}, C_f = {model['c_f']:.4g}{origin}) vs "
+        f"modal model (C_i = {model['c_i']:.4g} kg/(m s), C_f = {model['c_f']:.4g} kg/m^2"
+        f"{origin}) vs "
         f"measurement: envelope RMS error {100 * model['envelope_rms_error']:.1f} %, "
         f"frequency error {model['frequency_error_pct']:+.2f} %",))
