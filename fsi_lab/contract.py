@@ -553,11 +553,10 @@ ERROR_GIST = 160
 
 def error_gist(message: str) -> str:
     """The start of an analysis's error, for the message of an analysis that needed its
-    result: without its ``"<analysis> on channel '<name>': "`` prefix, to its first ``;``
-    or :data:`ERROR_GIST` characters (the whole message stands in the errors beside it)."""
+    result: without its ``"<analysis> on channel '<name>': "`` prefix, at most
+    :data:`ERROR_GIST` characters (the whole message stands in the errors beside it)."""
     prefix = re.match(r"[^:']* on channel '[^']*': ", message)
     text = message[prefix.end():] if prefix else message
-    text = text.split("; ", 1)[0]
     if len(text) > ERROR_GIST:
         text = text[:ERROR_GIST].rsplit(" ", 1)[0] + " ..."
     return text

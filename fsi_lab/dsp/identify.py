@@ -700,7 +700,7 @@ def _late_lines(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f_dom
     found = []
     for a, c in segments:                # (each on its own: one may still ring where
         third = (c - a) // 3             # another has fallen)
-        if third < 64:
+        if third < 64 or not np.ptp(x[c - third:c]) > 0.0:     # (a held exporter's fill)
             continue
         freqs, amp = averaged_spectrum(x, fs, [(c - third, c)])
         peaks = find_peaks_interpolated(freqs, amp, min_relative=0.01,

@@ -218,7 +218,7 @@ def test_a_failed_provider_stops_what_requires_it_with_the_reason():
 
 @pytest.mark.parametrize("message, gist", [
     ("hvd on channel 'tip': identify: the base keeps moving; end the excitation earlier",
-     "identify: the base keeps moving"),
+     "identify: the base keeps moving; end the excitation earlier"),
     ("identify: " + "word " * 60, "identify: " + " ".join(["word"] * 30) + " ..."),
 ])
 def test_an_analysis_that_needed_a_failed_result_repeats_only_the_gist_of_its_error(message,
