@@ -209,9 +209,24 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
         "c_f": _spread([r["c_f"] for r in per_run], [r["c_f_ci95"] for r in per_run]),
         "frequency_hz": _spread([r["frequency_hz"] for r in per_run],
                                 [r["frequency_ci95_hz"] for r in per_run])}
+    entry["warnings"] = _pooled_warnings(per_run)
     curves, axis, lo_hi = _curves(members, c_i, c_f, frequency)
     entry.update(amplitude_range_m=lo_hi, per_run=per_run, axis=axis, curves=curves)
     return entry
+
+
+def _pooled_warnings(per_run: list[dict[str, Any]]) -> list[str]:
+    """A sentence when runs of the group carry warnings on the mode: pooling narrows what
+    differs between runs (their noise, their scatter), not an error every run shares, which
+    those warnings may name (a close mode's smear corrected with a model, a law that
+    misfits); empty when no run was warned."""
+    warned = [r for r in per_run if r["warnings"]]
+    if not warned:
+        return []
+    return [f"{len(warned)} of {len(per_run)} runs carry warnings on this mode (first, "
+            f"{warned[0]['label']}: {warned[0]['warnings'][0]}): the pooled intervals hold "
+            "the runs' noise and scatter, not an error they share, which these warnings may "
+            "name; read them beside the pooled numbers"]
 
 
 def aggregate_extracts(extracts: Sequence[RunExtract]) -> dict[str, Any]:
@@ -334,9 +349,10 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
                              "smeared)")
         else:
             lines.append(f"{indent}  C_i and C_f not fitted: {entry['fit_error']}")
+        lines.extend(f"{indent}  warning: {w}" for w in entry.get("warnings", []))
         if entry["runs"] > 1:
             parts = []
-            for key, label, unit in (("c_i", "C_i", ""), ("c_f", "C_f", ""),
+            for key, label, unit in (("c_i", "C_i", " kg/(m s)"), ("c_f", "C_f", " kg/m^2"),
                                      ("frequency_hz", "f0", " Hz")):
                 s = spread[key]
                 if s["sd"] is not None:
@@ -345,8 +361,8 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
             lines.append(f"{indent}  between runs: " + "; ".join(parts))
         for run in entry["per_run"]:
             lines.append(f"{indent}    {run['label']}: {run['frequency_hz']:.4f} Hz, C_i = "
-                         f"{run['c_i']:.4g} ({_interval(run['c_i_ci95'])}), C_f = "
-                         f"{run['c_f']:.4g} ({_interval(run['c_f_ci95'])}), amplitude "
+                         f"{run['c_i']:.4g} kg/(m s) ({_interval(run['c_i_ci95'])}), C_f = "
+                         f"{run['c_f']:.4g} kg/m^2 ({_interval(run['c_f_ci95'])}), amplitude "
                          f"{1e3 * run['amplitude_range_m'][0]:.3g} to "
                          f"{1e3 * run['amplitude_range_m'][1]:.3g} mm")
     return "\n".join(lines)

@@ -78,6 +78,27 @@ def test_c_i_and_c_f_fitted_to_the_union_of_the_runs_hold_the_truth(extracts):
     assert agg["amplitude_range_m"] == [low, high]
 
 
+def test_a_pooled_mode_says_when_its_runs_were_warned(extracts):
+    """Pooling narrows the interval by what differs between runs, not by an error they share:
+    when runs carry warnings on the mode, the pooled mode says so (JSON and text); clean runs
+    give none."""
+    import dataclasses
+
+    runs = [extracts[f"level{k}"] for k in range(3)]
+    (clean,) = aggregate_extracts(runs)["modes"]
+    assert clean["warnings"] == [] and all(not r["warnings"] for r in clean["per_run"])
+    said = "the band filters smear this mode's first cycles by up to 40 %"
+    warned = dataclasses.replace(runs[1], modes=[dataclasses.replace(runs[1].modes[0],
+                                                                     warnings=[said])])
+    agg = aggregate_extracts([runs[0], warned, runs[2]])
+    (mode,) = agg["modes"]
+    assert mode["warnings"] == [
+        f"1 of 3 runs carry warnings on this mode (first, {runs[1].label}: {said}): the "
+        "pooled intervals hold the runs' noise and scatter, not an error they share, which "
+        "these warnings may name; read them beside the pooled numbers"]
+    assert "\n  warning: 1 of 3 runs carry warnings on this mode" in format_aggregate(agg)
+
+
 def test_the_runs_curves_on_one_amplitude_axis(extracts):
     agg = aggregate_extracts([extracts[f"level{k}"] for k in range(3)])
     (mode,) = agg["modes"]
