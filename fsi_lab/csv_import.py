@@ -289,19 +289,20 @@ def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: n
         # the rate's uncertainty from the rounding of the two ends
         spread = rate * float(rounding[0] + rounding[-1]) / span
     where = f"{path}: the time column (steps of {step:.6g} s) gives"
-    if given is not None:
-        if not abs(given - rate) <= max(spread, 1e-9 * given):
-            raise InputFileError(
-                f"--rate {given:g}: the time column of {path} gives {rate:.10g} Hz; leave out "
-                "--rate (the time column sets the rate) or give the rate the column shows"
-            )
-        return _check_rate(given, f"--rate {given:g}")
+    measured = rate
     if np.isfinite(rate) and abs(rate - round(rate)) <= spread:
         rate = float(round(rate))        # a whole number of Hz within the rounding
     elif np.isfinite(rate):
         # A time column printed in decimal misses the sample clock by its rounding (10 kHz
         # read back as 10000.0000000011 Hz); no clock is stable to 10 significant digits.
         rate = float(f"{rate:.10g}")
+    if given is not None:
+        if not abs(given - measured) <= max(spread, 1e-9 * given):
+            raise InputFileError(
+                f"--rate {given:g}: the time column of {path} gives {rate:.10g} Hz; leave out "
+                "--rate (the time column sets the rate) or give the rate the column shows"
+            )
+        return _check_rate(given, f"--rate {given:g}")
     return _check_rate(rate, where)
 
 
