@@ -2416,6 +2416,15 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                              "integration rings below it after each excitation): not reported")
         ranked = [i for i in ranked if results[i].spectral_peak_hz >= min_frequency]
     if components != "auto":
+        left = ranked[int(components):]
+        if left:
+            found = [f"{f:.4g}" for f in sorted(results[i].frequency_hz for i in left)]
+            listed = ", ".join(found[:-1]) + " and " + found[-1] if len(found) > 1 else found[0]
+            notes.append(f"{len(ranked)} modes have free decays; components = {int(components)} "
+                         "reports the largest (by their peaks in the decays' spectrum): "
+                         + (f"the mode at {listed} Hz is" if len(left) == 1 else
+                            f"the modes at {listed} Hz are")
+                         + " not reported (components = 'auto' reports every one)")
         ranked = ranked[:int(components)]
     if not ranked:
         low = max(band_t[0] if band_t else 0.0, min_frequency or 0.0)
