@@ -189,13 +189,17 @@ def read_csv(path: str | Path) -> Table:
         time = next((i for i, c in enumerate(columns) if c.is_time), None)
         data = np.empty((len(lines), len(columns)))
         printing = _Printing(len(lines))
-        count = 0
+        row_lines = np.empty(len(lines), dtype=np.int64)
+        count, read = 0, 1                       # rows kept; rows read, the header first
         marks: dict[str, tuple[int, str]] = {}   # the first value with each decimal mark
         for row in reader:
+            read += 1
             line = numbers[-1]
-            if reader.line_num != count + 2:         # the header, then one line a row
-                raise InputFileError(f"{path}: line {numbers[count + 1]}: a quoted value spans "
+            if reader.line_num != read:              # one line a row
+                raise InputFileError(f"{path}: line {numbers[read - 1]}: a quoted value spans "
                                      f"several lines; expected {EXPECTED}")
+            if not any(cell.strip() for cell in row):   # separators alone (a sheet's blank row)
+                continue
             if len(row) == len(columns) + 1 and not row[-1].strip():
                 row = row[:-1]
             if len(row) != len(columns):
@@ -214,6 +218,7 @@ def read_csv(path: str | Path) -> Table:
                 data[count, col] = _number(path, line, col, columns[col], cell, value_text)
                 if col == time:
                     printing.add(count, value_text)
+            row_lines[count] = line
             count += 1
     except csv.Error as exc:
         raise InputFileError(f"{path}: line {numbers[reader.line_num - 1]}: {exc}; expected "
@@ -228,7 +233,7 @@ def read_csv(path: str | Path) -> Table:
     if count < 2:
         raise InputFileError(f"{path}: fewer than two data rows")
     rounding = printing.rounding(count) if time is not None else np.zeros(count)
-    return Table(columns, data[:count], np.array(numbers[1:count + 1]), rounding)
+    return Table(columns, data[:count], row_lines[:count], rounding)
 
 
 def _number(path: Path, line: int, col: int, column: Column, cell: str, text: str) -> float:

@@ -209,6 +209,7 @@ def test_a_rate_the_time_column_contradicts_is_refused(tmp_path):
     ("x [m/s]\n0,0125\n-1,5E-03\n", [0.0125, -1.5e-3]),          # one column, decimal comma
     ("time [s],x [m]\n0,1,\n0.1,2,\n", [1.0, 2.0]),                 # separator ending the rows
     ("x [m]\ty [m]\n1\t2\n3\t4\n", [1.0, 3.0]),
+    ("x [m];y [m];\n1,5;2;\n;;\n2,5;3;\n;;\n", [1.5, 2.5]),    # a sheet's blank rows
 ])
 def test_exports_from_other_tools_read_as_written(tmp_path, text, values):
     path = tmp_path / "other.csv"
