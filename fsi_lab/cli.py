@@ -938,7 +938,8 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
 
     p = sub.add_parser("import", help="turn a CSV file ('name [unit]' header) into a run file")
     p.add_argument("csv", type=Path)
-    p.add_argument("--rate", type=float, metavar="HZ", help="sample rate without a time column")
+    p.add_argument("--rate", type=float, metavar="HZ",
+                   help="sample rate; beside a time column, checked against it and kept exact")
     p.add_argument("--reference", metavar="NAME",
                    help="the base acceleration column (the analysis's reference channel)")
     p.add_argument("--delay", action="append", default=[], metavar="NAME=SECONDS",

@@ -165,7 +165,11 @@ def read_csv(path: str | Path) -> Table:
     point (a thousands separator?) is refused rather than read a thousand times off.
     """
     path = Path(path)
-    lines = read_text(path, EXPECTED, utf16=True).splitlines()
+    text = read_text(path, EXPECTED, utf16=True)
+    if "\x00" in text:
+        raise InputFileError(f"{path}: holds NUL characters (UTF-16 text without its byte-order "
+                             f"mark?); expected {EXPECTED}")
+    lines = text.splitlines()
     numbers: list[int] = []          # the file's line number of each line the reader took
 
     def table():
@@ -177,9 +181,11 @@ def read_csv(path: str | Path) -> Table:
     rows = table()
     header = next(rows, None)
     if header is None:
-        raise InputFileError(f"{path}: empty; expected a header row 'name [unit],...' and data")
+        found = "only comments" if any(line.strip() for line in lines) else "empty"
+        raise InputFileError(f"{path}: {found}; expected a header row 'name [unit],...' and "
+                             "data")
     separator = _separator(header)
-    reader = csv.reader(itertools.chain([header], rows), delimiter=separator)
+    reader = csv.reader(itertools.chain([header], rows), delimiter=separator, strict=True)
     try:
         cells = next(reader)
         # An export's rows often end with the separator: an empty last cell on every line.
@@ -215,7 +221,8 @@ def read_csv(path: str | Path) -> Table:
                         if mark in value_text and mark not in marks:
                             marks[mark] = (line, cell)
                     value_text = value_text.replace(",", ".")
-                data[count, col] = _number(path, line, col, columns[col], cell, value_text)
+                data[count, col] = _number(path, line, col, columns[col], cell, value_text,
+                                           separator == ",")
                 if col == time:
                     printing.add(count, value_text)
             row_lines[count] = line
@@ -236,13 +243,15 @@ def read_csv(path: str | Path) -> Table:
     return Table(columns, data[:count], row_lines[:count], rounding)
 
 
-def _number(path: Path, line: int, col: int, column: Column, cell: str, text: str) -> float:
-    """The finite value of ``cell`` (read as ``text``) on file line ``line``."""
+def _number(path: Path, line: int, col: int, column: Column, cell: str, text: str,
+            commas: bool) -> float:
+    """The finite value of ``cell`` (read as ``text``) on file line ``line`` of a file whose
+    columns are separated by commas (``commas``) or not."""
     try:
         value = float(text)
     except ValueError:
         hint = (" (a decimal comma in a comma-separated file? separate the columns with "
-                "semicolons)" if "," in cell else "")
+                "semicolons)" if commas and "," in cell else "")
         raise InputFileError(
             f"{path}: line {line}, column {col + 1} ({column.written}): {cell!r} is not a "
             f"number{hint}"
@@ -278,9 +287,12 @@ def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: n
                              f"{lines[int(np.argmin(steps > 0)) + 1]})")
     # A column printed to a few digits moves each step by up to a unit of the last one
     # (2560 Hz to 6 decimals: steps of 0.000390 and 0.000391 s).
+    # Never half a step or more: a column printed to a step's resolution (whole ms at 1 kHz)
+    # would otherwise pass a missing sample.
     with np.errstate(over="ignore", invalid="ignore"):
-        excess = np.abs(steps - step) - np.maximum(TIME_TOLERANCE * step,
-                                                   (rounding[:-1] + rounding[1:]) * (1 + 1e-9))
+        allowed = np.minimum(np.maximum(TIME_TOLERANCE * step,
+                                        (rounding[:-1] + rounding[1:]) * (1 + 1e-9)), 0.49 * step)
+        excess = np.abs(steps - step) - allowed
     if not float(np.max(excess)) <= 0.0:
         worst = int(np.nanargmax(np.where(np.isnan(excess), np.inf, excess)))
         raise InputFileError(

@@ -164,7 +164,7 @@ def test_tab_separated_values_with_a_decimal_point(tmp_path):
     ("x [m];y [m]\n1,5;2\n1,5\n", "line 3 has 1 value; the header has 2 columns (separated by "
      "semicolons)"),
     ("x [m];y [m]\n1.000,5;2\n1;2\n", "line 2, column 1 (x): '1.000,5' is not a number"),
-    ("# only a comment\n", "empty; expected a header row"),
+    ("# only a comment\n", "only comments; expected a header row"),
 ])
 def test_a_separated_export_s_errors_name_its_lines(tmp_path, text, fragment):
     path = tmp_path / "bad.csv"
@@ -236,6 +236,7 @@ def test_a_utf16_export_with_its_byte_order_mark_is_read(tmp_path):
      "line 3 has '1,234' (a decimal comma) and line 3 '0.0002' (a point"),
     ("x [m],y [m]\n\"1,5\",2\n1,2\n", "'1,5' is not a number (a decimal comma in a "
      "comma-separated file? separate the columns with semicolons)"),
+    ("x [m];y [m]\n1.234,5;2\n1;2\n", "'1.234,5' is not a number\n"),
     ("Zeit [s];v [m/s]\n0;1\n1;2\n",
      "unit 's' is not accepted; expected m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n on "
      "m, m/s, m/s^2 and V (mm/s, um, mV), or s or ms for the time column; a time column is "
@@ -247,6 +248,11 @@ def test_a_utf16_export_with_its_byte_order_mark_is_read(tmp_path):
     ("Sample rate: 5000\nx [m]\n1\n2\n", "The first line that is not a '#' comment is the "
      "header row: begin any lines above it with '#'"),
     ("x [m]\n\"1\n2\"\n3\n", "line 2: a quoted value spans several lines"),
+    ("x [m],y [m]\n0.1,\"2\n", "line 2: unexpected end of data"),
+    ("# a preamble\n# and nothing else\n", "only comments; expected a header row"),
+    # a missing sample in a column printed to a step's resolution (whole ms at 1 kHz)
+    ("time [ms];x [m]\n" + "".join(f"{k};1\n" for k in range(40) if k != 20),
+     "step 0.002 s at line 22 against a mean of"),
 ])
 def test_an_export_read_wrong_is_refused_naming_why(tmp_path, text, fragment):
     path = tmp_path / "bad.csv"
@@ -255,6 +261,14 @@ def test_an_export_read_wrong_is_refused_naming_why(tmp_path, text, fragment):
     assert proc.returncode == 2
     assert fragment in proc.stderr
     assert not (tmp_path / "bad.h5").exists()
+
+
+def test_utf16_without_its_byte_order_mark_is_refused_naming_it(tmp_path):
+    path = tmp_path / "u16.csv"
+    path.write_bytes("x [m]\n1\n2\n".encode("utf-16-le"))
+    proc = cli("import", str(path), "-o", str(tmp_path / "u16.h5"), "--rate", "10")
+    assert proc.returncode == 2
+    assert "holds NUL characters (UTF-16 text without its byte-order mark?)" in proc.stderr
 
 
 def test_a_latin1_export_is_refused_naming_the_likely_encoding(tmp_path):

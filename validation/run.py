@@ -51,9 +51,11 @@ def fsi_lab_estimate(case: Case, x: np.ndarray) -> Estimate:
     # A dry-friction record is read as a user reads it: the law fsi-lab prefers gives C_i and
     # the friction force (a friction force the preferred law has not is no number, counted as
     # not covered). The quadratic law nests the viscous one: a viscous record's C_i is its.
-    fit = mode.quadratic
+    # The mode's warnings are on the quadratic law's C_i and C_f; the preferred law's numbers
+    # carry none of their own, so read by them a trial is unwarned (its silent misses count).
+    fit, warned = mode.quadratic, bool(mode.warnings)
     if case.law == "coulomb" and mode.laws.preferred != "quadratic":
-        fit = mode.laws.fits[mode.laws.preferred]
+        fit, warned = mode.laws.fits[mode.laws.preferred], False
     second = "gamma" if case.law == "coulomb" else "beta"
     (a_lo, a_hi) = fit.interval("a")
     c_f, (b_lo, b_hi) = math.nan, (math.nan, math.nan)
@@ -62,7 +64,7 @@ def fsi_lab_estimate(case: Case, x: np.ndarray) -> Estimate:
     return Estimate(c_i=2 * m * fit.value("a"), c_i_ci=(2 * m * a_lo, 2 * m * a_hi),
                     c_f=c_f, c_f_ci=(m * b_lo, m * b_hi),
                     frequency=mode.frequency_hz, frequency_ci=tuple(mode.frequency_ci),
-                    law=mode.laws.preferred, warned=bool(mode.warnings))
+                    law=mode.laws.preferred, warned=warned)
 
 
 def _envelope(t: np.ndarray, a: float, b: float, a0: float) -> np.ndarray:

@@ -127,6 +127,8 @@ SPLIT_BAND = 8.0
 #: deflection; the hold ends where the record first moves HOLD_DEPARTURE times that noise
 #: away from it (:func:`_static_hold`).
 HOLD_SHARE, HOLD_STILL, HOLD_OFFSET, HOLD_DEPARTURE, REST_SHARE = 0.02, 2.0, 10.0, 6.0, 0.1
+#: ... and the deflection held reaches at least this share of the largest excursion after it.
+HOLD_REACH = 0.5
 #: Spectral peaks below this fraction of the largest are not candidate modes.
 MODE_THRESHOLD = 0.01
 #: A candidate's spectral peak must stand this many times above the spectrum's noise level.
@@ -534,6 +536,11 @@ def _static_hold(x: np.ndarray) -> tuple[int, float] | None:
         return None
     moved = np.flatnonzero(np.abs(x - held) > HOLD_DEPARTURE * noise)
     if moved.size == 0 or moved[0] < head.size:
+        return None
+    # Released from a deflection, the record swings about the rest position from where it
+    # was held: its largest excursion is about the deflection. A still lead-in before an
+    # excitation lies near the rest position, however the record's end is read.
+    if abs(held - rest) < HOLD_REACH * float(np.max(np.abs(x[moved[0]:] - rest))):
         return None
     return int(moved[0]), held - rest
 
@@ -1347,7 +1354,10 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
                              zip(g.decays, found.starts[j], found.times[j])],
                             alpha=float(found.alpha[j]))
                   for j, g in enumerate(guesses)]
-        spread = np.concatenate([target[a:b] - np.mean(target[a:b]) for a, b in spans])
+        # on the block means the residual is taken over, each span less its mean
+        means = [target[a:a + (b - a) // average * average].reshape(-1, average).mean(axis=1)
+                 for a, b in spans]
+        spread = np.concatenate([m - m.mean() for m in means if m.size])
         r2 = 1.0 - found.residual_rms ** 2 / max(float(np.mean(spread ** 2)), 1e-300)
         for k, m in enumerate(group):
             m.joint = {"params": found.params[k], "cov": found.cov[k], "w0": float(found.w0[k]),
@@ -1815,8 +1825,9 @@ def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int,
     kept extrema sees: its square is added to the coefficient's variance. The drift test of
     :func:`_stable_start` asks whether a start is stable; this measures what remains when it
     passes with little power (a short decay in noise whose first cycles are still smeared).
-    Returns ``start_a`` and ``start_beta``: the factors the standard errors were widened by.
-    ``law`` names another law to treat the same way (the preferred one, when it is not the
+    Returns ``start_<name>`` for each of the law's parameters (``start_a``, ``start_beta``):
+    the factors its standard errors were widened by. ``law`` names another law to treat the
+    same way (the preferred one, when it is not the
     quadratic: its coefficients are the ones the record supports)."""
     base = mode.fits[law]
     variance = np.diag(base.cov).copy()
@@ -1854,8 +1865,8 @@ def _noise_spread(mode: _Mode, law: str = "quadratic") -> dict[str, float]:
     extrema err together (the prediction that pads a window is fitted to noisy cycles), which
     in short decays moves C_i and C_f more than that. Where the realizations spread a
     coefficient more than its covariance says, its variance is raised to theirs. Returns
-    ``noise_a`` and ``noise_beta``: the factors the standard errors were widened by (of
-    ``law``'s, when another law than the quadratic is named)."""
+    ``noise_<name>`` for each of ``law``'s parameters (``noise_a``, ``noise_beta``): the
+    factors its standard errors were widened by."""
     base = mode.fits[law]
     devs = [d.get("noise_dev") for d in mode.decays]
     if base.influence is None or any(v is None for v in devs) \
@@ -1880,14 +1891,16 @@ def _noise_spread(mode: _Mode, law: str = "quadratic") -> dict[str, float]:
 def _other_law_spread(mode: _Mode, follow: str, laws: Sequence[str]) -> None:
     """Steps 8a and 8c for the preferred law when it is not the quadratic one: its
     coefficients (a viscous C_i, a dry friction force) are then the ones the record supports,
-    and their intervals need what the quadratic law's get."""
+    and their intervals need what the quadratic law's get. The factors enter ``drift`` as
+    ``preferred_start_<name>`` and ``preferred_noise_<name>`` (``a``, ``gamma``)."""
     preferred = compare_laws([mode.fits[law] for law in laws]).preferred
     if preferred == "quadratic":
         return
     tried = int(mode.drift.get("dropped", 0))
     shortest = min(d["amplitude"].size for d in mode.decays) + tried
-    _start_sensitivity(mode, follow, tried, shortest, preferred)
-    _noise_spread(mode, preferred)
+    factors = {**_start_sensitivity(mode, follow, tried, shortest, preferred),
+               **_noise_spread(mode, preferred)}
+    mode.drift.update({f"preferred_{key}": value for key, value in factors.items()})
 
 
 def _halves(decays: list[dict]) -> tuple[list[dict], list[dict]] | None:
@@ -2075,7 +2088,7 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    f"by up to {split:.1f} standard errors: the damping is not one law over "
                    "this amplitude range (coupling with other modes, an amplitude-dependent "
                    "drag)" + (f"; their intervals are widened {_fold(widened)}"
-                              if widened > 1.0 else ""))
+                              if widened >= 1.005 else ""))
     # A mode fitted jointly to the record's samples (step 6a) uses no smeared extremum.
     if m.correction > CORRECTION_WARNING and "joint_modes" not in m.start_drift:
         out.append(f"the band filters smear this mode's first cycles by up to "
@@ -2420,8 +2433,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         if left:
             found = [f"{f:.4g}" for f in sorted(results[i].frequency_hz for i in left)]
             listed = ", ".join(found[:-1]) + " and " + found[-1] if len(found) > 1 else found[0]
-            notes.append(f"{len(ranked)} modes have free decays; components = {int(components)} "
-                         "reports the largest (by their peaks in the decays' spectrum): "
+            where = " in the band asked for" if band_t is not None else ""
+            notes.append(f"{len(ranked)} modes with free decays are found{where}; components = "
+                         f"{int(components)} reports the largest (by their peaks in the decays' "
+                         "spectrum): "
                          + (f"the mode at {listed} Hz is" if len(left) == 1 else
                             f"the modes at {listed} Hz are")
                          + " not reported (components = 'auto' reports every one)")

@@ -309,6 +309,25 @@ def test_a_displacement_held_at_its_static_deflection_before_release_is_identifi
                                                        quantity="displacement").notes)
 
 
+def test_a_still_lead_in_before_an_excitation_is_no_static_deflection():
+    """A displacement record at rest for 0.5 s, then a slow 2 Hz decay still ringing at the
+    record's end: the median of that end is no rest level, and the lead-in, near the rest
+    position, is left as it is (it was taken for a deflection held 13 % away)."""
+    from fsi_lab.dsp.identify import _static_hold
+
+    fs = 1000.0
+    t = np.arange(int(3.5 * fs)) / fs
+    w = 2 * math.pi * 2.0
+    decay = 1e-3 * np.exp(-0.02 * w * t) * np.sin(w * t)
+    x = np.concatenate([np.zeros(int(0.5 * fs)), decay])
+    x = x + 1e-6 * np.random.default_rng(0).standard_normal(x.size)
+    assert _static_hold(x) is None
+    held = _held_then_released(2e-3, 5000.0)
+    release, offset = _static_hold(held + 1e-5 * np.random.default_rng(1).standard_normal(
+        held.size))
+    assert 2500 <= release < 2500 + 0.01 * 5000.0 and offset == pytest.approx(2e-3, rel=0.01)
+
+
 def test_an_acceleration_channel_gives_the_velocity_channel_s_numbers():
     case = release(noise=0.0)
     v = clean_record(case)
@@ -527,7 +546,8 @@ def test_modes_left_out_by_a_number_of_components_are_named():
     one = identify(record, case.fs, components=1)
     assert len(one.modes) == 1
     (note,) = [n for n in one.notes if "components = 1" in n]
-    assert note.startswith("2 modes have free decays; components = 1 reports the largest")
+    assert note.startswith("2 modes with free decays are found; components = 1 reports the "
+                           "largest")
     left = float(re.search(r"the mode at ([\d.]+) Hz is not reported", note)[1])
     assert left == pytest.approx(2.0 * WET_F if one.modes[0].frequency_hz < 20 else WET_F,
                                  rel=1e-3)
