@@ -618,6 +618,25 @@ class DampingCoefficients(Result):
 
 
 # ----------------------------------------------------------------------------- modal model
+#: Above this RMS (%) of the instantaneous frequencies' differences over the compared decay,
+#: their mean (the modal model's frequency error) is warned as saying little.
+FREQUENCY_SCATTER_PCT = 5.0
+
+
+def _frequency_scatter(figures: dict[str, Any]) -> str | None:
+    """A warning when the compared decay's instantaneous frequencies scatter too much for the
+    modal model's frequency error to mean anything (a decay cut short by the record's end, as
+    the last of an impulse train, or still forced where the comparison starts); else None."""
+    rms = figures.get("frequency_rms_error_pct")
+    if rms is None or not math.isfinite(rms) or rms <= FREQUENCY_SCATTER_PCT:
+        return None
+    return (f"the modal model's instantaneous frequencies differ from the measured ones by "
+            f"{rms:.3g} % RMS over the decay compared ({figures['decay_start_s']:.3g} to "
+            f"{figures['decay_end_s']:.3g} s: a decay cut short by the record's end, or still "
+            f"forced where it starts): its frequency error of "
+            f"{figures['frequency_error_pct']:+.2f} % says little")
+
+
 @dataclass
 class ModalComparison(Result):
     """The beam model run with the measured base motion, compared with the measurement
@@ -682,7 +701,8 @@ class ModalComparison(Result):
                "natural_frequencies_hz": [float(f) for f in self.natural_frequencies_hz],
                "coordinate": "relative" if self.relative else "absolute",
                "oversampling": self.oversampling, "velocity_rms_error": self.velocity_rms_error}
-        entries = [{"index": k, "modal_model": {key: jsonable(v) for key, v in f.items()}}
+        entries = [{"index": k, "modal_model": {key: jsonable(v) for key, v in f.items()},
+                    **({"warnings": [warning]} if (warning := _frequency_scatter(f)) else {})}
                    for k, f in self.figures.items()]
         err_entries, err_attrs = error_entries(self.errors, "modal_model")
         attrs: dict[str, Any] = {
