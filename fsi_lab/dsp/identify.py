@@ -1354,15 +1354,10 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
                              zip(g.decays, found.starts[j], found.times[j])],
                             alpha=float(found.alpha[j]))
                   for j, g in enumerate(guesses)]
-        # on the block means the residual is taken over, each span less its mean
-        means = [target[a:a + (b - a) // average * average].reshape(-1, average).mean(axis=1)
-                 for a, b in spans]
-        spread = np.concatenate([m - m.mean() for m in means if m.size])
-        r2 = 1.0 - found.residual_rms ** 2 / max(float(np.mean(spread ** 2)), 1e-300)
         for k, m in enumerate(group):
             m.joint = {"params": found.params[k], "cov": found.cov[k], "w0": float(found.w0[k]),
                        "alpha": float(found.alpha[k]),
-                       "dof": found.dof, "r2": r2,
+                       "dof": found.dof, "r2": found.r2,
                        "residual": ratio, "modes": len(group), "widening": found.widening[k],
                        "laws": _joint_laws(group, k, found, fitted, target, fs, spans,
                                            follow, quantity, cubic, laws, average)}
@@ -1827,8 +1822,8 @@ def _start_sensitivity(mode: _Mode, follow: str, tried: int, shortest: int,
     passes with little power (a short decay in noise whose first cycles are still smeared).
     Returns ``start_<name>`` for each of the law's parameters (``start_a``, ``start_beta``):
     the factors its standard errors were widened by. ``law`` names another law to treat the
-    same way (the preferred one, when it is not the
-    quadratic: its coefficients are the ones the record supports)."""
+    same way (the preferred one, when it is not the quadratic: its coefficients are the ones
+    the record supports)."""
     base = mode.fits[law]
     variance = np.diag(base.cov).copy()
     extra = np.zeros(variance.size)

@@ -98,6 +98,9 @@ class JointFit:
     residual_rms
         RMS of the record minus the fitted decays over the spans (of their block means, with
         ``average``), in the record's unit.
+    r2
+        The share of the record's variance over the spans (of the same values, each span less
+        its mean) that the fit explains.
     samples, dof
         Samples (block means, with ``average``) fitted, and those less the parameters fitted
         (the modes', their decays' starts and the spans' offsets and slopes).
@@ -115,6 +118,7 @@ class JointFit:
     starts: list[np.ndarray]
     times: list[np.ndarray]
     residual_rms: float
+    r2: float
     samples: int
     dof: int
     widening: list[np.ndarray]
@@ -312,9 +316,13 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
         idx = [shared + 2 * decay_index.index((k, j)) for j in range(len(m.decays))]
         starts.append(theta[idx].copy())
         start_times.append(theta[np.array(idx) + 1].copy())
+    spread = np.concatenate([data[a:b] - np.mean(data[a:b])
+                             for a, b in zip(offsets[:-1], offsets[1:])])
     return JointFit(params=params, w0=np.array(w0), alpha=np.array(alpha), cov=covs,
                     starts=starts, times=start_times,
-                    residual_rms=float(np.sqrt(np.mean(resid ** 2))), samples=int(data.size),
+                    residual_rms=float(np.sqrt(np.mean(resid ** 2))),
+                    r2=1.0 - float(resid @ resid) / max(float(spread @ spread), 1e-300),
+                    samples=int(data.size),
                     dof=int(data.size - theta.size),
                     widening=widen, converged=bool(sol.status > 0))
 
