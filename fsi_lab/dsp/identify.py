@@ -183,6 +183,9 @@ FIRST_FLOOR = 3.0
 POOR_PRECISION = 0.15
 #: A cubic stiffness is fitted only when it moves the frequency by this share or more.
 STIFFNESS_SHIFT = 2e-3
+#: A free decay's half cycles last this range of the mode's half period: beyond it the decay
+#: has ended (:func:`_extrema`).
+HALF_CYCLE_RANGE = (0.5, 2.0)
 #: A mode is free once the base motion in its band has fallen below this share of its peak.
 BAND_QUIET_LEVEL = 0.01
 #: Share of each decay's first extrema left out by the start check (:func:`_start_check`).
@@ -935,6 +938,13 @@ def _extrema(signal: np.ndarray, fs: float, frequency: float, start: int, free: 
     t, v = t[sel], hc.values[sel]
     above = np.abs(v) >= floor
     run = int(np.argmin(above)) if not above.all() else above.size
+    # A half cycle far longer or shorter than the mode's is no cycle of its free decay: the
+    # motion has stopped (dry friction sticks) and what is left is the band filter's ringing
+    # and the noise, above a floor that a quiet record sets low.
+    steps = np.diff(t[:run]) * 2.0 * frequency
+    off = np.flatnonzero((steps < HALF_CYCLE_RANGE[0]) | (steps > HALF_CYCLE_RANGE[1]))
+    if off.size:
+        run = int(off[0]) + 1
     return t[:run], v[:run], hc.crossings + start / fs
 
 

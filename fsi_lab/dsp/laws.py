@@ -1060,6 +1060,32 @@ def compare_laws(fits: Sequence[LawFit]) -> LawComparison:
 
 # ----------------------------------------------------------------------------- signals
 @numba.njit(cache=True)
+def _friction_step(x, v, h, w0sq, alpha, a2, beta, gamma):
+    """One Runge-Kutta step of length ``h`` (s; < 0 backwards). With dry friction (``gamma``
+    > 0) a step in which the velocity changes sign is split at v = 0, where the friction force
+    reverses, or - forwards - the motion sticks when the restoring force cannot overcome it:
+    integrated through, the friction's wrong sign over the rest of the step put each velocity
+    zero crossing early (the half periods 0.03 % short, the fitted frequency 0.16 % low)."""
+    s = 1.0 if v > 0.0 else -1.0 if v < 0.0 else 0.0
+    if gamma > 0.0 and s == 0.0:
+        restoring = w0sq * x + alpha * x * x * x
+        if abs(restoring) <= gamma:
+            return x, v if h < 0.0 else 0.0
+        s = -1.0 if restoring > 0.0 else 1.0
+    xn, vn = _rk4(x, v, s, h, w0sq, alpha, a2, beta, gamma)
+    if gamma <= 0.0 or vn * s >= 0.0:
+        return xn, vn
+    acc = _accel(x, v, s, w0sq, alpha, a2, beta, gamma)
+    an = _accel(xn, vn, s, w0sq, alpha, a2, beta, gamma)
+    frac = _hermite_root(v, vn, acc * h, an * h)
+    xm, _ = _rk4(x, v, s, frac * h, w0sq, alpha, a2, beta, gamma)
+    restoring = w0sq * xm + alpha * xm * xm * xm
+    if h > 0.0 and abs(restoring) <= gamma:
+        return xm, 0.0
+    return _rk4(xm, 0.0, -s, (1.0 - frac) * h, w0sq, alpha, a2, beta, gamma)
+
+
+@numba.njit(cache=True)
 def _march(x, v, t_from, sample_times, w0sq, alpha, a2, beta, gamma, h_max, output, out):
     """Integrate from (x, v) at ``t_from`` through the monotonic ``sample_times`` (s), writing
     x (``output`` 0), v (1) or the acceleration (2) at each; steps no longer than ``h_max``
@@ -1077,8 +1103,7 @@ def _march(x, v, t_from, sample_times, w0sq, alpha, a2, beta, gamma, h_max, outp
                 w0sq_h, a2_h = _rk4_matched(w0sq, a2, h)
                 h_last = h
             for _ in range(steps):
-                s = 1.0 if v > 0.0 else -1.0 if v < 0.0 else 0.0
-                x, v = _rk4(x, v, s, h, w0sq_h, alpha, a2_h, beta, gamma)
+                x, v = _friction_step(x, v, h, w0sq_h, alpha, a2_h, beta, gamma)
                 if not (abs(v) < 1e150 and abs(x) < 1e150):   # overflow or NaN: give up
                     v = 0.0
                     x = 0.0

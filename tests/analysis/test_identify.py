@@ -805,6 +805,53 @@ def test_simulate_decay_continues_the_extremum_it_starts_from():
     np.testing.assert_allclose(np.abs(hc.values[j:j + 8]), amp, rtol=1e-4)
 
 
+def test_simulate_decay_reverses_dry_friction_where_the_velocity_changes_sign_and_sticks():
+    """Viscous damping and dry friction: each half cycle is a viscous oscillation about a
+    shifted rest, so the velocity's zero crossings are pi / w_d apart (closed form) until the
+    motion sticks, and it stays at rest after. The model matches the DOP853 record's
+    crossings to 1e-6 s and its samples to 2e-4 of the largest; integrated through the sign
+    change, the friction's wrong sign for the rest of each step put every crossing early (the
+    half periods 0.03 % short: 8.7 us of 29.4 ms) and left the model chattering after the
+    stop."""
+    case = release(noise=0.0, fs=100000.0, duration=0.45, c_f=0.0, c_i=0.3, friction=0.4)
+    v = clean_record(case)
+    fs = case.fs
+    a = 0.3 / (2 * WET_MASS)
+    wd = math.sqrt(W ** 2 - a ** 2)
+    hc = half_cycles(v, fs, WET_F)
+    k = int(np.argmax(np.abs(hc.values)))
+    t = np.arange(v.size) / fs
+    model = simulate_decay("coulomb", [a, 0.4], W, float(hc.values[k]), float(hc.times[k]), t)
+
+    def crossings(x):
+        i = np.flatnonzero(x[:-1] * x[1:] < 0.0)
+        return (i + x[i] / (x[i] - x[i + 1])) / fs
+
+    data, mine = crossings(v), crossings(model)
+    mine = mine[mine > hc.times[k]]           # (backwards, the model reaches the release)
+    assert data.size >= 10 and mine.size == data.size
+    np.testing.assert_allclose(mine, data, atol=1e-6)
+    np.testing.assert_allclose(np.diff(mine)[:8], math.pi / wd, rtol=3e-5)
+    np.testing.assert_allclose(model, v, atol=2e-4 * float(np.max(np.abs(v))))
+    stopped = t > data[-1] + math.pi / wd
+    assert stopped.sum() > 1000 and np.all(model[stopped] == 0.0)
+
+
+def test_a_dry_friction_decay_that_stops_in_a_quiet_record_keeps_its_frequency():
+    """Viscous damping and dry friction, noise 1e-4 of the largest: the motion sticks after 12
+    half cycles, and the band filter rings on in the quiet record after it, above a floor the
+    noise sets low. Those half cycles, three to eight times the mode's, were taken for the
+    decay's (the natural frequency read 34 % low, warned). The decay ends where its half
+    cycles stop being the mode's: the frequency within 0.01 %, its interval covering it."""
+    case = release(noise=1e-4, duration=3.0, c_f=0.0, c_i=0.3, friction=0.4)
+    for seed in range(2):
+        mode = identify(trial(case, seed), case.fs).modes[0]
+        assert mode.laws.preferred == "coulomb"
+        assert mode.frequency_hz == pytest.approx(WET_F, rel=1e-4)
+        assert mode.frequency_ci[0] <= WET_F <= mode.frequency_ci[1]
+        assert mode.laws.fits["coulomb"].value("gamma") == pytest.approx(0.4, rel=0.02)
+
+
 def test_a_decay_that_follows_no_single_law_is_flagged_by_its_two_halves():
     """Quadratic damping with a little dry friction: the quadratic law fitted to the larger
     and to the smaller half of the cycles disagree, which a warning says and the interval
