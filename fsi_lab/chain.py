@@ -24,6 +24,7 @@ from fsi_lab.contract import (
     Result,
     SharedRecord,
     error_gist,
+    failed_provider,
 )
 from fsi_lab.errors import FsiLabError, ParameterError
 from fsi_lab.events import EventBus, Progress
@@ -286,7 +287,10 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                 where = f"{plugin_name} on channel {channel_name!r}"
                 if not message.startswith(where):  # every message names plugin and channel
                     message = f"{where}: {message}"
-                bus.log("ERROR", f"analysis {plugin_name} on channel {channel_name}: {message}")
+                provider = failed_provider(message)
+                bus.log("ERROR", f"analysis {plugin_name} on channel {channel_name}: " + (
+                    f"not run, for want of {provider}'s result ({provider} failed, above)"
+                    if provider in failed else message))
                 channel_summary.setdefault("errors", []).append(
                     {"plugin": plugin_name, "message": message})
                 groups[key] = {"attrs": {"status": "failed", "error": message,

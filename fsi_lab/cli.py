@@ -142,6 +142,12 @@ def cmd_run(args) -> int:
     code = EXIT_FOR_STATUS[outcome.exit_status]
     if outcome.interrupted and code == 0:  # the record is complete, the command was not
         code = EXIT_FOR_STATUS["aborted"]
+    refused = nothing_identified(outcome.summary, registry) \
+        if code == 0 and outcome.summary else None
+    if refused:  # as `fsi-lab analyze` says of the same file
+        print(f"fsi-lab: error: {outcome.path}: {refused} (the run file is complete)",
+              file=sys.stderr)
+        code = 2
     if args.strict and not args.no_analysis:
         code = _strict_exit(outcome.summary or {}, code)
     if outcome.file_abandoned:
@@ -714,7 +720,6 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_gui(args) -> int:
-    args.signals.restore()  # the window handles its own ending
     try:
         from fsi_lab.gui.app import main as gui_main
     except ImportError as exc:
@@ -722,7 +727,10 @@ def cmd_gui(args) -> int:
             f"the GUI needs the 'gui' extra (PySide6, pyqtgraph): pip install 'fsi-lab[gui]' "
             f"({exc})"
         ) from None
-    return gui_main(args)
+    # Ctrl+C and SIGTERM are noted while the window is built, then the window handles them
+    # (fsi_lab.gui.app.EndOnSignal: it closes as its close button does, exit code 130).
+    with args.signals.held():
+        return gui_main(args)
 
 
 EXIT_STRICT = 3
@@ -907,8 +915,9 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
                    help="send the files to the Dask scheduler at ADDRESS, e.g. "
                         "tcp://10.0.0.5:8786 (needs the extra fsi-lab[cluster])")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override an analysis parameter: analysis.ANALYSIS.PARAMETER=VALUE "
-                        "(fsi-lab plugins -v lists them)")
+                   help="override an analysis parameter, analysis.ANALYSIS.PARAMETER=VALUE "
+                        "(fsi-lab plugins -v lists them), or the specimen's, "
+                        "specimen.KEY=VALUE (e.g. specimen.fluid=water)")
     p.add_argument("--strict", action="store_true",
                    help="exit 3 when a result was refused or carries a warning")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",

@@ -562,6 +562,19 @@ def error_gist(message: str) -> str:
     return text
 
 
+#: How an analysis that could not run because another failed before it on the channel is
+#: worded (:meth:`AnalysisContext.result`, :func:`fsi_lab.chain._missing`).
+_FOR_WANT_OF = re.compile(r"(\S+) failed earlier in the chain on this channel|"
+                          r"which (\S+) failed to give on this channel")
+
+
+def failed_provider(message: str) -> str | None:
+    """The analysis whose failure an error's ``message`` says it could not do without, or
+    None when it failed on its own account."""
+    found = _FOR_WANT_OF.search(message)
+    return (found.group(1) or found.group(2)) if found else None
+
+
 def kind_name(kind: str | type[Result]) -> str:
     """The name of a result kind given by name or by its :class:`Result` class.
 

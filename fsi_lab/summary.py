@@ -17,6 +17,7 @@ import math
 import numbers
 from typing import Any
 
+from fsi_lab.contract import failed_provider
 from fsi_lab.presentation import SummaryText
 
 #: Keys of a channel's summary the core shows itself.
@@ -125,8 +126,18 @@ def format_summary(summary: dict[str, Any], registry=None) -> str:
                      for key, value in plain_values(info, claimed | set(CHANNEL_KEYS)))
         for component in info.get("components", []):
             lines.extend(_component_lines(registry, channel, info, component))
-        for error in info.get("errors", []):
-            lines.append(f"  failed {error['plugin']}: {error['message']}")
+        # An analysis that needed a failed one's result: named once, after that failure.
+        errors = info.get("errors", [])
+        failed = {error["plugin"] for error in errors}
+        waiting: dict[str, list[str]] = {}
+        for error in errors:
+            provider = failed_provider(error["message"])
+            if provider in failed and provider != error["plugin"]:
+                waiting.setdefault(provider, []).append(error["plugin"])
+            else:
+                lines.append(f"  failed {error['plugin']}: {error['message']}")
+        lines.extend(f"  not run, for want of {provider}'s result ({provider} failed, above): "
+                     + ", ".join(names) for provider, names in waiting.items())
     return "\n".join(lines)
 
 

@@ -226,3 +226,47 @@ def test_analyze_with_a_shorter_chain_leaves_recorded_plugin_settings_aside(sim_
     assert proc.returncode == 0, proc.stderr
     assert "spectrum_peaks_hz" not in again["channels"]["tip_velocity"]
     assert again["channels"]["tip_velocity"]["components"]
+
+
+def test_a_run_whose_record_identifies_nothing_exits_2_as_analyze_does(tmp_path):
+    """In air the profile's 2 components find one peak in the free decays: hvd is refused and
+    nothing is identified. `run` printed that and exited 0 where `analyze` of the same file
+    exits 2; now both exit 2, `run` adding that its file is complete."""
+    proc = cli("run", "profiles/wet-beam-sim.toml", "--out", str(tmp_path),
+               "--set", "specimen.fluid=air", timeout=300)
+    assert proc.returncode == 2, proc.stderr
+    (path,) = tmp_path.glob("*.h5")
+    assert proc.stderr.rstrip().endswith("(the run file is complete)")
+    assert f"fsi-lab: error: {path}: nothing was identified: channel tip_velocity: hvd " \
+           in proc.stderr
+    assert read_run(path).attrs["exit_status"] == "completed"
+    again = cli("analyze", str(path), timeout=300)
+    assert again.returncode == 2
+    # The refusal is said once; the analyses that needed hvd's result are named after it
+    # (they repeated it, one line each and one log line each on stderr).
+    lines = again.stdout.splitlines()
+    assert sum(1 for line in lines if "2 component(s) asked for" in line) == 1
+    assert "  not run, for want of hvd's result (hvd failed, above): integrate, instantaneous, " \
+           "backbone, damping, equivalent-damping, modal-model" in lines
+    logged = [line for line in again.stderr.splitlines() if line.startswith("[error] analysis ")]
+    assert len(logged) == 7
+    assert sum(1 for line in logged if "2 component(s) asked for" in line) == 1
+
+
+def test_a_noise_free_simulation_is_not_said_to_hold_coloured_noise(tmp_path):
+    """`fsi-lab simulate` writes the bench's physics without noise: the bands' tails hold the
+    record's numerical residue, which the chain compared with a white noise of 1e-17 and
+    warned "the noise in this mode's band is 754943998.9 times the record's white noise".
+    That residue is no noise: no such warning, and the paper's C_i and C_f."""
+    path = tmp_path / "sim.h5"
+    made = cli("simulate", "profiles/wet-beam-sim.toml", "--duration", "10", "--rate", "10000",
+               "-o", str(path), timeout=300)
+    assert made.returncode == 0, made.stderr
+    data, proc = cli_json("analyze", str(path), timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    comps = data["channels"]["tip_velocity"]["components"]
+    assert comps and not any("times the record's white noise" in w
+                             for c in comps for w in c["warnings"])
+    mode2 = min(comps, key=lambda c: abs(c["frequency_hz"] - 17.06))
+    assert mode2["equivalent_damping"]["c_i"] == pytest.approx(0.65, rel=0.01)
+    assert mode2["equivalent_damping"]["c_f"] == pytest.approx(33.0, rel=0.02)

@@ -94,6 +94,7 @@ from fsi_lab.dsp.laws import (
     simulate_decay,
 )
 from fsi_lab.dsp.spectrum import amplitude_spectrum, averaged_spectrum, find_peaks_interpolated
+from fsi_lab.dsp.spikes import find_spikes, without_spikes
 from fsi_lab.errors import AnalysisError
 
 QUANTITIES = ("velocity", "displacement", "acceleration")
@@ -183,6 +184,8 @@ FIRST_FLOOR = 3.0
 POOR_PRECISION = 0.15
 #: A cubic stiffness is fitted only when it moves the frequency by this share or more.
 STIFFNESS_SHIFT = 2e-3
+#: Spikes whose times a note names (:func:`.spikes.find_spikes`).
+SPIKES_NAMED = 5
 #: A free decay's half cycles last this range of the mode's half period: beyond it the decay
 #: has ended (:func:`_extrema`).
 HALF_CYCLE_RANGE = (0.5, 2.0)
@@ -2206,6 +2209,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         record = record.copy()
         record[:hold[0]] -= hold[1]
     record = record - float(np.mean(record))
+    spikes = find_spikes(record)
+    if spikes.size:
+        record = without_spikes(record, spikes)
     # Dominant oscillation and the noise: the spectrum of the whole record.
     # The dominant oscillation is one the sampling resolves: decays split on the half periods
     # of a mode with 4 samples per cycle fall apart at every beat with the others.
@@ -2232,6 +2238,16 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     cand_f, cand_a, notes, guards, steady = _candidates(
         record, fs, windows, int(components) if components != "auto" else "auto", band_t,
         f_dom, sigma)
+    if spikes.size:
+        at = ", ".join(f"{i / fs:.4g}" for i in spikes[:SPIKES_NAMED])
+        more = f" and {spikes.size - SPIKES_NAMED} more" if spikes.size > SPIKES_NAMED else ""
+        notes.insert(0, f"{spikes.size} isolated sample{'s' if spikes.size > 1 else ''} "
+                        f"stand{'' if spikes.size > 1 else 's'} far off the oscillation their "
+                        f"neighbours trace (at {at} s{more}: "
+                        "spikes, as a vibrometer's signal dropouts or a digitiser's glitches "
+                        "give): each is replaced by the cubic through its two neighbours on "
+                        "either side (left in, their broadband energy lifts the extrema the "
+                        "damping laws are fitted to)")
     if hold is not None:
         notes.insert(0, f"the record holds still for its first {hold[0] / fs:.3g} s, "
                         f"{hold[1]:.3g} (the record's unit) away from where it comes to rest (a "
@@ -2394,7 +2410,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             _other_law_spread(mode, follow, laws)
         else:               # (the band fit's range checks would only widen what it replaces)
             _take_joint(mode)
-        if (ratio := _band_noise_ratio(mode, fs)) is not None:
+        # (a noise-free record's bands hold its numerical residue, not noise: no ratio)
+        largest = max(float(np.max(np.abs(d["values"]))) for d in mode.decays)
+        if (ratio := _band_noise_ratio(mode, fs)) is not None \
+                and ratio * mode.noise >= PRECISION * largest:
             mode.drift["band_noise"] = ratio
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)

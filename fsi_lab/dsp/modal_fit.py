@@ -197,12 +197,17 @@ def _fit(model: _Model, h: np.ndarray, weights: np.ndarray, starts: list[tuple[f
          f_bounds: list[tuple[float, float]]) -> Any:
     """Least-squares fit of the modes from their starts (f, zeta); each mode's zeta is first
     chosen on a grid, the others held at their starts, then all are refined together."""
-    p = np.array([v for f, z in starts for v in (f, math.log(z))], dtype=np.float64)
+    def inside(z: float) -> float:
+        # (a start from a half-power band as wide as the peak's frequency is no damping ratio
+        # the model can take: its pole needs zeta < 1)
+        return math.log(min(max(z, 2 * _ZETA_BOUNDS[0]), 0.5 * _ZETA_BOUNDS[1]))
+
+    p = np.array([v for f, z in starts for v in (f, inside(z))], dtype=np.float64)
     for i in range(0, p.size, 2):
         best = None
         for z in [math.exp(p[i + 1])] + list(np.geomspace(1e-5, 0.3, 14)):
             q = p.copy()
-            q[i + 1] = math.log(min(max(z, 2 * _ZETA_BOUNDS[0]), 0.5 * _ZETA_BOUNDS[1]))
+            q[i + 1] = inside(z)
             r = _residual(model.basis(q), h, weights)
             cost = float(r @ r)
             if best is None or cost < best[0]:
@@ -465,7 +470,9 @@ def modal_fit(frequency: Any, sxy: Any, sxx: Any, f_peak: float, *, fs: float,
             pass
     if interval:
         f_ci = (fn - q * se[0], fn + q * se[0])
-        z_ci = (zeta * math.exp(-q * se[1]), zeta * math.exp(q * se[1]))
+        spread = q * float(se[1])       # (of log zeta: beyond 700 its exp overflows)
+        z_ci = (zeta * math.exp(-spread), zeta * math.exp(spread)) if spread < 700.0 \
+            else (0.0, math.inf)
     else:
         warnings.append(f"peak at {fn:.4g} Hz: no interval could be computed")
     bins_across = 2.0 * zeta * fn / df
@@ -478,7 +485,7 @@ def modal_fit(frequency: Any, sxy: Any, sxx: Any, f_peak: float, *, fs: float,
         if segment:
             text += f" (segments of {need} samples or more would resolve the band)"
         warnings.append(text)
-    if interval and math.isfinite(z_ci[1]) and z_ci[1] / zeta > RESOLVED_FACTOR:
+    if interval and not z_ci[1] / zeta <= RESOLVED_FACTOR:
         warnings.append(f"peak at {fn:.4g} Hz: the damping ratio is not resolved (95 %: "
                         f"{z_ci[0]:.3g} to {z_ci[1]:.3g})")
     coh = _coherence(txx, tyy, txy)

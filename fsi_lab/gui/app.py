@@ -12,10 +12,11 @@ from __future__ import annotations
 
 import gc
 import os
+import signal
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import pyqtgraph as pg
 from PySide6.QtCore import QCoreApplication, QEvent, QEventLoop, Qt, QTimer
@@ -460,6 +461,44 @@ def _dispose(window: MainWindow) -> None:
     QApplication.instance().processEvents()
 
 
+#: Exit code of a window closed by Ctrl+C or SIGTERM (as every fsi-lab command's).
+EXIT_INTERRUPTED = 130
+#: Said on stderr once the window is open and handles Ctrl+C and SIGTERM.
+READY = "fsi-lab gui: window open (Ctrl+C or SIGTERM closes it, as its close button does)"
+#: How often Python gets to run a signal handler while Qt's event loop holds the thread, ms.
+SIGNAL_POLL_MS = 200
+
+
+class EndOnSignal:
+    """Ctrl+C and SIGTERM close the window as its close button does: a run in progress is
+    aborted first and the window closes once the bench is in its safe state; a sequence's run
+    ends safely. Qt's event loop holds the thread, so a timer lets Python run the handler."""
+
+    def __init__(self, window: MainWindow, noted: Sequence[int] = ()) -> None:
+        self.window = window
+        self.received: int | None = None
+        self._timer = QTimer()
+        self._timer.timeout.connect(lambda: None)
+        self._timer.start(SIGNAL_POLL_MS)
+        self._previous = {signum: signal.signal(signum, self._close)
+                          for signum in (signal.SIGINT, signal.SIGTERM)}
+        if noted:  # (received while the window was being built)
+            self._close(noted[0], None)
+        else:
+            print(READY, file=sys.stderr, flush=True)
+
+    def _close(self, signum, frame) -> None:
+        if self.received is None:
+            self.received = signum
+            self.window.notify("WARNING", f"{signal.Signals(signum).name} received: closing")
+            QTimer.singleShot(0, self.window.close)
+
+    def restore(self) -> None:
+        self._timer.stop()
+        for signum, handler in self._previous.items():
+            signal.signal(signum, handler)
+
+
 def fitting_size(app: QApplication) -> tuple[int, int]:
     """:data:`PREFERRED_SIZE`, or less where the screen's free area is smaller."""
     screen = app.primaryScreen()
@@ -502,9 +541,12 @@ def main(args: Any) -> int:
                                    "analysis for the run shown; its views: "
                                    f"{', '.join(window.analysis.view_titles()) or 'none'}")
     if screenshot is None:
+        held = getattr(args, "signals", None)
+        ending = EndOnSignal(window, held.pending if held is not None else ())
         code = app.exec()
+        ending.restore()
         _dispose(window)
-        return code
+        return EXIT_INTERRUPTED if ending.received else code
     idle = idle and wait_until_idle(window)
     saved = take_screenshot(window, Path(screenshot))
     errors = [text for level, text in window.messages.messages if level == "ERROR"]

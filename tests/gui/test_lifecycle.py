@@ -1,13 +1,25 @@
 """The window's Qt objects are taken down in order: nothing signals a deleted plot item."""
 
 import gc
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import LOAD_TIMEOUT_MS, UI_TIMEOUT_MS, write_run
+from support import LineReader
 
 from fsi_lab.events import DataBlock
-from fsi_lab.gui.app import MainWindow, _configure_pyqtgraph
+from fsi_lab.gui.app import READY, MainWindow, _configure_pyqtgraph
+
+SIM_PROFILE_PATH = Path(__file__).resolve().parents[2] / "profiles" / "wet-beam-sim.toml"
+#: The longest a window may take to start and close on a shared machine, s (a bound, not a
+#: measure: the test ends as soon as the process does).
+END_TIMEOUT_S = 180.0
 
 
 @pytest.mark.parametrize("state", ["figures built while idle", "every figure drawn"])
@@ -44,3 +56,30 @@ def test_the_window_is_deleted_without_an_error(qtbot, registry, tmp_path, state
         if not disposed:
             window.close()
             window.dispose()
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_fsi_lab_gui_ends_on_sigterm_and_ctrl_c_with_exit_130(signum):
+    """``fsi-lab gui`` closes on SIGTERM and Ctrl+C as on its close button (a run in progress
+    is aborted to the safe state first) and exits 130. Its own start left them to the start-up
+    note, which only noted them: the window stayed open until kill -9. The signal is sent once
+    the window says it is open, until the process ends (nothing here depends on how fast the
+    machine starts it)."""
+    env = {**os.environ, "QT_QPA_PLATFORM": "offscreen"}
+    proc = subprocess.Popen([sys.executable, "-m", "fsi_lab.cli", "gui", str(SIM_PROFILE_PATH)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        deadline = time.monotonic() + END_TIMEOUT_S
+        err = LineReader(proc.stderr)
+        err.wait_for(lambda line: line.rstrip("\n") == READY, timeout=END_TIMEOUT_S)
+        while proc.poll() is None and time.monotonic() < deadline:
+            proc.send_signal(signum)
+            try:
+                proc.wait(timeout=1.0)
+            except subprocess.TimeoutExpired:
+                pass
+        assert proc.poll() == 130, (proc.poll(), err.lines)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait(timeout=30)
