@@ -25,6 +25,7 @@ from fsi_lab.contract import (
     SharedRecord,
     error_gist,
     failed_provider,
+    for_want_of,
 )
 from fsi_lab.errors import FsiLabError, ParameterError
 from fsi_lab.events import EventBus, Progress
@@ -288,9 +289,9 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
                 if not message.startswith(where):  # every message names plugin and channel
                     message = f"{where}: {message}"
                 provider = failed_provider(message)
-                bus.log("ERROR", f"analysis {plugin_name} on channel {channel_name}: " + (
-                    f"not run, for want of {provider}'s result ({provider} failed, above)"
-                    if provider in failed else message))
+                said = provider in failed and failed_provider(failed[provider]) is None
+                bus.log("ERROR", f"analysis {plugin_name} on channel {channel_name}: "
+                        + (for_want_of(provider) if said else message))
                 channel_summary.setdefault("errors", []).append(
                     {"plugin": plugin_name, "message": message})
                 groups[key] = {"attrs": {"status": "failed", "error": message,

@@ -562,17 +562,30 @@ def error_gist(message: str) -> str:
     return text
 
 
-#: How an analysis that could not run because another failed before it on the channel is
-#: worded (:meth:`AnalysisContext.result`, :func:`fsi_lab.chain._missing`).
-_FOR_WANT_OF = re.compile(r"(\S+) failed earlier in the chain on this channel|"
-                          r"which (\S+) failed to give on this channel")
+#: How an analysis that could not do without the result of one that failed before it on the
+#: channel says so (:meth:`AnalysisContext.result`, :func:`fsi_lab.chain._missing`).
+_FOR_WANT_OF = (re.compile(r"(?:[^:']* on channel '[^']*': )?(\S+) failed earlier in the "
+                           r"chain on this channel, so its '[^']+' result is missing \("),
+                re.compile(r"(?:[^:']* on channel '[^']*': )?needs the '[^']+' result, which "
+                           r"(\S+) failed to give on this channel \("))
 
 
 def failed_provider(message: str) -> str | None:
-    """The analysis whose failure an error's ``message`` says it could not do without, or
-    None when it failed on its own account."""
-    found = _FOR_WANT_OF.search(message)
-    return (found.group(1) or found.group(2)) if found else None
+    """The analysis whose failure an error's ``message`` gives as its only reason, or None
+    (an analysis that failed on its own account, or for more than one reason)."""
+    for pattern in _FOR_WANT_OF:
+        found = pattern.match(message)
+        # (one reason: a second missing result would be named after a "; ")
+        if found and message.count(" result, which ") + message.count(
+                " result earlier in the chain on this channel, which did not run") <= 1:
+            return found.group(1)
+    return None
+
+
+def for_want_of(provider: str) -> str:
+    """What an analysis that could not do without ``provider``'s result is told to say once
+    that failure has been said in full."""
+    return f"no result, for want of {provider}'s ({provider} failed, above)"
 
 
 def kind_name(kind: str | type[Result]) -> str:

@@ -17,7 +17,7 @@ import math
 import numbers
 from typing import Any
 
-from fsi_lab.contract import failed_provider
+from fsi_lab.contract import failed_provider, for_want_of
 from fsi_lab.presentation import SummaryText
 
 #: Keys of a channel's summary the core shows itself.
@@ -127,17 +127,17 @@ def format_summary(summary: dict[str, Any], registry=None) -> str:
         for component in info.get("components", []):
             lines.extend(_component_lines(registry, channel, info, component))
         # An analysis that needed a failed one's result: named once, after that failure.
-        errors = info.get("errors", [])
-        failed = {error["plugin"] for error in errors}
+        said: set[str] = set()
         waiting: dict[str, list[str]] = {}
-        for error in errors:
+        for error in info.get("errors", []):
             provider = failed_provider(error["message"])
-            if provider in failed and provider != error["plugin"]:
+            if provider in said:
                 waiting.setdefault(provider, []).append(error["plugin"])
             else:
                 lines.append(f"  failed {error['plugin']}: {error['message']}")
-        lines.extend(f"  not run, for want of {provider}'s result ({provider} failed, above): "
-                     + ", ".join(names) for provider, names in waiting.items())
+                said.add(error["plugin"])
+        lines.extend(f"  {for_want_of(provider)}: {', '.join(names)}"
+                     for provider, names in waiting.items())
     return "\n".join(lines)
 
 

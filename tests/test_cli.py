@@ -246,7 +246,7 @@ def test_a_run_whose_record_identifies_nothing_exits_2_as_analyze_does(tmp_path)
     # (they repeated it, one line each and one log line each on stderr).
     lines = again.stdout.splitlines()
     assert sum(1 for line in lines if "2 component(s) asked for" in line) == 1
-    assert "  not run, for want of hvd's result (hvd failed, above): integrate, instantaneous, " \
+    assert "  no result, for want of hvd's (hvd failed, above): integrate, instantaneous, " \
            "backbone, damping, equivalent-damping, modal-model" in lines
     logged = [line for line in again.stderr.splitlines() if line.startswith("[error] analysis ")]
     assert len(logged) == 7
@@ -270,3 +270,32 @@ def test_a_noise_free_simulation_is_not_said_to_hold_coloured_noise(tmp_path):
     mode2 = min(comps, key=lambda c: abs(c["frequency_hz"] - 17.06))
     assert mode2["equivalent_damping"]["c_i"] == pytest.approx(0.65, rel=0.01)
     assert mode2["equivalent_damping"]["c_f"] == pytest.approx(33.0, rel=0.02)
+
+
+def test_only_failures_for_want_of_a_failed_result_alone_are_named_once():
+    """An analysis named after the failure it could not do without gives no other reason; one
+    that gives another reason too, or waits on an analysis that failed for want of a third,
+    keeps its whole message."""
+    from fsi_lab.registry import load_registry
+    from fsi_lab.summary import format_summary
+
+    errors = [
+        ("hvd", "identify: 2 component(s) asked for"),
+        ("integrate", "hvd failed earlier in the chain on this channel, so its 'components' "
+                      "result is missing (hvd: identify: 2 component(s) asked for)"),
+        ("modal-model", "needs the 'reference' result earlier in the chain on this channel, "
+                        "which did not run; the 'components' result, which hvd failed to give "
+                        "on this channel (identify: 2 component(s) asked for)"),
+        ("after-integrate", "needs the 'curves' result, which integrate failed to give on this "
+                            "channel (hvd failed earlier ...)"),
+        ("damping", "needs the 'components' result, which hvd failed to give on this channel "
+                    "(identify: 2 component(s) asked for)"),
+    ]
+    summary = {"channels": {"tip": {"errors": [
+        {"plugin": name, "message": f"{name} on channel 'tip': {text}"}
+        for name, text in errors]}}}
+    lines = format_summary(summary, load_registry()).splitlines()
+    assert [line.split(":")[0] for line in lines[1:]] == [
+        "  failed hvd", "  failed modal-model", "  failed after-integrate",
+        "  no result, for want of hvd's (hvd failed, above)"]
+    assert lines[-1].endswith(": integrate, damping")

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.ndimage import median_filter
 
 from fsi_lab.dsp._signal import as_record, check_rate, fail
 from fsi_lab.dsp.modal_fit import (
@@ -34,16 +35,16 @@ from fsi_lab.dsp.modal_fit import (
     half_power_damping,
     modal_fit,
 )
-from fsi_lab.dsp.spectrum import cross_spectra, find_peaks_interpolated
+from fsi_lab.dsp.spectrum import SpectralPeaks, cross_spectra, find_peaks_interpolated
 from fsi_lab.sources import check_source, is_source
 
-#: Bins where the reference's power falls below this share of its largest are not searched
-#: for peaks (40 dB: a random excitation band-limited to 200 Hz put the shaker's base 80 to
-#: 105 dB down above 220 Hz, where |H1| of noise over noise peaked twice as high as the beam's
-#: modes; the beam's 17 Hz mode lies 23 dB down, under the shaker's 30 Hz resonance).
+#: Bins where the reference's power (its median over EXCITED_BINS bins) falls below this
+#: share of its largest hold no mode (40 dB: a random excitation band-limited to 200 Hz put
+#: the shaker's base 80 to 105 dB down above 220 Hz, where |H1| of noise over noise peaked
+#: twice as high as the beam's modes; the beam's 17 Hz mode lies 23 dB down, under the
+#: shaker's 30 Hz resonance).
 EXCITED_SHARE = 1e-4
-#: Left-out peaks a warning names.
-IDLE_NAMED = 5
+EXCITED_BINS = 9
 
 
 @dataclass(frozen=True)
@@ -93,6 +94,7 @@ class FRF:
     peak_magnitudes: np.ndarray
     modes: tuple[ModalFit, ...]
     warnings: tuple[str, ...]
+    notes: tuple[str, ...] = ()
 
     @property
     def resolution(self) -> float:
@@ -124,6 +126,9 @@ def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float
         Window name for :func:`scipy.signal.get_window`.
     min_relative
         Peaks of |H1| with a prominence below this fraction of the largest are ignored.
+        Peaks are sought only where the reference is excited: where its power (the median
+        over :data:`EXCITED_BINS` bins) is at least :data:`EXCITED_SHARE` of its largest
+        (a note then gives the range sought).
     max_peaks
         Keep at most this many natural frequencies (the largest peaks).
     min_coherence
@@ -194,22 +199,29 @@ def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float
     mag = np.abs(h1)
     mag[0] = 0.0                              # the DC bin carries no resonance
     # Where the reference carries almost no power (outside the band an excitation covers),
-    # H1 divides noise by noise: its peaks there are no modes, and may be its largest.
-    excited = sxx >= EXCITED_SHARE * float(np.max(sxx[1:]))
-    peaks = find_peaks_interpolated(f, np.where(excited, mag, 0.0), min_relative=min_relative,
-                                    max_peaks=None, fmin=f[1], _func=func)
+    # H1 divides noise by noise: its peaks there are no modes, and may be its largest. The
+    # reference's level is taken over EXCITED_BINS bins (a tone in it, or a narrow drop at a
+    # mode as a shaker's force shows, does not move it).
+    level = median_filter(sxx, size=EXCITED_BINS, mode="nearest")
+    excited = (level >= EXCITED_SHARE * float(np.max(level[1:]))) & (f > 0)
     notes = []
-    if peaks.frequencies.size:
-        idle = find_peaks_interpolated(f, np.where(excited, 0.0, mag), min_relative=min_relative,
-                                       max_peaks=None, fmin=f[1], _func=func)
-        left = idle.frequencies[idle.amplitudes >= min_relative * peaks.amplitudes[0]]
-        if left.size:
-            listed = ", ".join(f"{v:.4g}" for v in np.sort(left)[:IDLE_NAMED])
-            more = f" and {left.size - IDLE_NAMED} more" if left.size > IDLE_NAMED else ""
-            notes.append(f"peaks of |H1| at {listed} Hz{more} lie where the reference carries "
-                         f"less than {EXCITED_SHARE:g} of its largest power (outside what the "
-                         "excitation covers): there H1 divides noise by noise; not taken for "
-                         "modes")
+    if not excited.any():
+        raise fail(func, "the reference record carries no power at any frequency above 0 Hz; "
+                         "expected the excitation's record (e.g. the base acceleration)")
+    if not excited[1:].all():
+        searched = f[excited]
+        notes.append(f"modes are sought from {searched[0]:.4g} to {searched[-1]:.4g} Hz, "
+                     f"where the reference's power is at least {EXCITED_SHARE:g} of its "
+                     "largest: outside what the excitation covers, H1 divides noise by noise")
+    # Unexcited bins are held at the lowest excited |H1|: no peak there, and none so large
+    # that the peaks the excitation reaches fall below min_relative of it. A peak at the edge
+    # of an excited stretch is that edge, not a peak of H1.
+    found = find_peaks_interpolated(f, np.where(excited, mag, float(np.min(mag[excited]))),
+                                    min_relative=min_relative, max_peaks=None, fmin=f[1],
+                                    _func=func)
+    k = np.clip(np.rint(found.frequencies / f[1]).astype(int), 1, f.size - 2)
+    inside = excited[k] & excited[k - 1] & excited[k + 1]
+    peaks = SpectralPeaks(found.frequencies[inside], found.amplitudes[inside])
     fp = peaks.frequencies
     amp = peaks.amplitudes
     if min_coherence > 0 and fp.size:
@@ -225,7 +237,7 @@ def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float
         modes.append(modal_fit(f, spectra.sxy, spectra.sxx, float(fk), fs=fs, segment=segment,
                                window=window, syy=spectra.syy, counts=spectra.counts,
                                neighbours_hz=np.delete(fp, i), _func=func))
-    warnings = notes + [w for m in modes for w in m.warnings]
+    warnings = [w for m in modes for w in m.warnings]
     fn = np.array([m.frequency_hz for m in modes])
     for i, m in enumerate(modes):
         if not math.isfinite(m.frequency_hz):
@@ -239,4 +251,4 @@ def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float
                damping_ratios=np.array([m.damping_ratio for m in modes]),
                damping_ratio_ci95=np.array([m.damping_ratio_ci95 for m in modes]).reshape(-1, 2),
                half_power_damping_ratios=hp, peak_frequencies=fp, peak_magnitudes=amp,
-               modes=tuple(modes), warnings=tuple(warnings))
+               modes=tuple(modes), warnings=tuple(warnings), notes=tuple(notes))

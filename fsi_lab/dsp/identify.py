@@ -6,6 +6,9 @@ interval, its backbone (frequency against amplitude), the fits of the candidate 
 (:mod:`.laws`) with the one the record prefers, and sentences saying how far to trust each
 number. The steps:
 
+0. **Spikes.** Isolated samples far off the oscillation their neighbours trace (a vibrometer's
+   dropouts: :func:`.spikes.find_spikes`) are replaced, in the record and in the reference,
+   and a note names them.
 1. **Free decays.** The record is split into its free decays (:func:`.decays.decay_segments`
    on half-period maxima of the record low-passed at :data:`SPLIT_BAND` times its dominant
    frequency: a step or ramp derivative gives one, an impulse train one per impulse); each is
@@ -34,7 +37,9 @@ number. The steps:
 4. **Extrema.** The extrema of each mode's band signal (:func:`.instantaneous.half_cycles`),
    from the first free one on - every cycle counts: the large first cycles carry the quadratic
    damping - down to :data:`FLOOR` times the noise RMS in the band, and no lower than
-   :data:`PRECISION` of the window's largest band value (the splitting's own residue).
+   :data:`PRECISION` of the window's largest band value (the splitting's own residue); a
+   decay ends too at a half cycle outside :data:`HALF_CYCLE_RANGE` of the mode's (the motion
+   has stopped, as dry friction stops it, and the band filter rings on).
 5. **Laws.** Each candidate law is fitted to the extrema of all the mode's decays together
    (:func:`.laws.fit_law`, errors whitened with the band's noise correlation) and the laws are
    ranked by AICc (:func:`.laws.compare_laws`).
@@ -934,7 +939,8 @@ def _col(f: float, amplitude: float, others: np.ndarray, freqs: np.ndarray,
 def _extrema(signal: np.ndarray, fs: float, frequency: float, start: int, free: int,
              floor: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Times (s, record), values and crossings of the extrema of a band signal of the window
-    starting at ``start``, from the first at or after sample ``free`` while above ``floor``."""
+    starting at ``start``, from the first at or after sample ``free`` while above ``floor``
+    and while each half cycle lasts :data:`HALF_CYCLE_RANGE` of the mode's."""
     hc = half_cycles(signal, fs, frequency)
     t = hc.times + start / fs
     sel = t >= (free - 1) / fs
@@ -1068,10 +1074,17 @@ def _noise_before(modes: list[_Mode], record: np.ndarray, fs: float, bands: Mode
 def _band_noise_ratio(mode: _Mode, fs: float) -> float | None:
     """A mode's band noise (RMS, measured before the excitation and after its decays) over
     the white noise's share in its band, or None with fewer than :data:`TAIL_PERIODS`
-    periods to measure it on."""
+    periods to measure it on or a band noise below :data:`PRECISION` of the mode's largest
+    extremum."""
     if mode.noise_samples * mode.frequency < TAIL_PERIODS * fs:
         return None
-    return math.sqrt(mode.noise_power / mode.noise_samples) / max(mode.noise, 1e-300)
+    band = math.sqrt(mode.noise_power / mode.noise_samples)
+    # A noise-free record's bands hold its numerical residue, not noise: no ratio.
+    largest = max((float(np.max(np.abs(d["values"]))) for d in mode.decays if d["values"].size),
+                  default=0.0)
+    if band < PRECISION * largest:
+        return None
+    return band / max(mode.noise, 1e-300)
 
 
 def _band_noise_excess(mode: _Mode, fs: float) -> float | None:
@@ -2204,14 +2217,18 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         if not 0.0 < band_t[0] < band_t[1]:
             raise fail(func, f"band = {band!r}; expected (low, high) in Hz with 0 < low < high")
     follow = "displacement" if quantity == "displacement" else "velocity"
+    # Spikes first: one in a still stretch would hide it, one in the base would ring in its
+    # bands and read as motion.
+    spikes = find_spikes(record)
+    if spikes.size:
+        record = without_spikes(record, spikes)
+    if reference is not None and (base_spikes := find_spikes(reference)).size:
+        reference = without_spikes(reference, base_spikes)
     hold = _static_hold(record) if quantity == "displacement" else None
     if hold is not None:                 # the held part at the rest level, its noise kept
         record = record.copy()
         record[:hold[0]] -= hold[1]
     record = record - float(np.mean(record))
-    spikes = find_spikes(record)
-    if spikes.size:
-        record = without_spikes(record, spikes)
     # Dominant oscillation and the noise: the spectrum of the whole record.
     # The dominant oscillation is one the sampling resolves: decays split on the half periods
     # of a mode with 4 samples per cycle fall apart at every beat with the others.
@@ -2239,15 +2256,15 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         record, fs, windows, int(components) if components != "auto" else "auto", band_t,
         f_dom, sigma)
     if spikes.size:
-        at = ", ".join(f"{i / fs:.4g}" for i in spikes[:SPIKES_NAMED])
+        at = ", ".join(f"{i / fs:.6g}" for i in spikes[:SPIKES_NAMED])
         more = f" and {spikes.size - SPIKES_NAMED} more" if spikes.size > SPIKES_NAMED else ""
         notes.insert(0, f"{spikes.size} isolated sample{'s' if spikes.size > 1 else ''} "
                         f"stand{'' if spikes.size > 1 else 's'} far off the oscillation their "
-                        f"neighbours trace (at {at} s{more}: "
-                        "spikes, as a vibrometer's signal dropouts or a digitiser's glitches "
-                        "give): each is replaced by the cubic through its two neighbours on "
-                        "either side (left in, their broadband energy lifts the extrema the "
-                        "damping laws are fitted to)")
+                        f"neighbours trace (at {at} s{more}: spikes, as a vibrometer's "
+                        "signal dropouts or a digitiser's glitches give, or noise with far "
+                        "heavier tails than Gaussian): each is replaced by the cubic through "
+                        "its two neighbours on either side (left in, their broadband energy "
+                        "lifts the extrema the damping laws are fitted to)")
     if hold is not None:
         notes.insert(0, f"the record holds still for its first {hold[0] / fs:.3g} s, "
                         f"{hold[1]:.3g} (the record's unit) away from where it comes to rest (a "
@@ -2410,10 +2427,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             _other_law_spread(mode, follow, laws)
         else:               # (the band fit's range checks would only widen what it replaces)
             _take_joint(mode)
-        # (a noise-free record's bands hold its numerical residue, not noise: no ratio)
-        largest = max(float(np.max(np.abs(d["values"]))) for d in mode.decays)
-        if (ratio := _band_noise_ratio(mode, fs)) is not None \
-                and ratio * mode.noise >= PRECISION * largest:
+        if (ratio := _band_noise_ratio(mode, fs)) is not None:
             mode.drift["band_noise"] = ratio
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)

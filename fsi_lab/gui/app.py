@@ -15,8 +15,9 @@ import os
 import signal
 import sys
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import pyqtgraph as pg
 from PySide6.QtCore import QCoreApplication, QEvent, QEventLoop, Qt, QTimer
@@ -399,11 +400,13 @@ def _wait_events(app: QApplication, ms: int) -> None:
     loop.exec()
 
 
-def wait_until_idle(window: MainWindow, timeout_s: float = 120.0) -> bool:
-    """Process events until nothing is loading or checking (for screenshots)."""
+def wait_until_idle(window: MainWindow, timeout_s: float = 120.0,
+                    stop: Callable[[], bool] = lambda: False) -> bool:
+    """Process events until nothing is loading or checking (for screenshots), or ``stop()``
+    holds (False then)."""
     deadline = time.monotonic() + timeout_s
     app = QApplication.instance()
-    while time.monotonic() < deadline:
+    while time.monotonic() < deadline and not stop():
         pending = window.runs.pending or window._show_when_loaded
         checking = window.session.loaded and window.session.current is None
         if not window.busy() and not pending and not checking:
@@ -472,9 +475,11 @@ SIGNAL_POLL_MS = 200
 class EndOnSignal:
     """Ctrl+C and SIGTERM close the window as its close button does: a run in progress is
     aborted first and the window closes once the bench is in its safe state; a sequence's run
-    ends safely. Qt's event loop holds the thread, so a timer lets Python run the handler."""
+    ends safely. Qt's event loop holds the thread, so a timer lets Python run the handler.
+    ``noted``: signals received while the window was being built, acted on at once."""
 
-    def __init__(self, window: MainWindow, noted: Sequence[int] = ()) -> None:
+    def __init__(self, window: MainWindow, noted: Sequence[int] = (), *,
+                 interactive: bool = True) -> None:
         self.window = window
         self.received: int | None = None
         self._timer = QTimer()
@@ -482,16 +487,24 @@ class EndOnSignal:
         self._timer.start(SIGNAL_POLL_MS)
         self._previous = {signum: signal.signal(signum, self._close)
                           for signum in (signal.SIGINT, signal.SIGTERM)}
-        if noted:  # (received while the window was being built)
+        if noted:
             self._close(noted[0], None)
-        else:
+        elif interactive:
             print(READY, file=sys.stderr, flush=True)
 
     def _close(self, signum, frame) -> None:
-        if self.received is None:
-            self.received = signum
-            self.window.notify("WARNING", f"{signal.Signals(signum).name} received: closing")
-            QTimer.singleShot(0, self.window.close)
+        name = signal.Signals(signum).name
+        if self.received is not None:  # the window is closing: say what it waits for
+            print(f"fsi-lab gui: {name} received: still closing"
+                  + (" (the run is being brought to its safe state)"
+                     if self.window.run_control.running else ""), file=sys.stderr, flush=True)
+            return
+        self.received = signum
+        print(f"fsi-lab gui: {name} received: closing"
+              + (" (aborting the run to its safe state first)"
+                 if self.window.run_control.running else ""), file=sys.stderr, flush=True)
+        self.window.notify("WARNING", f"{name} received: closing")
+        QTimer.singleShot(0, self.window.close)
 
     def restore(self) -> None:
         self._timer.stop()
@@ -531,23 +544,28 @@ def main(args: Any) -> int:
     window.resize(*size)
     window.show()
     freeze_startup_objects()
+    held = getattr(args, "signals", None)
+    ending = EndOnSignal(window, held.pending if held is not None else (),
+                         interactive=screenshot is None)
     window.open_paths(paths)
     view = getattr(args, "view", None)
     idle = True
     if view is not None:  # the run files' tabs exist once they are loaded
-        idle = wait_until_idle(window)
+        idle = wait_until_idle(window, stop=lambda: ending.received is not None)
         if not window.analysis.show_view(view):
             window.notify("ERROR", f"--view {view}: no view of that title or drawing that "
                                    "analysis for the run shown; its views: "
                                    f"{', '.join(window.analysis.view_titles()) or 'none'}")
     if screenshot is None:
-        held = getattr(args, "signals", None)
-        ending = EndOnSignal(window, held.pending if held is not None else ())
         code = app.exec()
         ending.restore()
         _dispose(window)
         return EXIT_INTERRUPTED if ending.received else code
-    idle = idle and wait_until_idle(window)
+    idle = idle and wait_until_idle(window, stop=lambda: ending.received is not None)
+    ending.restore()
+    if ending.received:
+        _dispose(window)
+        return EXIT_INTERRUPTED
     saved = take_screenshot(window, Path(screenshot))
     errors = [text for level, text in window.messages.messages if level == "ERROR"]
     _dispose(window)

@@ -62,5 +62,5 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> AnalysisResult:
                          "half_power_damping_ratios": jsonable(res.half_power_damping_ratios),
                          "peak_frequencies_hz": jsonable(res.peak_frequencies),
                          "resolution_hz": res.resolution,
-                         "warnings": list(res.warnings)}},
+                         "warnings": list(res.warnings), "notes": list(res.notes)}},
         values=res)

@@ -64,4 +64,5 @@ def fsi_lab_summary_lines(summary, component):
     bounds = frf.get("damping_ratio_ci95") or [None] * len(frequencies)
     modes = [_mode(f, z, b) for f, z, b in zip(frequencies, zetas, bounds) if f is not None]
     return SummaryText(keys=("frf",), lines=(
-        f"frf against {frf.get('reference')}: " + (", ".join(modes) or "no mode found"),))
+        f"frf against {frf.get('reference')}: " + (", ".join(modes) or "no mode found"),
+        *(f"frf note: {note}" for note in frf.get("notes") or ())))
