@@ -47,6 +47,15 @@ EXCITED_SHARE = 1e-4
 EXCITED_BINS = 9
 
 
+def _stretches(f: np.ndarray, inside: np.ndarray) -> str:
+    """The stretches of ``f`` (Hz) where ``inside`` holds, in words ("from a to b Hz and
+    from c to d Hz", the first three)."""
+    edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(np.int8), 0]))
+    spans = [f"from {f[lo]:.4g} to {f[hi - 1]:.4g} Hz" for lo, hi in zip(edges[::2], edges[1::2])]
+    more = f" and {len(spans) - 3} more" if len(spans) > 3 else ""
+    return " and ".join(spans[:3]) + more
+
+
 @dataclass(frozen=True)
 class FRF:
     """Frequency response estimates.
@@ -209,10 +218,9 @@ def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float
         raise fail(func, "the reference record carries no power at any frequency above 0 Hz; "
                          "expected the excitation's record (e.g. the base acceleration)")
     if not excited[1:].all():
-        searched = f[excited]
-        notes.append(f"modes are sought from {searched[0]:.4g} to {searched[-1]:.4g} Hz, "
-                     f"where the reference's power is at least {EXCITED_SHARE:g} of its "
-                     "largest: outside what the excitation covers, H1 divides noise by noise")
+        notes.append(f"modes are sought {_stretches(f, excited)}, where the reference's power "
+                     f"is at least {EXCITED_SHARE:g} of its largest: outside what the "
+                     "excitation covers, H1 divides noise by noise")
     # Unexcited bins are held at the lowest excited |H1|: no peak there, and none so large
     # that the peaks the excitation reaches fall below min_relative of it. A peak at the edge
     # of an excited stretch is that edge, not a peak of H1.
