@@ -186,7 +186,8 @@ def wait_finished(qtbot, window):
 
 def write_run(path: Path, rate: float = 1000.0, seconds: float = 4.0, analysis: bool = True,
               failed: str | None = None, c_i: float = 0.65, c_f: float = 33.0,
-              name: str = "synthetic", hvd_components: int = 2) -> Path:
+              name: str = "synthetic", hvd_components: int = 2,
+              hvd_bands: np.ndarray | None = None) -> Path:
     """A run file with a decaying two-mode velocity and analysis groups laid out as the
     analysis plugins store them (``/analysis/<channel>/<plugin>/``); HVD finds
     ``hvd_components`` components (beyond two, weak ones at higher frequencies)."""
@@ -257,6 +258,10 @@ def write_run(path: Path, rate: float = 1000.0, seconds: float = 4.0, analysis: 
             "attrs": {"component_0_c_i": c_i, "component_0_c_f": c_f, "component_0_r2": 0.914},
             "params": {"confidence": 0.95}},
     }
+    if hvd_bands is not None:  # the decomposition of the "bands" method: a band per mode
+        groups["tip_velocity/hvd"]["datasets"]["bands"] = np.asarray(hvd_bands, dtype=float)
+        groups["tip_velocity/hvd"]["units"]["bands"] = "Hz"
+        groups["tip_velocity/hvd"]["attrs"]["method"] = "bands"
     for content in groups.values():
         content["attrs"] = {"status": "ok", **content.get("attrs", {})}
     if failed:

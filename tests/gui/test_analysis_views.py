@@ -36,7 +36,7 @@ def test_views_fill_from_the_plugins_layout(qtbot, make_window, registry, tmp_pa
     assert not filled["Modal model"]
     assert "not computed" in views.view(type(views.views[6])).note.text()  # modal model
     hvd = views.view(HVDView)
-    assert "2 of 2 component(s)" in hvd.note.text() and "4, 1 Hz" in hvd.note.text()
+    assert "2 of 2 component(s)" in hvd.note.text() and "cut-offs 4, 1 Hz" in hvd.note.text()
     eq = views.view(EquivalentDampingView)
     text = eq.values.text()
     assert eq.values.isVisibleTo(eq)
@@ -294,3 +294,14 @@ def test_rows_are_components_however_short():
     three_components_of_two_points = np.arange(6.0).reshape(3, 2)
     assert [list(r) for r in rows(three_components_of_two_points)] == [[0, 1], [2, 3], [4, 5]]
     assert [list(r) for r in rows(np.array([1.0, 2.0]))] == [[1, 2]]
+
+
+def test_the_bands_method_s_components_are_titled_by_their_bands(qtbot, make_window, registry,
+                                                                 tmp_path):
+    """The "bands" method's components are its modes' bands: their title named half their
+    widths as HVD's low-pass cut-offs ("cut-offs 4.6, 7.89 Hz" for a band of 11.8 to 21 Hz)."""
+    path = write_run(tmp_path / "a.h5", hvd_bands=np.array([[11.8, 21.0], [1.5, 2.5]]))
+    views = _open(qtbot, make_window(registry), path)
+    assert views.filled()["HVD components"]
+    note = views.view(HVDView).note.text()
+    assert "bands 11.8 to 21, 1.5 to 2.5 Hz" in note and "cut-offs" not in note

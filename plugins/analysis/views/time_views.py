@@ -81,9 +81,14 @@ class HVDView(View):
             span = active_span(t, envelopes[0])
             if span is not None:
                 top.setXRange(*span, padding=0)
-        cutoffs = hvd.get("cutoffs")
-        extra = f"; cut-offs {', '.join(f'{c:.3g}' for c in np.ravel(cutoffs))} Hz" \
-            if cutoffs is not None else ""
+        # The "bands" method's components are its modes' bands; HVD's have low-pass cut-offs.
+        bands, cutoffs = hvd.get("bands"), hvd.get("cutoffs")
+        if bands is not None and np.ndim(bands) == 2:
+            extra = "; bands " + ", ".join(f"{lo:.3g} to {hi:.3g}" for lo, hi in bands) + " Hz"
+        elif cutoffs is not None:
+            extra = f"; cut-offs {', '.join(f'{c:.3g}' for c in np.ravel(cutoffs))} Hz"
+        else:
+            extra = ""
         self.set_note(f"HVD of {channel}: {count} of {max(len(components), len(envelopes))} "
                       f"component(s), by decreasing amplitude{extra}")
         return True
@@ -154,6 +159,6 @@ class FrequencyView(View):
                 drawn = True
         if drawn:
             robust_range(plot, shown)
-            self.set_note(f"instantaneous frequency of {channel}; record ends HVD does not "
-                          "trust are left out")
+            self.set_note(f"instantaneous frequency of {channel}; samples near the record's "
+                          "ends, which HVD does not trust, are left out")
         return drawn
