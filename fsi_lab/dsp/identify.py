@@ -82,6 +82,7 @@ from typing import Any, Sequence
 
 import numpy as np
 import scipy.stats as sstats
+from scipy.signal import hilbert
 
 from fsi_lab.dsp._signal import _band_limited, as_record, check_rate, fail, smooth_step
 from fsi_lab.dsp.bands import ModeBands, reduce_rate, reduction_factor, split
@@ -194,6 +195,11 @@ SPIKES_NAMED = 5
 #: A free decay's half cycles last this range of the mode's half period: beyond it the decay
 #: has ended (:func:`_extrema`).
 HALF_CYCLE_RANGE = (0.5, 2.0)
+#: A spectral peak whose every decay falls at the rate of the base's motion in its band
+#: (within FOLLOW_RATE of it, the base falling FOLLOW_FALL-fold or more over the decay) follows
+#: the base: a shaker's resonance in air read as a 30 Hz mode with C_f = -31 (its rate 15.2
+#: 1/s, the base's 15.0); the wet bench's modes fall at 2.5 1/s over a base at -0.6 to +0.8.
+FOLLOW_RATE, FOLLOW_FALL = 0.2, 2.0
 #: A mode is free once the base motion in its band has fallen below this share of its peak.
 BAND_QUIET_LEVEL = 0.01
 #: Share of each decay's first extrema left out by the start check (:func:`_start_check`).
@@ -566,7 +572,6 @@ def _unforced(windows: list[tuple[int, int, int]], reference: np.ndarray, fs: fl
     weak pulse's peak, a still base read as still moving). Refuses the record when none is: a
     base that keeps moving (random or continuous excitation) forces the structure
     throughout, and no decay is free."""
-    from scipy.signal import hilbert
 
     ref = reference - float(np.median(reference))
     env = np.abs(hilbert(ref))
@@ -1085,6 +1090,30 @@ def _band_noise_ratio(mode: _Mode, fs: float) -> float | None:
     if band < PRECISION * largest:
         return None
     return band / max(mode.noise, 1e-300)
+
+
+def _follows_base(mode: _Mode, base_envelope: np.ndarray, fs: float
+                  ) -> tuple[float, float] | None:
+    """The decay rates (1/s, of the mode's extrema and of the base's envelope in its band at
+    their times, averaged over its decays) when every decay long enough to judge falls as the
+    base's motion in the mode's band falls (within :data:`FOLLOW_RATE` of its rate, the base
+    falling by :data:`FOLLOW_FALL` or more over the decay); else None. A base still ringing at
+    its own resonance drives the structure there, and the record's "decay" is the base's."""
+    rates = []
+    for d in mode.decays:
+        t, amplitude = d["times"], d["amplitude"]
+        if t.size < 2 * MIN_CYCLES or np.any(amplitude <= 0.0):
+            continue
+        base = np.interp(t, np.arange(base_envelope.size) / fs, base_envelope)
+        if np.any(base <= 0.0):
+            return None
+        own = float(np.polyfit(t - t[0], np.log(amplitude), 1)[0])
+        driven = float(np.polyfit(t - t[0], np.log(base), 1)[0])
+        if not (driven * (t[-1] - t[0]) <= -math.log(FOLLOW_FALL)
+                and abs(own - driven) <= FOLLOW_RATE * abs(driven)):
+            return None
+        rates.append((own, driven))
+    return tuple(np.mean(rates, axis=0)) if rates else None
 
 
 def _band_noise_excess(mode: _Mode, fs: float) -> float | None:
@@ -2357,9 +2386,23 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                          "after the decays: noise that is not white, as in a motion relative to "
                          "the base): not a mode of the record")
             m.decays = []
+    followers = []
+    if reference is not None and any(m.decays for m in modes):
+        base_envelopes = np.abs(hilbert(split(reference, fs, bands), axis=-1))
+        for m in modes:
+            if m.decays and (rates := _follows_base(m, base_envelopes[m.band], fs)):
+                followers.append(m)
+                notes.append(f"the spectral peak at {m.frequency:.4g} Hz decays as the base's own "
+                             f"motion in its band does ({-rates[0]:.3g} against {-rates[1]:.3g} "
+                             "1/s, the base falling by half or more over each decay): the base "
+                             "rings there (a shaker's own resonance) and the record follows "
+                             "it; not a free decay of the structure")
+                m.decays = []
     modes = [m for m in modes if m.decays]
     if not modes:
-        raise fail(func, _too_short(windows, dropped, fs) + "; ".join(notes))
+        if followers and not dropped:
+            raise fail(func, "no spectral peak has a free decay of its own; " + "; ".join(notes))
+        raise fail(func, _too_short(windows, dropped + followers, fs) + "; ".join(notes))
     # Step 5: first fits, then the floor judged on the fitted envelope.
     for mode in modes:
         half = _pooled_half_period(mode.decays)
