@@ -2191,7 +2191,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         from the later of its largest sample and such a time.
     reference
         The base acceleration on the same samples, or None: each mode's extrema then count
-        from when the base's motion in that mode's band has calmed down as well.
+        from when the base's motion in that mode's band has calmed down as well, and a peak
+        that only follows the base's own ringing (a shaker's resonance) is left out with a
+        note. In units consistent with the record's: m/s^2 beside a record in m, m/s or
+        m/s^2.
     laws
         Damping laws to fit (:data:`.laws.LAWS`); ``"quadratic"`` is always among them.
     min_frequency
