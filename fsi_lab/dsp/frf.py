@@ -35,7 +35,7 @@ from fsi_lab.dsp.modal_fit import (
     half_power_damping,
     modal_fit,
 )
-from fsi_lab.dsp.spectrum import SpectralPeaks, cross_spectra, find_peaks_interpolated
+from fsi_lab.dsp.spectrum import cross_spectra, find_peaks_interpolated
 from fsi_lab.sources import check_source, is_source
 
 #: Bins where the reference's power (its median over EXCITED_BINS bins) falls below this
@@ -229,9 +229,7 @@ def frf(x: Any, y: Any, fs: float, *, segment: int | None = None, overlap: float
                                     _func=func)
     k = np.clip(np.rint(found.frequencies / f[1]).astype(int), 1, f.size - 2)
     inside = excited[k] & excited[k - 1] & excited[k + 1]
-    peaks = SpectralPeaks(found.frequencies[inside], found.amplitudes[inside])
-    fp = peaks.frequencies
-    amp = peaks.amplitudes
+    fp, amp = found.frequencies[inside], found.amplitudes[inside]
     if min_coherence > 0 and fp.size:
         ok = np.interp(fp, f, coh) >= min_coherence
         fp, amp = fp[ok], amp[ok]

@@ -965,12 +965,11 @@ def _extrema(signal: np.ndarray, fs: float, frequency: float, start: int, free: 
     return t[:run], v[:run], hc.crossings + start / fs
 
 
-def _band_quiet(reference: np.ndarray, fs: float, bands: ModeBands) -> list[np.ndarray]:
-    """Per band, the samples at which the reference (the base acceleration) has calmed down in
-    that band after each of its bursts (:func:`.decays.quiet_times` at
-    :data:`BAND_QUIET_LEVEL`): a mode is forced at resonance by the base motion in its own band,
-    however small the base's total motion."""
-    parts = split(np.asarray(reference, dtype=np.float64), fs, bands)
+def _band_quiet(parts: np.ndarray, fs: float) -> list[np.ndarray]:
+    """Per band, the samples at which the reference (the base acceleration, split into the
+    modes' bands: ``parts``) has calmed down in that band after each of its bursts
+    (:func:`.decays.quiet_times` at :data:`BAND_QUIET_LEVEL`): a mode is forced at resonance
+    by the base motion in its own band, however small the base's total motion."""
     return [np.rint(quiet_times(row, fs, level=BAND_QUIET_LEVEL) * fs).astype(np.int64)
             for row in parts]
 
@@ -2356,7 +2355,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         sigma /= math.sqrt(factor)
     # Steps 3 and 4: extrema of each mode in each window, from where the mode is free (its
     # band of the base acceleration has calmed down too, when the reference is given).
-    base_free = _band_quiet(reference, fs, bands) if reference is not None else None
+    base_parts = split(reference, fs, bands) if reference is not None else None
+    base_free = _band_quiet(base_parts, fs) if base_parts is not None else None
     _noise_before(modes, record, fs, bands, f_dom, integrate)
     for w, (start, free, stop) in enumerate(windows):
         if stop - start < MIN_WINDOW:         # (a short window at a reduced rate)
@@ -2401,8 +2401,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                          "the base): not a mode of the record")
             m.decays = []
     followers = []
-    if reference is not None and any(m.decays for m in modes):
-        base_envelopes = np.abs(hilbert(split(reference, fs, bands), axis=-1))
+    if base_parts is not None and any(m.decays for m in modes):
+        base_envelopes = np.abs(hilbert(base_parts, axis=-1))
         for m in modes:
             if m.decays and (rates := _follows_base(m, base_envelopes[m.band], fs, follow)):
                 followers.append(m)

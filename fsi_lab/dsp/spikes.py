@@ -93,7 +93,8 @@ def find_spikes(x: Any) -> np.ndarray:
     # stretches of equal samples whose differences are exactly 0.
     steps = np.abs(np.diff(y))
     step = float(np.min(steps[steps > 0])) if np.any(steps > 0) else 0.0
-    diff = np.abs(y - _neighbour_cubic(y))
+    signed = y - _neighbour_cubic(y)
+    diff = np.abs(signed)
     # (the first and last two samples have no cubic: their typical difference is their
     # neighbours')
     typical = np.empty(y.size)
@@ -107,7 +108,6 @@ def find_spikes(x: Any) -> np.ndarray:
     # A spike's own mark: it enters its neighbours' cubics, their differences -2/3 and 1/6 of
     # its own. A kink or a step leaves other marks (MARKS): the differences around each
     # candidate must follow the spike's closely, and better than any other's.
-    signed = y - _neighbour_cubic(y)
     around = signed[k[:, None] + np.arange(-2, 3)[None, :]]
     misfit = {}
     for name, mark in MARKS.items():
