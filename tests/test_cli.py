@@ -120,6 +120,22 @@ def test_summary_text_flags_coefficients_whose_interval_contains_zero():
     assert "not resolved" not in format_summary(summary([1.0, 5.0]))
 
 
+def test_summary_text_gives_the_preferred_viscous_law_s_damping_ratio_in_percent():
+    from fsi_lab.cli import format_summary
+
+    viscous = {"delta_aicc": 0.0, "a": 0.145, "c_i": 0.002175, "c_i_ci95": [0.002173, 0.002177],
+               "damping_ratio": 0.0020004, "damping_ratio_ci95": [0.0019981, 0.0020027]}
+    text = format_summary({"channels": {"tip_velocity": {"components": [{
+        "index": 0, "frequency_hz": 11.53,
+        "equivalent_damping": {"c_i": 0.002176, "c_f": -3.8e-5, "r2": 1.0,
+                               "c_i_ci95": [0.002163, 0.002189], "c_f_ci95": [-7e-4, 6e-4],
+                               "preferred_law": "viscous",
+                               "laws": {"viscous": viscous}}}]}}})
+    line = next(x for x in text.splitlines() if "viscous law (preferred)" in x)
+    assert line.strip() == ("viscous law (preferred): C_i = 0.002175 kg/(m s) (95 %: 0.002173 "
+                            "to 0.002177), damping ratio 0.2 % (95 %: 0.1998 to 0.2003 %)")
+
+
 def test_summary_text_says_whose_coefficients_the_modal_model_ran_with():
     """The model is one beam with one C_i and C_f (here component 0's fit): the line under
     component 1 must not pass them off as component 1's."""

@@ -106,8 +106,9 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
         model = np.concatenate(quad.model)
         r2 = 1.0 - float(np.sum((amp - model) ** 2)) / max(
             float(np.sum((amp - amp.mean()) ** 2)), 1e-300)
+    omega = 2.0 * math.pi * mode.frequency_hz
     laws = {name: _law_entry_of(fit, float(mode.laws.delta[name]), mass, scale, level,
-                                name == mode.laws.preferred)
+                                name == mode.laws.preferred, omega)
             for name, fit in mode.laws.fits.items()}
     entry = {"c_i": 2.0 * mass * a, "c_f": mass * beta * scale,
              "c_i_ci95": [2.0 * mass * a_lo, 2.0 * mass * a_hi],
@@ -125,11 +126,13 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
 
 
 def _law_entry_of(fit: Any, delta_aicc: float, mass: float, scale: float, level: float,
-                  preferred: bool) -> dict[str, Any]:
+                  preferred: bool, omega: float) -> dict[str, Any]:
     """One law's entry of ``laws``: its AICc gap, parameters and standard errors (measured
     coordinate), and for the ``preferred`` law the coefficients per length they stand for
     with their intervals: C_i (kg/(m s)) from ``a``, C_f (kg/m^2) from ``beta``, the friction
     force (N/m) from ``gamma`` (a friction force per unit mass in the measured coordinate).
+    A preferred viscous law also gives its damping ratio ``a / omega`` (``omega``: the mode's
+    small-amplitude natural frequency, rad/s), the one number that law stands for.
     Another law's fit describes nothing the record supports (its coefficients may well be
     negative): it is given for the comparison, not as coefficients to read."""
     entry: dict[str, Any] = {
@@ -147,6 +150,9 @@ def _law_entry_of(fit: Any, delta_aicc: float, mass: float, scale: float, level:
         finite = math.isfinite(low) and math.isfinite(high)
         entry[key] = factor * fit.value(name)
         entry[f"{key}_ci95"] = [factor * low, factor * high] if finite else None
+        if fit.law == "viscous":
+            entry["damping_ratio"] = fit.value(name) / omega
+            entry["damping_ratio_ci95"] = [low / omega, high / omega] if finite else None
     return entry
 
 

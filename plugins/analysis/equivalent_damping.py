@@ -106,6 +106,11 @@ def _preferred_law_line(eq: dict) -> tuple[str, ...]:
         return ()
     text = (f"{_LAW_WORDS[eq['preferred_law']]} (preferred): C_i = {law['c_i']:.4g} kg/(m s) "
             f"{_interval(law.get('c_i_ci95'))}")
+    if law.get("damping_ratio") is not None:
+        bounds = law.get("damping_ratio_ci95")
+        text += f", damping ratio {100.0 * law['damping_ratio']:.4g} %"
+        if bounds:
+            text += f" (95 %: {100.0 * bounds[0]:.4g} to {100.0 * bounds[1]:.4g} %)"
     if law.get("friction_force_per_length") is not None:
         text += (f", friction force = {law['friction_force_per_length']:.4g} N/m "
                  f"{_interval(law.get('friction_force_per_length_ci95'))}")

@@ -126,6 +126,9 @@ def test_wet_short_impulses_with_a_band_around_17_hz(tmp_path):
 
 
 def test_dry_profile_recovers_the_modal_damping_ratios(tmp_path):
+    """The damping curves' median within 10 %, and the viscous law, which the record prefers
+    in air, gives the configured ratio within 1 % (measured: within 0.05 %) with an interval
+    of its own."""
     ratios = tomllib.loads(DRY.read_text())["model"]["damping_ratios"]
     summary = _run(DRY, tmp_path)
     components = sorted(summary["components"], key=lambda c: c["frequency_hz"])
@@ -133,3 +136,12 @@ def test_dry_profile_recovers_the_modal_damping_ratios(tmp_path):
     for component, ratio in zip(components, ratios):
         zeta = np.asarray(component["damping"]["zeta"], dtype=float)
         assert np.nanmedian(zeta) == pytest.approx(ratio, rel=0.10), component["frequency_hz"]
+        eq = component["equivalent_damping"]
+        assert eq["preferred_law"] == "viscous"
+        viscous = eq["laws"]["viscous"]
+        assert viscous["damping_ratio"] == pytest.approx(ratio, rel=0.01)
+        low, high = viscous["damping_ratio_ci95"]
+        assert low < viscous["damping_ratio"] < high and high - low < 0.1 * ratio
+        assert viscous["c_i"] == pytest.approx(
+            2.0 * eq["mass_per_length"] * viscous["damping_ratio"]
+            * 2.0 * np.pi * component["frequency_hz"], rel=1e-9)
