@@ -4,6 +4,7 @@ subcommand as installed through their entry points (pyproject.toml)."""
 import json
 import signal
 
+import pytest
 from support import PROFILES, LineReader, cli, cli_json, start_cli
 
 from fsi_lab.runfile import read_run
@@ -75,13 +76,16 @@ def test_fsi_lab_bench_takes_the_profile_whose_beam_the_run_identifies(tmp_path)
     assert code == 0
 
 
-def test_ctrl_c_aborts_a_real_time_run_in_the_safe_state(tmp_path):
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_aborts_a_real_time_run_in_the_safe_state(tmp_path, signum):
+    """Ctrl+C, or SIGTERM (a scheduler's stop), during the acquisition: exit 130, the run file
+    says aborted, and the amplifier and the source were left with their outputs off."""
     out = tmp_path / "runs"
     proc = start_cli("run", str(DRY), "--out", str(out), "--verbose", "--set", "bench.fast=false",
                      "--set", "run.duration=30")
     try:
         LineReader(proc.stderr).wait_for(lambda text: text.startswith("[debug] flushed"), 60)
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(signum)
         assert proc.wait(timeout=30) == 130
     finally:
         proc.kill()
