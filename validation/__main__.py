@@ -170,6 +170,10 @@ def main() -> int:
     if real:
         print(f"\nReal recordings ({', '.join(real)}; validation/real_data.py):\n")
         print(real_data.render(real_data.evaluate(real)))
+        count = min(trials, real_data.REPLICA_TRIALS)
+        print(f"\nReplicas of the real recordings ({count} trials per channel; "
+              "validation/real_data.py):\n")
+        print(real_data.render_replicas(real_data.replica_rows(real, count)))
     print(f"\n{len(cases) * trials} trials in {time.perf_counter() - started:.0f} s",
           file=sys.stderr)
     return 0

@@ -27,6 +27,19 @@ Records
     so the 0.2 % target is not reached on this mode (its warnings are on the damping law,
     none on the frequency).
 
+Replicas
+--------
+Each channel is also rebuilt from SSI's modes (:func:`replica`: damped sinusoids from the
+impact's end, amplitudes and phases fitted to the channel) with white noise at the record's own
+broadband level, and identified over :data:`REPLICA_TRIALS` trials with known truth. On the
+beam's replicas the 30.78 Hz mode reads within 0.04 % RMS of the replica's 30.738 Hz (0.4 to
+0.5 % noise; coverage 0.90 to 0.95), the 215.6 Hz mode within 0.01 %: at this record's noise
+and mode mix the method reaches the target five times over. What it reads on the record
+itself departs from the replica's frequency by more than that: the record is not a sum of
+linear damped sinusoids to that precision (the fit leaves 2 % of its variance, at the modes'
+lines: 17 to 44 times the variance of its broadband noise), and no frequency of such a model
+is "the" record's to 0.2 %.
+
 Columns: the reference; fsi-lab's damped natural frequency per channel with its 95 % interval,
 its error, its viscous damping ratio (the viscous law's decay rate over the natural angular
 frequency) with its interval, and whether it was warned; the peers' values in the same run.
@@ -58,6 +71,11 @@ CLUSTER = 0.02
 #: pysdkit HVD settings: components, low-pass in FFT bins of the mirrored record.
 HVD_COMPONENTS = 4
 HVD_FPAR = 10
+#: Replicas (:func:`replica_rows`): trials per channel (at most), the noise's seed, and the
+#: Welch segment (samples) its level is measured with.
+REPLICA_TRIALS = 20
+REPLICA_SEED = 2024
+NOISE_SEGMENT = 256
 
 
 @dataclass(frozen=True)
@@ -71,6 +89,7 @@ class Record:
     quantity: str                   # for fsi-lab: "acceleration", "velocity", "displacement"
     reference_hz: tuple[float, ...]  # damped natural frequencies
     reference_damping: tuple[float, ...] | None = None
+    free_from: int = 0              # first sample after the excitation (the impact) is over
 
 
 def pysdkit_beam() -> Record:
@@ -81,7 +100,8 @@ def pysdkit_beam() -> Record:
     return Record(name="pysdkit-beam",
                   source="pysdkit 0.5.0 (MIT), load_bss_beam: Yu, Shock Vib. 2019, exp. 1",
                   signals=np.asarray(data["signal"], dtype=np.float64), fs=float(data["fs"]),
-                  quantity="acceleration", reference_hz=(30.78, 215.6, 585.9, 1115.3))
+                  quantity="acceleration", reference_hz=(30.78, 215.6, 585.9, 1115.3),
+                  free_from=23)
 
 
 RECORDS = {"pysdkit-beam": pysdkit_beam}
@@ -211,6 +231,111 @@ def hvd_modes(record: Record) -> list[list[Peer]]:
             row.append(Peer(frequency=float(hz[k])) if k is not None else Peer())
         out.append(row)
     return out
+
+
+@dataclass
+class ReplicaRow:
+    """fsi-lab on a replica of one channel of a record, for one of its modes, over trials."""
+
+    record: str
+    reference: float
+    channel: int
+    truth: float                    # the replica's damped frequency, Hz
+    noise: float                    # its white noise RMS over its largest value
+    trials: int
+    errors: list[float] = field(default_factory=list)   # relative, where the mode was found
+    covered: int = 0
+    warned: int = 0
+
+
+def replica(record: Record, modes: list[Peer], channel: int) -> tuple[np.ndarray, float]:
+    """Channel ``channel`` of ``record`` rebuilt from ``modes`` (damped frequencies and damping
+    ratios; NaN ones left out): damped sinusoids from :attr:`Record.free_from` on, their
+    amplitudes and phases fitted to the channel by least squares, zero before. Returned with
+    the RMS of white noise at the record's broadband level: the median power spectral density
+    of what the fit leaves (its misfit sits at the modes' lines, its noise everywhere)."""
+    from scipy.signal import welch
+
+    x = record.signals[channel]
+    t = (np.arange(x.size) - record.free_from) / record.fs
+    columns = []
+    for mode in modes:
+        if not math.isfinite(mode.frequency):
+            continue
+        damped = 2.0 * math.pi * mode.frequency
+        rate = mode.zeta * damped / math.sqrt(1.0 - mode.zeta ** 2)
+        columns += [np.exp(-rate * t) * np.cos(damped * t), np.exp(-rate * t) * np.sin(damped * t)]
+    basis = np.stack(columns, axis=1)
+    free = slice(record.free_from, None)
+    coef, *_ = np.linalg.lstsq(basis[free], x[free], rcond=None)
+    clean = basis @ coef
+    clean[:record.free_from] = 0.0
+    _, psd = welch(x[free] - clean[free], record.fs, nperseg=min(NOISE_SEGMENT, x[free].size))
+    return clean, float(np.sqrt(np.median(psd) * record.fs / 2.0))
+
+
+def replica_rows(names: list[str] | None = None, trials: int = REPLICA_TRIALS
+                 ) -> list[ReplicaRow]:
+    """fsi-lab on :func:`replica` of every channel of every record (or those named), with fresh
+    noise in each of ``trials`` trials: per channel and reference mode that SSI found, the
+    error of the damped frequency against the replica's own, the coverage of its interval and
+    the trials warned."""
+    from fsi_lab.dsp.identify import identify
+    from fsi_lab.errors import AnalysisError
+
+    rows = []
+    for name, load in RECORDS.items():
+        if names and name not in names:
+            continue
+        record = load()
+        modes = ssi_modes(record)
+        for channel in range(record.signals.shape[0]):
+            clean, sigma = replica(record, modes, channel)
+            here = [ReplicaRow(record.name, ref, channel, mode.frequency,
+                               sigma / float(np.max(np.abs(clean))), trials)
+                    for ref, mode in zip(record.reference_hz, modes)
+                    if math.isfinite(mode.frequency)]
+            for trial in range(trials):
+                rng = np.random.default_rng([REPLICA_SEED, channel, trial])
+                try:
+                    found = identify(clean + sigma * rng.standard_normal(clean.size), record.fs,
+                                     quantity=record.quantity)
+                except AnalysisError:
+                    continue
+                damped = np.array([m.damped_frequency_hz for m in found.modes])
+                for row in here:
+                    k = _matched(damped, row.truth)
+                    if k is None:
+                        continue
+                    mode = found.modes[k]
+                    scale = mode.damped_frequency_hz / mode.frequency_hz
+                    row.errors.append(mode.damped_frequency_hz / row.truth - 1.0)
+                    row.covered += (mode.frequency_ci[0] * scale <= row.truth
+                                    <= mode.frequency_ci[1] * scale)
+                    row.warned += bool(mode.warnings)
+            rows += here
+    return rows
+
+
+def render_replicas(rows: list[ReplicaRow]) -> str:
+    """The replica rows as a markdown table."""
+    head = ("| record | reference Hz | channel | replica's f_d Hz | noise % of peak | found | "
+            "bias % | RMS % | largest % | coverage | warned |")
+    lines = [head, "|" + "|".join("---" for _ in range(head.count("|") - 1)) + "|"]
+    for row in rows:
+        e = 100.0 * np.array(row.errors)
+        if e.size == 0:
+            lines.append(f"| {row.record} | {row.reference:g} | {row.channel} | "
+                         f"{row.truth:.3f} | {100.0 * row.noise:.2f} | 0/{row.trials} | "
+                         "left out in every trial | | | | |")
+            continue
+        stats = (
+                 f"{e.mean():+.3f} | {math.sqrt(float(np.mean(e * e))):.3f} | "
+                 f"{float(np.max(np.abs(e))):.3f} | {row.covered / e.size:.2f}")
+        lines.append(f"| {row.record} | {row.reference:g} | {row.channel} | {row.truth:.3f} | "
+                     f"{100.0 * row.noise:.2f} | {e.size}/{row.trials} | {stats} | "
+                     f"{row.warned}/{e.size} |")
+    return "\n".join(lines)
 
 
 def evaluate(names: list[str] | None = None) -> list[ModeRow]:

@@ -9,10 +9,19 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from fsi_lab.dsp.identify import identify
-from validation.real_data import TARGET, fsi_lab_modes, pysdkit_beam, ssi_modes
+from validation.real_data import (
+    TARGET,
+    Peer,
+    Record,
+    fsi_lab_modes,
+    pysdkit_beam,
+    replica,
+    ssi_modes,
+)
 
 
 @pytest.fixture(scope="module")
@@ -93,3 +102,25 @@ def test_ssi_peer_within_0_2_percent_and_damping_agrees_with_fsi_lab(beam, found
         peer = min(peers, key=lambda p: abs(p.frequency - mode.damped_frequency_hz))
         zeta = mode.laws.fits["viscous"].value("a") / (2 * math.pi * mode.frequency_hz)
         assert zeta == pytest.approx(peer.zeta, rel=0.2)
+
+
+def test_a_replica_rebuilds_a_record_of_damped_sinusoids_and_measures_its_broadband_noise():
+    """A record made of two damped sinusoids after 20 quiet samples, with white noise of RMS
+    0.02: rebuilt from the modes' frequencies and damping ratios within 5 % of the noise, and
+    the noise measured within 15 % (the median of a periodogram of 16 segments)."""
+    fs, n, start = 2560.0, 4096, 20
+    t = (np.arange(n) - start) / fs
+    modes = [Peer(30.0, 0.03), Peer(215.0, 0.005), Peer(math.nan, math.nan)]
+    clean = np.zeros(n)
+    for mode, amplitude, phase in zip(modes[:2], (4.0, 25.0), (0.3, 1.2)):
+        damped = 2.0 * np.pi * mode.frequency
+        rate = mode.zeta * damped / math.sqrt(1.0 - mode.zeta ** 2)
+        clean += amplitude * np.exp(-rate * t) * np.sin(damped * t + phase)
+    clean[:start] = 0.0
+    noisy = clean + 0.02 * np.random.default_rng(5).standard_normal(n)
+    record = Record("two modes", "test", noisy[None, :], fs, "acceleration", (30.0, 215.0, 500.0),
+                    free_from=start)
+    rebuilt, sigma = replica(record, modes, 0)
+    assert sigma == pytest.approx(0.02, rel=0.15)
+    assert np.sqrt(np.mean((rebuilt - clean) ** 2)) < 0.05 * 0.02
+    assert np.all(rebuilt[:start] == 0.0)
