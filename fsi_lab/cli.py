@@ -768,13 +768,16 @@ def nothing_identified(summary: dict[str, Any], registry) -> str | None:
     """Why nothing in an analysed record was identified, or None: on every channel the analysis
     that provides its components (the decomposition into modes) was refused and none came out
     (a record of noise, or of no free decay), so the exit code says so (2: a signal the
-    analysis cannot handle) although what could be computed was stored."""
+    analysis cannot handle) although what could be computed was stored. A channel missing from
+    the run counts as refused."""
     reasons = []
     for name, info in (summary.get("channels") or {}).items():
         if info.get("components"):
             return None
+        # (an error of no analysis: the channel itself is missing from the run)
         refused = [error for error in info.get("errors", [])
-                   if _provides(registry, error.get("plugin"), "components")]
+                   if error.get("plugin") is None
+                   or _provides(registry, error.get("plugin"), "components")]
         if not refused:
             return None
         reasons.append(f"channel {name}: {refused[0]['message']}")

@@ -244,6 +244,26 @@ def test_analyze_with_a_shorter_chain_leaves_recorded_plugin_settings_aside(sim_
     assert again["channels"]["tip_velocity"]["components"]
 
 
+def test_a_run_file_without_the_channel_to_analyse_exits_2_and_says_so(sim_profile, tmp_path):
+    """The analysed channel deleted from a run file: `analyze` said "failed None: ..." and
+    exited 0, with --json too."""
+    analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
+    data, proc = cli_json("run", str(sim_profile(analysis=analysis)), "--out", str(tmp_path))
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(data["run"], "r+") as f:
+        del f["channels/tip_velocity"]
+    proc = cli("analyze", data["run"])
+    assert proc.returncode == 2
+    assert "  not analysed: channel 'tip_velocity' is not in the run; channels are " \
+           in proc.stdout
+    assert "None" not in proc.stdout
+    assert f"{data['run']}: nothing was identified: channel tip_velocity: channel " \
+           "'tip_velocity' is not in the run" in proc.stderr
+    again, proc = cli_json("analyze", data["run"])
+    assert proc.returncode == 2
+    assert again["channels"]["tip_velocity"]["errors"][0]["plugin"] is None
+
+
 def test_a_run_whose_record_identifies_nothing_exits_2_as_analyze_does(tmp_path):
     """In air the profile's 2 components find one peak in the free decays: hvd is refused and
     nothing is identified. `run` printed that and exited 0 where `analyze` of the same file
