@@ -229,7 +229,7 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
     FsiLabError
         The run file cannot be read or analysed at all (naming it; exit code 2 for bad input).
     """
-    from fsi_lab.chain import channels_to_analyse
+    from fsi_lab.chain import channels_to_analyse, cut_quiet_tail
     from fsi_lab.contract import AnalysisContext
     from fsi_lab.run_profile import analysis_profile, require_something_to_analyse, worker_registry
     from fsi_lab.runfile import read_run, require_analysable
@@ -255,14 +255,18 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
     out = RunExtract(path=str(task.path), label=task.label or Path(task.path).name,
                      start_time=str(run.attrs.get("start_time", "")),
                      overrides=list(run.attrs.get("overrides", [])))
-    for name in channels_to_analyse(run.channels, profile.analysis.get("channels", [])):
-        if name not in run.channels:
+    names = channels_to_analyse(run.channels, profile.analysis.get("channels", []))
+    reference = profile.analysis.get("reference")
+    # the record up to where its own analysis stops (its quiet tail left out, as run_chain does)
+    channels, _ = cut_quiet_tail(run.channels, names + ([reference] if reference else []))
+    for name in names:
+        if name not in channels:
             out.errors.append(f"channel {name!r} is not in the run")
             continue
-        context = AnalysisContext(channel=run.channels[name], channels=run.channels,
+        context = AnalysisContext(channel=channels[name], channels=channels,
                                   results={}, specimen=profile.specimen,
                                   mass_per_length=task.mass_per_length,
-                                  reference=profile.analysis.get("reference"))
+                                  reference=reference)
         try:
             result = hvd.run(context, hvd_params)
             _modes(out, name, identification_of(result), context, eq_params, mass)

@@ -367,10 +367,36 @@ def aggregate_tasks(paths: list[Path], sets: list[str], mass_per_length: float |
                                  "expected run files or the --out directory of fsi-lab "
                                  "sequence")
         paths = files
+    paths = list(dict.fromkeys(paths))
+    _refuse_copies(paths)
     names = [path.name for path in paths]
     return [ExtractTask(str(path), tuple(sets), mass_per_length,
                         path.name if names.count(path.name) == 1 else str(path))
-            for path in dict.fromkeys(paths)]
+            for path in paths]
+
+
+def _refuse_copies(paths: list[Path]) -> None:
+    """Refuse run files that are copies of one run (the same uuid): pooled as independent runs
+    they would narrow the intervals and show no spread between runs. Files that cannot be read
+    are left to the extraction, which names what is wrong with them."""
+    import h5py
+
+    seen: dict[str, Path] = {}
+    for path in paths:
+        try:
+            with h5py.File(path, "r") as f:
+                run_uuid = f.attrs.get("uuid")
+        except (OSError, ValueError):
+            continue
+        if isinstance(run_uuid, bytes):
+            run_uuid = run_uuid.decode()
+        if not run_uuid:
+            continue
+        if run_uuid in seen:
+            raise InputFileError(
+                f"{path}: a copy of {seen[run_uuid]} (both hold run {run_uuid}); each run "
+                "counts once in an aggregate: give one of them")
+        seen[str(run_uuid)] = path
 
 
 def cmd_aggregate(args) -> int:

@@ -328,6 +328,12 @@ class SequenceRunner:
                   f"(95 %: {low:.4g} to {high:.4g}, +-{100 * half:.3g} %) at "
                   f"{mode['frequency_hz']:.4g} Hz is within the plan's "
                   f"+-{100 * stop.relative_half_width:g} %")
+        warned = sum(1 for run in mode.get("per_run", []) if run.get("warnings"))
+        if warned:
+            # More runs narrow the interval, not an error the runs share: the stop says so.
+            reason += (f"; {warned} of {len(mode['per_run'])} runs carry warnings on this mode "
+                       "(the interval holds their noise and scatter, not an error they share: "
+                       "read the aggregate's warnings beside it)")
         for entry in self.record.runs:
             if entry["status"] in ("pending", "failed", "aborted"):
                 entry.update(status="skipped", error=f"not carried out: {reason}")

@@ -176,6 +176,47 @@ def test_fsi_lab_aggregate_files_and_directories(files, tmp_path):
     assert thicker and float(thicker.group(1)) == pytest.approx(20.0, rel=1e-4), text
 
 
+def test_copies_of_one_run_are_refused_not_pooled_as_independent_runs(files, tmp_path):
+    """Two copies of one run file (the same uuid) were pooled as two runs: "2 runs", a
+    spread between them of exactly 0 and a narrower interval, with no word."""
+    import shutil
+
+    copy = tmp_path / "copy.h5"
+    shutil.copy(files["level0"], copy)
+    code, out, err = run_main("aggregate", str(files["level0"]), str(files["level1"]),
+                              str(copy), "--mass-per-length", str(MASS))
+    assert code == 2 and out == ""
+    assert f"{copy}: a copy of {files['level0']} (both hold run " in err
+    assert "each run counts once in an aggregate: give one of them" in err
+    folder = tmp_path / "folder"
+    folder.mkdir()
+    shutil.copy(files["level0"], folder / "a.h5")
+    shutil.copy(files["level0"], folder / "b.h5")
+    code, _, err = run_main("aggregate", str(folder), "--mass-per-length", str(MASS))
+    assert code == 2 and f"{folder / 'b.h5'}: a copy of {folder / 'a.h5'}" in err
+
+
+def test_a_run_s_own_numbers_in_the_aggregate_are_those_of_its_analysis(tmp_path):
+    """`fsi-lab aggregate RUN.h5` identified the whole record where `fsi-lab run` and
+    `fsi-lab analyze` read it to its quiet tail: on the wet bench's record the third mode's
+    C_f came out 30.2 in the aggregate against 35.7 in the file's own analysis."""
+    from support import PROFILES, cli_json
+
+    data, proc = cli_json("run", str(PROFILES / "wet-beam-sim.toml"), "--out", str(tmp_path),
+                          "--set", "run.duration=8", timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    channel = data["analysis"]["channels"]["tip_velocity"]
+    assert any("are a quiet tail" in note for note in channel["notes"])
+    own = {round(c["frequency_hz"], 2): c["equivalent_damping"] for c in channel["components"]}
+    code, out, err = run_main("aggregate", data["run"], "--json")
+    assert code == 0, err
+    pooled = {round(m["frequency_hz"], 2): m["per_run"][0] for m in json.loads(out)["modes"]}
+    assert sorted(pooled) == sorted(own)
+    for frequency, run in pooled.items():
+        for key in ("c_i", "c_f"):
+            assert run[key] == pytest.approx(own[frequency][key], rel=1e-9), (frequency, key)
+
+
 def test_runs_without_a_mass_per_length_are_refused_naming_them(files):
     code, out, err = run_main("aggregate", str(files["level0"]), "--json")
     assert code == 2

@@ -136,6 +136,26 @@ def test_stop_when_ends_the_sequence_once_the_interval_is_narrow_enough(tmp_path
     assert (out / SEQUENCE_FILE).exists()
 
 
+def test_a_stop_on_a_mode_whose_runs_are_warned_says_so(tmp_path):
+    """The third wet mode (47.8 Hz) is warned in these runs (its larger and smaller cycles do
+    not quite agree on one law): a stop on its C_i says how many runs carry warnings, since
+    more runs narrow the interval, not an error the runs share."""
+    stop = ('[plan.stop_when]\nquantity = "c_i"\nrelative_half_width = 0.05\n'
+            'frequency_hz = 47.0\nmin_runs = 2\n')
+    out = tmp_path / "out"
+    code, text, err = run_main("sequence", str(write_plan(tmp_path, HEIGHTS, stop)), "--out",
+                               str(out), "--json")
+    assert code == 0, err
+    data = json.loads(text)
+    mode = min(data["aggregate"]["modes"], key=lambda m: abs(m["frequency_hz"] - 47.0))
+    warned = sum(1 for run in mode["per_run"] if run["warnings"])
+    assert warned > 0
+    assert data["stopped_early"].endswith(
+        f"; {warned} of {len(mode['per_run'])} runs carry warnings on this mode (the interval "
+        "holds their noise and scatter, not an error they share: read the aggregate's "
+        "warnings beside it)")
+
+
 def test_repeats_on_the_simulated_bench_draw_new_noise(tmp_path):
     from fsi_lab.plan import load_plan
 
