@@ -507,11 +507,12 @@ def cmd_show(args) -> int:
 
 
 def _show_sequence(args) -> int:
-    """``fsi-lab show DIR``: the sequence record in DIR (or the sequence.h5 named)."""
+    """``fsi-lab show DIR``: the sequence record in DIR (or the sequence.h5 named), with the
+    results of an analysis stored in a run file after the sequence recorded the run."""
     from fsi_lab.seqfile import load_record
-    from fsi_lab.sequence import format_record, running_note
+    from fsi_lab.sequence import format_record, running_note, with_later_analyses
 
-    record = load_record(args.run)
+    record = with_later_analyses(load_record(args.run))
     if args.json:
         info = record.as_json()
         if record.attrs["status"] == "running":

@@ -41,7 +41,15 @@ RUN_STATUSES = ("pending", "running", "completed", "failed", "aborted", "skipped
 
 def compact_results(summary: dict[str, Any] | None) -> dict[str, list[dict[str, Any]]]:
     """Per analysed channel, each component's frequency (Hz), C_i (kg/(m s)) and C_f (kg/m^2)
-    with their 95 % intervals and R^2, from an analysis summary (empty without one)."""
+    with their 95 % intervals and R^2, and its warnings, from an analysis summary (empty
+    without one).
+
+    A component's ``warnings`` are its own and those of each analysis that keeps them under
+    its key (:func:`fsi_lab.summary.warnings_of`), the latter prefixed ``key: `` as
+    ``fsi-lab analyze --strict`` names them; an empty list when none warned it.
+    """
+    from fsi_lab.summary import warnings_of
+
     results: dict[str, list[dict[str, Any]]] = {}
     for channel, info in ((summary or {}).get("channels") or {}).items():
         components = []
@@ -49,7 +57,9 @@ def compact_results(summary: dict[str, Any] | None) -> dict[str, list[dict[str, 
             eq = component.get("equivalent_damping") or {}
             components.append({
                 "index": component.get("index"), "frequency_hz": component.get("frequency_hz"),
-                **{key: eq.get(key) for key in ("c_i", "c_i_ci95", "c_f", "c_f_ci95", "r2")}})
+                **{key: eq.get(key) for key in ("c_i", "c_i_ci95", "c_f", "c_f_ci95", "r2")},
+                "warnings": [f"{key}: {text}" if key else text
+                             for key, text in warnings_of(component)]})
         results[channel] = components
     return results
 

@@ -8,7 +8,8 @@ sequence stops when a run fails (unless the plan says ``on_failure = "continue"`
 when an interlock tripped, when the bench was not confirmed safe, or on Ctrl+C or SIGTERM (the
 run in progress ends as ``fsi-lab run`` ends it). The record (:mod:`fsi_lab.seqfile`) is
 rewritten before and after every run, so :func:`resume` continues with the first run that did
-not complete, also after ``kill -9``.
+not complete, also after ``kill -9``; it first completes the analysis of a completed run whose
+analysis was stopped (or failed), which the record then holds.
 
 After every completed run the completed runs are aggregated (:mod:`fsi_lab.aggregate`: modes
 grouped by frequency, C_i and C_f fitted to the union of their free decays, the curves on one
@@ -125,6 +126,9 @@ class SequenceRunner:
 
     def _loop(self) -> tuple[str, str]:
         ran = 0
+        for entry, profile in analyses_to_complete(self.plan, self.record, self.registry):
+            self._complete_analysis(entry, profile)
+            self._save()
         if self._stale():  # resumed: the runs completed before, as the record does not hold
             stop = self._aggregate_safely()
             self._save()
@@ -186,8 +190,13 @@ class SequenceRunner:
             entry.update(status="failed", error=str(exc), stop_time=utc_now(), run_file="")
             self._save()
             return "failed", f"{planned.label}: refused: {exc}"
+        error = outcome.error or ""
+        if outcome.exit_status == "completed" and outcome.summary is None \
+                and profile.analysis["chain"]:  # stopped, failed or skipped (a signal at its end)
+            error = (f"{error or 'its analysis was skipped (interrupted as the run ended)'}; "
+                     f"{self._resume_advice()}")
         entry.update(status=outcome.exit_status, stop_time=utc_now(),
-                     error=outcome.error or "", interrupted=outcome.interrupted,
+                     error=error, interrupted=outcome.interrupted,
                      run_file=outcome.path.name if outcome.path else "",
                      results=compact_results(outcome.summary))
         self.file_abandoned = self.file_abandoned or outcome.file_abandoned
@@ -202,7 +211,7 @@ class SequenceRunner:
             self.record.save()
         label = planned.label
         if outcome.exit_status == "aborted" or outcome.interrupted:
-            return "interrupted", f"{label}: {outcome.error or INTERRUPTED}"
+            return "interrupted", f"{label}: {error or INTERRUPTED}"
         unsafe = unsafe_roles(outcome.final_states)
         if unsafe:
             return "failed", (f"{label}: the bench was NOT confirmed safe after the run ("
@@ -221,6 +230,40 @@ class SequenceRunner:
                                     "(on_failure = \"continue\")")
         self.signals.raise_pending()
         return stop
+
+    def _resume_advice(self) -> str:
+        return (f"fsi-lab sequence --resume {self.record.directory} analyses it and records "
+                f"its results in {SEQUENCE_FILE} too")
+
+    def _complete_analysis(self, entry: dict[str, Any], profile) -> None:
+        """Record the analysis of a completed run whose record holds none: the one its run
+        file holds (``fsi-lab analyze`` stored it since), else one made now and stored in the
+        run file as the run's own analysis is (its identification kept for the aggregation).
+        An analysis that fails is logged and recorded in the run's ``error``; the sequence
+        goes on."""
+        from fsi_lab.store import analyse_and_store
+
+        path = self.record.directory / entry["run_file"]
+        label = run_label(entry)
+        try:
+            summary = read_analysis_summary(path)
+            if summary is None:
+                self.bus.log("INFO", f"[sequence] {label}: completed without its analysis; "
+                                     f"analysing {path.name}")
+                self._identified = {}
+                run = read_run(path, load_data=False, lazy=True)  # a channel is read when used
+                summary = analyse_and_store(path, run.channels, profile.analysis,
+                                            profile.analysis_params, self._capturing_registry(),
+                                            specimen=profile.specimen, bus=self.bus)
+                self._keep_identification(entry, profile)
+            else:
+                self.bus.log("INFO", f"[sequence] {label}: recording the analysis its run file "
+                                     f"holds ({path.name})")
+        except (FsiLabError, OSError) as exc:
+            entry["error"] = f"analysis not stored: {exc}; run fsi-lab analyze on the run file"
+            self.bus.log("ERROR", f"[sequence] {label}: {entry['error']}")
+            return
+        entry.update(results=compact_results(summary), error="")
 
     def _aggregate_safely(self) -> tuple[str, str] | None:
         """:meth:`_aggregate`; an aggregation that fails is logged (the runs go on, the record
@@ -411,7 +454,8 @@ def resume(directory: Path, registry: Registry) -> tuple[Plan, SequenceRecord]:
     for entry in record.runs:
         if entry["status"] == "running":
             settle_unfinished(record, entry)
-    if all(entry["status"] in ("completed", "skipped") for entry in record.runs):
+    if all(entry["status"] in ("completed", "skipped") for entry in record.runs) \
+            and not analyses_to_complete(plan, record, registry):
         return plan, record  # nothing to resume: the record stays as it is
     remaining = tuple(r for r, e in zip(plan.runs, record.runs)
                       if e["status"] not in ("completed", "skipped"))
@@ -422,6 +466,58 @@ def resume(directory: Path, registry: Registry) -> tuple[Plan, SequenceRecord]:
     attrs["resumed"] = [*attrs.get("resumed", []), utc_now()]
     attrs.update(status="running", error="", stop_time="")
     return plan, record
+
+
+def lacks_analysis(record: SequenceRecord, entry: dict[str, Any]) -> bool:
+    """Whether ``entry`` is a completed run whose record holds no analysis results although
+    its run file is there (its analysis was stopped, failed, or ended with the process)."""
+    return (entry["status"] == "completed" and bool(entry["run_file"])
+            and not entry.get("results") and (record.directory / entry["run_file"]).is_file())
+
+
+def analyses_to_complete(plan: Plan, record: SequenceRecord,
+                         registry: Registry) -> list[tuple[dict[str, Any], Any]]:
+    """The completed runs whose analysis the record lacks (:func:`lacks_analysis`) and can
+    get: their run file holds one (stored by ``fsi-lab analyze`` since), or their profile has
+    an analysis chain to make one. Each with its profile.
+
+    Raises
+    ------
+    ProfileError
+        A run's profile no longer parses (a plugin it names is gone).
+    """
+    todo = []
+    for entry, planned in zip(record.runs, plan.runs):
+        if not lacks_analysis(record, entry):
+            continue
+        profile = plan.profile_for(planned, registry)
+        if profile.analysis["chain"] or _stored_summary(record, entry) is not None:
+            todo.append((entry, profile))
+    return todo
+
+
+def _stored_summary(record: SequenceRecord, entry: dict[str, Any]) -> dict[str, Any] | None:
+    """The analysis summary of ``entry``'s run file; None without one, or when the file cannot
+    be read."""
+    try:
+        return read_analysis_summary(record.directory / entry["run_file"])
+    except InputFileError:
+        return None
+
+
+def with_later_analyses(record: SequenceRecord) -> SequenceRecord:
+    """``record`` as ``fsi-lab show`` presents it: a completed run whose record holds no
+    analysis results but whose run file now holds an analysis (``fsi-lab analyze`` stored it
+    after the sequence recorded the run) gets that analysis's results, with ``results_from``
+    = ``"run file"`` and its error cleared. Only the runs in memory change: the record on disk
+    is left to ``fsi-lab sequence --resume``."""
+    for entry in record.runs:
+        if lacks_analysis(record, entry):
+            summary = _stored_summary(record, entry)
+            if summary is not None:
+                entry.update(results=compact_results(summary), results_from="run file",
+                             error="")
+    return record
 
 
 def settle_unfinished(record: SequenceRecord, entry: dict[str, Any]) -> None:
@@ -444,7 +540,7 @@ def settle_unfinished(record: SequenceRecord, entry: dict[str, Any]) -> None:
     if status == "completed":
         entry.update(status="completed", results=compact_results(summary),
                      error="" if summary else "the sequence ended before the run's analysis "
-                     "was stored; run fsi-lab analyze on the run file")
+                     f"was stored; fsi-lab sequence --resume {record.directory} analyses it")
         return
     if status not in ("aborted", "failed"):
         status = "running"
@@ -505,9 +601,27 @@ def _describe_run(entry: dict[str, Any], total: int) -> str:
                                                          if details else "")
 
 
+def _component_lines(channel: str, c: dict[str, Any]) -> list[str]:
+    """One component of a run's ``results``: a line with its frequency, C_i and C_f and how
+    many warnings it carries, then one line per warning (records written before ``warnings``
+    was kept have none)."""
+    text = f"      {channel} component {c.get('index')}"
+    if c.get("frequency_hz") is not None:
+        text += f" at {c['frequency_hz']:.3f} Hz"
+    if c.get("c_i") is None or c.get("c_f") is None:
+        text += ": C_i and C_f not identified"
+    else:
+        text += f": C_i = {c['c_i']:.4g} kg/(m s), C_f = {c['c_f']:.4g} kg/m^2"
+    warnings = c.get("warnings") or []
+    if warnings:
+        text += f" [{len(warnings)} warning{'s' if len(warnings) > 1 else ''}]"
+    return [text, *(f"        warning: {w}" for w in warnings)]
+
+
 def format_record(record: SequenceRecord) -> str:
     """The record in a few readable lines: the sequence, then one line per run with its
-    status, run file and identified C_i and C_f (component 0 of each analysed channel)."""
+    status and run file, and under it one line per component of each analysed channel (its
+    frequency, C_i and C_f) followed by the components' warnings."""
     attrs = record.attrs
     counts = record.counts()
     total = len(record.runs)
@@ -535,13 +649,13 @@ def format_record(record: SequenceRecord) -> str:
         if entry.get("attempts"):
             text += f" ({len(entry['attempts'])} earlier attempt(s))"
         lines.append(text)
+        if entry.get("results_from") == "run file":
+            lines.append("      results read from its run file (analysed after the sequence "
+                         f"recorded the run; fsi-lab sequence --resume {record.directory} "
+                         f"records them in {SEQUENCE_FILE})")
         for channel, components in (entry.get("results") or {}).items():
-            for c in components[:1]:
-                if c.get("c_i") is None:
-                    continue
-                lines.append(f"      {channel} component {c['index']} at "
-                             f"{c['frequency_hz']:.3f} Hz: C_i = {c['c_i']:.4g} kg/(m s), "
-                             f"C_f = {c['c_f']:.4g} kg/m^2")
+            for component in components:
+                lines.extend(_component_lines(channel, component))
         if entry["error"] and entry["status"] not in ("pending", "skipped"):
             lines.append(f"      {entry['error']}")
     if record.aggregate is not None:
