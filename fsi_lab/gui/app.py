@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import pyqtgraph as pg
-from PySide6.QtCore import QCoreApplication, QEvent, QEventLoop, Qt, QTimer
+from PySide6.QtCore import QCoreApplication, QEvent, QEventLoop, Qt, QTimer, qInstallMessageHandler
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (
     QApplication,
@@ -389,6 +389,29 @@ def freeze_startup_objects() -> None:
     gc.freeze()
 
 
+#: Qt messages that say nothing to a user, left out of stderr: the offscreen platform (used by
+#: ``--screenshot``) cannot pass size hints to a window system it does not have.
+QUIET_QT_MESSAGES = frozenset({"This plugin does not support propagateSizeHints()"})
+
+
+def quiet_qt_messages() -> Callable[[], None]:
+    """Leave the :data:`QUIET_QT_MESSAGES` out of Qt's messages; every other message goes
+    where it went before (Qt's handler, or the one installed before). Returns a function that
+    puts the previous handler back."""
+    previous = None
+
+    def handler(mode, context, message) -> None:
+        if message in QUIET_QT_MESSAGES:
+            return
+        if previous is not None:
+            previous(mode, context, message)
+        else:
+            print(message, file=sys.stderr, flush=True)
+
+    previous = qInstallMessageHandler(handler)
+    return lambda: qInstallMessageHandler(previous)
+
+
 def _configure_pyqtgraph() -> None:
     pg.setConfigOptions(background="w", foreground="k", antialias=True)
 
@@ -524,6 +547,14 @@ def fitting_size(app: QApplication) -> tuple[int, int]:
 def main(args: Any) -> int:
     """``fsi-lab gui [PROFILE | RUN.h5 ...] [--screenshot OUT.png] [--size WxH] [--view
     NAME]``."""
+    restore = quiet_qt_messages()
+    try:
+        return _main(args)
+    finally:
+        restore()
+
+
+def _main(args: Any) -> int:
     screenshot = getattr(args, "screenshot", None)
     if QApplication.instance() is None:
         if screenshot is not None:

@@ -29,6 +29,8 @@ MIN_ROW_PLOT = (180, 110)
 MIN_LAST_ROW_HEIGHT = 150
 #: Fewest decades a spectrum's amplitude axis spans.
 MIN_DECADES = 2.0
+#: The spectra's amplitude axis before any data (log10 of the unit): whole, labelled decades.
+EMPTY_DECADES = (-3.0, 0.0)
 
 
 class RingBuffer:
@@ -148,6 +150,7 @@ class LivePlots(QWidget):
                 self.spectra[name].setData([], [])
                 self._y_ranges[name] = None
                 self._s_ranges[name] = None
+            self._empty_ranges()
             return
         self.graphics.clear()
         self.curves.clear()
@@ -196,10 +199,19 @@ class LivePlots(QWidget):
             self._s_ranges[name] = None
         self.graphics.ci.layout.setColumnStretchFactor(0, 3)
         self.graphics.ci.layout.setColumnStretchFactor(1, 2)
+        self._empty_ranges()
         self.graphics.fit_minimum()
         self.status.setText(
             f"{len(self.units)} channels at {self.sample_rate:g} Hz; window {self.window_s:g} s "
             "(display decimated; the run file keeps every sample)")
+
+    def _empty_ranges(self) -> None:
+        """Before any data: the time axes span the rolling window the header names, and the
+        spectra a few labelled decades."""
+        if self.time_plots:
+            next(iter(self.time_plots.values())).setXRange(0.0, self.window_s, padding=0)
+        for spec in self.spectrum_plots.values():
+            spec.setYRange(*EMPTY_DECADES, padding=0)
 
     # ------------------------------------------------------------------ data
     def on_block(self, block: DataBlock) -> None:

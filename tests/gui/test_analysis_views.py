@@ -284,8 +284,11 @@ def test_time_and_model_curves_land_where_the_plugins_put_them(qtbot, tmp_path):
             assert len(model) == 1, (cls.__name__, cell)
             x, y = model[0].getData()
             order = np.argsort(model_curves[x_name][0])
+            expected = model_curves[y_name][0][order]
+            if cls is BackboneView:  # relative to the component's frequency (17 Hz), in %
+                expected = 100 * (expected - 17.0) / 17.0
             np.testing.assert_allclose(x, model_curves[x_name][0][order])
-            np.testing.assert_allclose(y, model_curves[y_name][0][order])
+            np.testing.assert_allclose(y, expected)
 
 
 def test_rows_are_components_however_short():
@@ -305,3 +308,86 @@ def test_the_bands_method_s_components_are_titled_by_their_bands(qtbot, make_win
     assert views.filled()["HVD components"]
     note = views.view(HVDView).note.text()
     assert "bands 11.8 to 21, 1.5 to 2.5 Hz" in note and "cut-offs" not in note
+
+
+def _with_specimen_and_convention(path, convention):
+    """The run's profile gains a measuring point; equivalent-damping its amplitude convention."""
+    import h5py
+
+    with h5py.File(path, "r+") as f:
+        f.attrs["profile"] = (f.attrs["profile"]
+                              + "\n[specimen]\nlength = 0.08\nmeasurement_point = 0.08\n")
+        f["analysis/tip_velocity/equivalent-damping"].attrs["amplitude_convention"] = convention
+    return path
+
+
+def test_amplitude_axes_say_which_amplitude_they_are(qtbot, tmp_path):
+    modal = ("component 0: modal: q_2 = w(x_meas) / W_2(x_meas), W_2(x_meas) = 2 (Eq. 15, "
+             "int W^2 = L); component 1: modal: q_3 = w(x_meas) / W_3(x_meas), W_3(x_meas) = 2")
+    results = load_results(_with_specimen_and_convention(write_run(tmp_path / "m.h5"), modal))
+    labels = {}
+    for cls in (BackboneView, DampingView, EquivalentDampingView):
+        view = cls()
+        qtbot.addWidget(view)
+        view.show_results(results, "tip_velocity")
+        assert view.filled, cls.__name__
+        bottom = view._plots[(0, 0)].getAxis("bottom")
+        labels[cls] = (bottom.labelText, bottom.labelUnits)
+    # measured at the measuring point (backbone, damping) vs modal (C_q): never the same words
+    assert labels[BackboneView] == ("displacement amplitude at x = 0.08 m", "m")
+    assert labels[DampingView] == labels[BackboneView]
+    assert labels[EquivalentDampingView] == ("modal amplitude q = w(x_m) / W(x_m)", "m")
+
+    measured = "component 0: measured (displacement amplitude at the measuring point)"
+    results = load_results(_with_specimen_and_convention(write_run(tmp_path / "w.h5"),
+                                                         measured))
+    view = EquivalentDampingView()
+    qtbot.addWidget(view)
+    view.show_results(results, "tip_velocity")
+    assert view._plots[(0, 0)].getAxis("bottom").labelText == \
+        "displacement amplitude at x = 0.08 m"
+
+
+def test_the_cq_range_shows_the_fit_not_the_noise_floor(qtbot, tmp_path):
+    import h5py
+
+    path = write_run(tmp_path / "noisy.h5", c_i=0.65, c_f=0.5)  # C_q 0.65 to 0.83
+    rng = np.random.default_rng(3)
+    with h5py.File(path, "r+") as f:
+        group = f["analysis/tip_velocity/equivalent-damping"]
+        amp, cq = group["amplitude"][0], group["c_q"][0]
+        # the noise floor: as many points again at tiny amplitudes, C_q scattered by +-2
+        floor = rng.uniform(1e-6, 2e-5, amp.size)
+        noisy = 0.65 + rng.uniform(-2.0, 2.0, amp.size)
+        noisy[:2] = (-2.0, 2.3)
+        del group["amplitude"], group["c_q"]
+        group["amplitude"] = np.concatenate([amp, floor])[None, :]
+        group["c_q"] = np.concatenate([cq, noisy])[None, :]
+    view = EquivalentDampingView()
+    qtbot.addWidget(view)
+    view.show_results(load_results(path), "tip_velocity")
+    low, high = view._plots[(0, 0)].viewRange()[1]
+    fit = 0.65 + 8 * 0.5 * 2 * np.pi * 17.0 * np.array([0.0, amp.max()]) / (3 * np.pi)
+    assert low <= fit.min() and fit.max() <= high       # the fitted line is in view ...
+    assert low <= cq.min() and cq.max() <= high         # ... with the points that carry it
+    assert low > -2.0 and high < 2.3                    # the noise floor's extremes are not
+    assert (high - low) < 2 * (fit.max() - fit.min())   # the fit fills much of the height
+    assert "beyond the range shown" in view.note.text()  # and the clipped points are told
+
+
+def test_backbone_components_are_drawn_relative_to_their_own_frequency(qtbot, tmp_path):
+    view = BackboneView()
+    qtbot.addWidget(view)
+    view.show_results(load_results(write_run(tmp_path / "b.h5")), "tip_velocity")
+    plot = view._plots[(0, 0)]
+    assert plot.getAxis("left").labelText == "frequency shift (f − f_n) / f_n (%)"
+    points = {item.name(): item.getData() for item in plot.listDataItems()}
+    amp = np.linspace(0.004, 0.0005, 40)
+    # write_run: component 0 at 17 Hz (f_n 17 in the summary), component 1 at 2 Hz
+    np.testing.assert_allclose(points["component 0 (f_n = 17 Hz)"][1],
+                               100 * (17 - 10 * amp - 17) / 17)
+    np.testing.assert_allclose(points["component 1 (f_n = 2 Hz)"][1],
+                               100 * (2 - 5 * amp[:-10] - 2) / 2)
+    low, high = plot.viewRange()[1]
+    # both modes on one axis of a few tenths of a percent: component 0's bend is in view
+    assert low <= 100 * (-10 * amp.max()) / 17 and high >= 0 and high - low < 5

@@ -52,3 +52,22 @@ def test_unknown_channel_or_rate_reconfigures(qtbot):
     qtbot.addWidget(plots)
     plots.on_block(DataBlock(0.0, 1000.0, {"x": np.ones(100)}))
     assert set(plots.buffers) == {"x"} and plots.sample_rate == 1000.0
+
+
+def test_empty_plots_show_the_window_the_header_names_and_whole_decades(qtbot):
+    plots = LivePlots(window_s=10.0)
+    qtbot.addWidget(plots)
+    plots.resize(900, 500)
+    plots.show()
+    qtbot.waitExposed(plots)
+    plots.configure({"drive": "V", "tip_velocity": "m/s"}, 1000.0)
+    assert "window 10 s" in plots.status.text()
+    qtbot.waitUntil(lambda: all(np.allclose(p.viewRange()[0], [0.0, 10.0], atol=0.01)
+                                for p in plots.time_plots.values()), timeout=30000)
+    for spec in plots.spectrum_plots.values():
+        low, high = spec.viewRange()[1]  # log10 of the amplitude
+        decades = [d for d in range(-12, 12) if low <= d <= high]
+        assert len(decades) >= 2, (low, high)  # labelled decades, not ticks 2 to 9 alone
+    plots.time_plots["drive"].setXRange(3.0, 4.0, padding=0)
+    plots.configure({"drive": "V", "tip_velocity": "m/s"}, 1000.0)  # the same channels again
+    assert np.allclose(plots.time_plots["drive"].viewRange()[0], [0.0, 10.0])

@@ -54,3 +54,20 @@ def test_screenshot_through_the_command(tmp_path):
         env={**os.environ, "QT_QPA_PLATFORM": "offscreen"})
     assert proc.returncode == 0, proc.stderr
     assert _png(out) == (1366, 768)
+    assert "propagateSizeHints" not in proc.stderr  # the offscreen platform's remark
+
+
+def test_qt_s_offscreen_size_hint_message_alone_is_silenced(qtlog):
+    from PySide6.QtCore import qWarning
+
+    from fsi_lab.gui.app import quiet_qt_messages
+
+    restore = quiet_qt_messages()
+    try:
+        qWarning("This plugin does not support propagateSizeHints()")
+        qWarning("another Qt warning")
+    finally:
+        restore()
+    said = [record.message for record in qtlog.records]
+    assert "another Qt warning" in said
+    assert not any("propagateSizeHints" in text for text in said)

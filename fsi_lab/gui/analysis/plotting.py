@@ -70,6 +70,14 @@ def robust_range(plot: pg.PlotItem, values: Sequence[np.ndarray], axis: str = "y
         plot.setXRange(max(lo - margin, 0.0) if lo >= 0 else lo - margin, hi + margin, padding=0)
 
 
+def plain_numbers(plot: pg.PlotItem, side: str = "left") -> None:
+    """Tick labels of one axis as the values are, without an SI prefix on its unit or an
+    "(x0.001)" scale: for units that take no prefix (%, kg/(m s))."""
+    axis = plot.getAxis(side)
+    axis.setLabel(axis.labelText, units=axis.labelUnits or None, siPrefixEnableRanges=())
+    axis.updateAutoSIPrefix()
+
+
 def active_span(t: np.ndarray, envelope: np.ndarray, fraction: float = 0.01
                 ) -> tuple[float, float] | None:
     """The time span where ``envelope`` exceeds ``fraction`` of its peak."""
@@ -83,3 +91,45 @@ def active_span(t: np.ndarray, envelope: np.ndarray, fraction: float = 0.01
     t0, t1 = float(t[above[0]]), float(t[above[-1]])
     pad = 0.05 * (t1 - t0)
     return t0 - pad, t1 + pad
+
+
+def weighted_percentiles(values, weights, percents: Sequence[float]) -> np.ndarray | None:
+    """Percentiles of ``values`` where each counts with its weight (NaN and non-positive
+    weights left out); None without any value to count."""
+    v, w = np.ravel(np.asarray(values, dtype=float)), np.ravel(np.asarray(weights, dtype=float))
+    keep = np.isfinite(v) & np.isfinite(w) & (w > 0)
+    if not keep.any():
+        return None
+    v, w = v[keep], w[keep]
+    order = np.argsort(v)
+    v, w = v[order], w[order]
+    cumulative = (np.cumsum(w) - 0.5 * w) / w.sum()
+    return np.interp(np.asarray(percents, dtype=float) / 100.0, cumulative, v)
+
+
+def amplitude_weighted_range(plot: pg.PlotItem, series, extra=(), low: float = 5.0,
+                             high: float = 95.0) -> tuple[float, float] | None:
+    """Set the y range of ``plot`` to the points that carry the curve, not the noise floor.
+
+    ``series``: ``(amplitude, y)`` per component. A quantity derived from a decaying envelope
+    scatters roughly as 1/amplitude, so each component's points count with their amplitude:
+    the ``low``-``high`` amplitude-weighted percentiles of each component, together with the
+    ``extra`` values (a fitted curve, which is always shown), make the range. Points outside it
+    stay reachable by zooming out ("View all"). Returns the range, None when nothing is set."""
+    bounds = [np.ravel(np.asarray(e, dtype=float)) for e in extra]
+    for amplitude, y in series:
+        found = weighted_percentiles(y, np.abs(np.asarray(amplitude, dtype=float)),
+                                     (low, high))
+        if found is not None:
+            bounds.append(found)
+    data = np.concatenate(bounds or [np.zeros(0)])
+    data = data[np.isfinite(data)]
+    if data.size == 0:
+        return None
+    lo, hi = float(data.min()), float(data.max())
+    if hi <= lo:
+        hi, lo = hi + max(abs(hi) * 0.05, 1e-12), lo - max(abs(lo) * 0.05, 1e-12)
+    margin = 0.15 * (hi - lo)
+    lo, hi = lo - margin, hi + margin
+    plot.setYRange(lo, hi, padding=0)
+    return lo, hi

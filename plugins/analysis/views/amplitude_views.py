@@ -13,12 +13,15 @@ from fsi_lab.gui.analysis.datasets import finite_pairs, per_component, summary_s
 from fsi_lab.gui.analysis.plotting import (
     COLOURS,
     MAX_COMPONENTS_DRAWN,
+    amplitude_weighted_range,
     draw_line,
     draw_points,
+    plain_numbers,
     robust_range,
 )
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults
+from fsi_lab.plugins.analysis.views.labels import measured_amplitude
 from fsi_lab.plugins.analysis.views.names import (
     DISPLACEMENT_AMPLITUDE,
     FREQUENCY,
@@ -69,32 +72,51 @@ class _AmplitudeView(View):
                                      "amplitude", self.summary_y)
         if not pairs_d and not pairs_v:
             return False
-        left = self.add_plot(0, 0, self.y_label, "displacement amplitude", self.y_units, "m")
+        self.prepare(results, channel, [b for _, b in pairs_d or pairs_v])
+        pairs_d = [(a, self.shown(k, b)) for k, (a, b) in enumerate(pairs_d)]
+        pairs_v = [(a, self.shown(k, b)) for k, (a, b) in enumerate(pairs_v)]
+        left = self.add_plot(0, 0, self.y_label, measured_amplitude(results), self.y_units,
+                             "m")
         yield
         for k, (a, b) in enumerate(pairs_d[:MAX_COMPONENTS_DRAWN]):
             self._series(left, a, b, k)
             yield
-        robust_range(left, [b for _, b in pairs_d])
+        self.y_range(left, pairs_d)
         right = None
         if not self.compact:
-            right = self.add_plot(0, 1, self.y_label, "velocity amplitude", self.y_units, "m/s")
+            right = self.add_plot(0, 1, self.y_label, measured_amplitude(results, "velocity"),
+                                  self.y_units, "m/s")
             yield
             for k, (a, b) in enumerate(pairs_v[:MAX_COMPONENTS_DRAWN]):
                 self._series(right, a, b, k)
                 yield
-            robust_range(right, [b for _, b in pairs_v])
+            self.y_range(right, pairs_v)
             if not pairs_v:
                 right.setTitle("velocity amplitude: not computed")
         yield from self.overlay_model(results, channel, left, right)
         self.set_note(f"{self.title} of {channel}, {len(pairs_d or pairs_v)} component(s)")
         return True
 
+    def prepare(self, results: RunResults, channel: str, rows: list[np.ndarray]) -> None:
+        """Work out what :meth:`shown` needs before a drawing (``rows``: the quantity of each
+        component)."""
+
+    def shown(self, k: int, values: np.ndarray) -> np.ndarray:
+        """Component ``k``'s quantity as drawn (as it is, unless a view says otherwise)."""
+        return values
+
+    def component_name(self, k: int) -> str:
+        return f"component {k}"
+
+    def y_range(self, plot: pg.PlotItem, pairs) -> None:
+        robust_range(plot, [b for _, b in pairs])
+
     def _series(self, plot: pg.PlotItem, a: np.ndarray, b: np.ndarray, k: int) -> None:
         colour = COLOURS[k % len(COLOURS)]
         if a.size > 400:
-            draw_line(plot, a, b, colour, f"component {k}", 1.4)
+            draw_line(plot, a, b, colour, self.component_name(k), 1.4)
         else:
-            draw_points(plot, a, b, colour, f"component {k}", 5)
+            draw_points(plot, a, b, colour, self.component_name(k), 5)
 
     def overlay_model(self, results, channel, left, right) -> Iterator[None]:
         """The modal model's curve (dashed) over the measured one, where it computed it."""
@@ -105,7 +127,8 @@ class _AmplitudeView(View):
         for plot, name in ((left, self.model_x), (right, self.model_velocity_x)):
             if plot is None or not name:
                 continue
-            for k, (a, b) in enumerate(finite_pairs(zip(per_component(model, name), y))):
+            shown = [self.shown(k, row) for k, row in enumerate(y)]
+            for k, (a, b) in enumerate(finite_pairs(zip(per_component(model, name), shown))):
                 order = np.argsort(a)
                 draw_line(plot, a[order], b[order], "#000000",
                           "modal model" if k == 0 else None, 1.6, Qt.PenStyle.DashLine)
@@ -113,17 +136,51 @@ class _AmplitudeView(View):
 
 
 class BackboneView(_AmplitudeView):
+    """Each component's frequency relative to its own identified frequency f_n, in %: modes
+    tens of hertz apart share one axis and each one's curvature shows."""
+
     title = "Backbone"
     plugins = ("backbone",)
     y_name = FREQUENCY
     velocity_y_name = VELOCITY_FREQUENCY
     summary_velocity_section = "backbone_velocity"
-    y_label = "frequency"
-    y_units = "Hz"
+    y_label = "frequency shift (f − f_n) / f_n (%)"  # no unit: pyqtgraph would prefix "%"
     summary_section = "backbone"
     summary_y = "frequency_hz"
     model_x = "backbone_amplitude_model"
     model_y = "backbone_frequency_model"
+
+    def __init__(self, compact: bool = False, parent: QWidget | None = None) -> None:
+        super().__init__(compact, parent)
+        #: each component's reference frequency f_n (Hz): the summary's identified frequency,
+        #: else the median of its backbone
+        self.references: list[float] = []
+
+    def prepare(self, results: RunResults, channel: str, rows: list[np.ndarray]) -> None:
+        identified = {c.get("index"): c.get("frequency_hz")
+                      for c in results.components(channel)}
+        self.references = []
+        for k, row in enumerate(rows):
+            f_n = identified.get(k)
+            if not isinstance(f_n, (int, float)) or not np.isfinite(f_n) or f_n <= 0:
+                finite = row[np.isfinite(row)]
+                f_n = float(np.median(finite)) if finite.size else np.nan
+            self.references.append(float(f_n))
+
+    def shown(self, k: int, values: np.ndarray) -> np.ndarray:
+        f_n = self.references[k] if k < len(self.references) else np.nan
+        return 100.0 * (np.asarray(values, dtype=float) - f_n) / f_n
+
+    def component_name(self, k: int) -> str:
+        if k < len(self.references) and np.isfinite(self.references[k]):
+            return f"component {k} (f_n = {self.references[k]:.4g} Hz)"
+        return f"component {k}"
+
+    def y_range(self, plot: pg.PlotItem, pairs) -> None:
+        # the backbone at the amplitudes that carry it, not the noise floor of the smallest;
+        # percent as it is (no "x0.001" scale on the axis)
+        amplitude_weighted_range(plot, pairs)
+        plain_numbers(plot)
 
 
 class DampingView(_AmplitudeView):

@@ -9,9 +9,16 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QLabel, QWidget
 
 from fsi_lab.gui.analysis.datasets import finite_pairs, format_ci, per_component
-from fsi_lab.gui.analysis.plotting import COLOURS, draw_line, draw_points, robust_range
+from fsi_lab.gui.analysis.plotting import (
+    COLOURS,
+    amplitude_weighted_range,
+    draw_line,
+    draw_points,
+    plain_numbers,
+)
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import PluginResult, RunResults
+from fsi_lab.plugins.analysis.views.labels import cq_amplitude
 from fsi_lab.plugins.analysis.views.names import CQ, CQ_AMPLITUDE
 
 
@@ -53,14 +60,18 @@ class EquivalentDampingView(View):
         rows_cq = per_component(result, CQ)
         if not rows_cq:
             return False
-        plot = self.add_plot(0, 0, "C_q", "displacement amplitude W", "kg/(m s)", "m")
+        convention = result.scalar("amplitude_convention")
+        amplitude = cq_amplitude(results, convention)
+        plot = self.add_plot(0, 0, "C_q", amplitude, "kg/(m s)", "m")
+        plain_numbers(plot)  # no "mkg/(m s)"
         yield
-        lines = []
+        lines, points, fits = [], [], []
         for k, (w_row, cq_row) in enumerate(zip(rows_w, rows_cq)):
             pairs = finite_pairs([(w_row, cq_row)])
             if not pairs:
                 continue
             w, cq = pairs[0]
+            points.append((w, cq))
             colour = COLOURS[k % len(COLOURS)]
             draw_points(plot, w, cq, colour, f"C_q, component {k}", 5)
             yield
@@ -72,6 +83,7 @@ class EquivalentDampingView(View):
                 omega = 2 * np.pi * float(frequencies[k])
                 span = np.array([0.0, float(np.max(w))])
                 line = summary["c_i"] + 8 * summary["c_f"] * omega * span / (3 * np.pi)
+                fits.append(line)
                 draw_line(plot, span, line, colour, f"fit, component {k}", 1.8,
                           Qt.PenStyle.DashLine)
                 yield
@@ -80,17 +92,23 @@ class EquivalentDampingView(View):
                 lines.append(f"<b>component {k}</b>: {values}")
         if not lines:
             return False
-        robust_range(plot, [finite_pairs([(w, c)])[0][1] for w, c in zip(rows_w, rows_cq)
-                            if finite_pairs([(w, c)])])
+        # the fits and the points that carry them, not the noise floor of the smallest
+        # amplitudes (C_q scatters as 1/W there)
+        shown = amplitude_weighted_range(plot, points, fits)
+        clipped = 0 if shown is None else sum(
+            int(np.sum((cq < shown[0]) | (cq > shown[1]))) for _, cq in points)
         if not self.compact:
             lines.append("<span style='color:#555'>in brackets: 95 % intervals</span>")
         self.values.setText("<br>".join(lines))
         self.values.setVisible(True)
-        convention = result.scalar("amplitude_convention")
-        self.set_note("C_q against displacement amplitude W, its fit C_q = C_i + 8 C_f ω W / 3π "
-                      "(Eq. 24) and 95 % intervals" if self.compact else
-                      "C_q = 2 ζ (μ + M) 2π f against displacement amplitude W, and its "
-                      "first-order fit C_q = C_i + 8 C_f ω W / 3π (Eq. 24)")
+        w = "q" if amplitude.startswith("modal") else "W"
+        note = (f"C_q against {w}, its fit C_q = C_i + 8 C_f ω {w} / 3π (Eq. 24) and 95 % "
+                "intervals" if self.compact else
+                f"C_q = 2 ζ (μ + M) 2π f against the amplitude {w}, and its first-order fit "
+                f"C_q = C_i + 8 C_f ω {w} / 3π (Eq. 24)")
+        if clipped:
+            note += f"; {clipped} point(s) beyond the range shown (View all shows them)"
+        self.set_note(note)
         if convention:
             self.note.setToolTip(f"amplitudes: {convention}")
         return True
