@@ -5,9 +5,11 @@ m/s^2, g or V, with a prefix mm, um, mV...) gives the quantity. An optional ``ti
 ``[ms]``) column replaces the sample rate given on the command line. Values are converted to SI
 (g to m/s^2, mm/s to m/s). Files exported where the decimal mark is a comma separate their
 columns with semicolons (or tabs): their ``1,5`` reads as 1.5. Lines starting with ``#`` before
-or among the rows are comments. What a run file gets from its profile and instruments and a CSV
-cannot say is given on import: the base acceleration column (``reference``) and the sensors'
-signal delays, so that the analysis of exported data gives the run's results.
+or among the rows are comments; blank lines only above the header or after the last row (one
+among the rows is a missing sample, refused). What a run file gets from its profile and
+instruments and a CSV cannot say is given on import: the base acceleration column
+(``reference``) and the sensors' signal delays, so that the analysis of exported data gives the
+run's results.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import re
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
-from typing import Mapping
+from typing import Mapping, NoReturn
 
 import numpy as np
 
@@ -40,6 +42,8 @@ ACCEPTED_UNITS = ("m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n on m, m/s
                   "(mm/s, um, mV), or s or ms for the time column")
 #: Column separators recognised in the header row, most telling first.
 SEPARATORS = (";", "\t", ",")
+#: A blank line: empty, spaces or tabs, or separators alone (a sheet's empty row).
+_BLANK = re.compile(r"[\s,;]*")
 _SEPARATOR_NAMES = {";": "semicolons", "\t": "tabs", ",": "commas"}
 
 
@@ -174,17 +178,27 @@ def read_csv(path: str | Path) -> Table:
 
     def table():
         for number, line in enumerate(lines, start=1):
-            if line.strip() and not line.lstrip().startswith("#"):
+            if not _BLANK.fullmatch(line) and not line.lstrip().startswith("#"):
                 numbers.append(number)
                 yield line
 
     rows = table()
     header = next(rows, None)
     if header is None:
-        found = "only comments" if any(line.strip() for line in lines) else "empty"
+        found = "only comments" if any(not _BLANK.fullmatch(line) for line in lines) else "empty"
         raise InputFileError(f"{path}: {found}; expected a header row 'name [unit],...' and "
                              "data")
     separator = _separator(header)
+    # Blank lines are accepted above the header and after the last row; between, one is a
+    # missing sample: skipped, it would move every later sample by a sample period.
+    body = [(number, not _BLANK.fullmatch(line))
+            for number, line in enumerate(lines[numbers[0]:], start=numbers[0] + 1)
+            if not line.lstrip().startswith("#")]
+    last = max((number for number, row in body if row), default=0)
+    blank = next((number for number, row in body if not row and number < last), None)
+    if blank is not None:
+        text = lines[blank - 1]
+        _missing_sample(path, blank, separator in text or bool(text.strip()))
     reader = csv.reader(itertools.chain([header], rows), delimiter=separator, strict=True)
     try:
         cells = next(reader)
@@ -204,8 +218,10 @@ def read_csv(path: str | Path) -> Table:
             if reader.line_num != read:              # one line a row
                 raise InputFileError(f"{path}: line {numbers[read - 1]}: a quoted value spans "
                                      f"several lines; expected {EXPECTED}")
-            if not any(cell.strip() for cell in row):   # separators alone (a sheet's blank row)
-                continue
+            if not any(cell.strip() for cell in row):   # empty cells alone ('"";""')
+                if line < last:
+                    _missing_sample(path, line, True)
+                continue                                 # a sheet's blank rows at its end
             if len(row) == len(columns) + 1 and not row[-1].strip():
                 row = row[:-1]
             if len(row) != len(columns):
@@ -241,6 +257,17 @@ def read_csv(path: str | Path) -> Table:
         raise InputFileError(f"{path}: fewer than two data rows")
     rounding = printing.rounding(count) if time is not None else np.zeros(count)
     return Table(columns, data[:count], row_lines[:count], rounding)
+
+
+def _missing_sample(path: Path, line: int, cells: bool) -> NoReturn:
+    """Refuse the blank line ``line`` (empty ``cells``, or nothing but spaces) among the rows."""
+    found = "has no values (separators alone)" if cells else "is blank"
+    raise InputFileError(
+        f"{path}: line {line} {found}: a sample is missing there (skipped, every later sample "
+        "would move one sample period early); expected a row of values on every line from the "
+        "header to the last row: blank lines only above the header or after the last row, and "
+        "'#' comment lines anywhere"
+    )
 
 
 def _number(path: Path, line: int, col: int, column: Column, cell: str, text: str,

@@ -191,7 +191,7 @@ def test_a_rate_the_time_column_contradicts_is_refused(tmp_path):
     ("x [m/s]\n0,0125\n-1,5E-03\n", [0.0125, -1.5e-3]),          # one column, decimal comma
     ("time [s],x [m]\n0,1,\n0.1,2,\n", [1.0, 2.0]),                 # separator ending the rows
     ("x [m]\ty [m]\n1\t2\n3\t4\n", [1.0, 3.0]),
-    ("x [m];y [m];\n1,5;2;\n;;\n2,5;3;\n;;\n", [1.5, 2.5]),    # a sheet's blank rows
+    ("x [m];y [m];\n1,5;2;\n2,5;3;\n;;\n;;\n", [1.5, 2.5]),    # a sheet's empty rows at its end
 ])
 def test_exports_from_other_tools_read_as_written(tmp_path, text, values):
     path = tmp_path / "other.csv"
@@ -250,6 +250,77 @@ def test_an_export_read_wrong_is_refused_naming_why(tmp_path, text, fragment):
     assert proc.returncode == 2
     assert fragment in proc.stderr
     assert not (tmp_path / "bad.h5").exists()
+
+
+# A record with no time column: the rows are the samples, one sample period apart.
+SAMPLES = [f"{0.01 * np.sin(2 * np.pi * 17 * k / 1000):.7f}" for k in range(60)]
+
+
+@pytest.mark.parametrize("end", ["\n", "\r\n"])
+@pytest.mark.parametrize("header, sep, blank, after, fragment", [
+    # one column (the tester's files: 4000 samples read as 3999, each later one a period
+    # early); the line empty, spaces or tabs, or separators alone
+    ("tip [m/s]", "", "", 30, "is blank"),
+    ("tip [m/s]", "", " ", 30, "is blank"),
+    ("tip [m/s]", "", " \t ", 30, "is blank"),
+    ("tip [m/s]", "", ";", 30, "has no values (separators alone)"),
+    ("tip [m/s]", "", ",", 30, "has no values (separators alone)"),
+    ("tip [m/s]", "", '""', 30, "has no values (separators alone)"),
+    ("tip [m/s]", "", "", 0, "is blank"),         # right after the header: the first sample
+    ("tip [m/s]", "", "", 58, "is blank"),        # before the last row
+    # two columns: a blank line, and a sheet's empty row among the rows
+    ("tip [m/s],base [g]", ",", "", 30, "is blank"),
+    ("tip [m/s],base [g]", ",", ",,", 30, "has no values (separators alone)"),
+    ("tip [m/s];base [g];", ";", ";;", 30, "has no values (separators alone)"),
+    ("tip [m/s]\tbase [g]", "\t", "\t", 30, "has no values (separators alone)"),
+])
+def test_a_blank_line_among_the_rows_is_refused_as_a_missing_sample(tmp_path, header, sep,
+                                                                      blank, after, fragment,
+                                                                      end):
+    """Skipped, a blank line among the rows of a file without a time column would move every
+    later sample one sample period early (the frequencies read 0.5 to 2.4 % high): it is
+    refused like an empty cell, naming its line (the header is line 1)."""
+    trailing = sep if sep and header.endswith(sep) else ""
+    rows = [sep.join([value] * header.count("[")) + trailing for value in SAMPLES]
+    path = tmp_path / "gap.csv"
+    path.write_bytes(end.join([header, *rows[:after], blank, *rows[after:], ""]).encode())
+    out = tmp_path / "gap.h5"
+    proc = cli("import", str(path), "-o", str(out), "--rate", "1000")
+    assert proc.returncode == 2, proc.stderr
+    assert f"{path}: line {after + 2} {fragment}: a sample is missing there" in proc.stderr
+    assert ("expected a row of values on every line from the header to the last row: blank "
+            "lines only above the header or after the last row") in proc.stderr
+    assert not out.exists()
+
+
+def test_a_blank_line_in_a_time_column_names_its_line(tmp_path):
+    """With a time column the blank line shows as a step twice the others; it is named."""
+    lines = ["time [s],tip [m/s]"] + [f"{k / 1000:.3f},{v}" for k, v in enumerate(SAMPLES)]
+    path = tmp_path / "timed.csv"
+    path.write_text("\n".join([*lines[:21], "", *lines[22:]]) + "\n")
+    proc = cli("import", str(path), "-o", str(tmp_path / "timed.h5"))
+    assert proc.returncode == 2
+    assert f"{path}: line 22 is blank: a sample is missing there" in proc.stderr
+    assert not (tmp_path / "timed.h5").exists()
+
+
+@pytest.mark.parametrize("end", ["\n", "\r\n"])
+@pytest.mark.parametrize("blank", ["", "  ", "\t", " \t", ";", ",", ";;"])
+def test_blank_lines_above_the_header_and_after_the_last_row_are_accepted(tmp_path, blank, end):
+    """Blank lines around the table hide no sample: every row is read, none shifted; comment
+    lines stay accepted anywhere, after the last row too."""
+    lines = [blank, "# exported", blank, "tip [m/s]", *SAMPLES[:30], "# a note", *SAMPLES[30:],
+             blank, "# end", blank, blank]
+    path = tmp_path / "around.csv"
+    path.write_bytes((end.join(lines) + end).encode())
+    run = _imported(path, "--rate", "1000")
+    np.testing.assert_array_equal(run.channels["tip"].data, np.array(SAMPLES, dtype=float))
+    # without the final newline, and with only a trailing newline
+    for name, text in (("bare.csv", end.join(["tip [m/s]", *SAMPLES])),
+                       ("one.csv", end.join(["tip [m/s]", *SAMPLES]) + end)):
+        (tmp_path / name).write_bytes(text.encode())
+        np.testing.assert_array_equal(_imported(tmp_path / name, "--rate", "1000")
+                                      .channels["tip"].data, np.array(SAMPLES, dtype=float))
 
 
 def test_utf16_without_its_byte_order_mark_is_refused_naming_it(tmp_path):
