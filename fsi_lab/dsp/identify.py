@@ -6,9 +6,10 @@ interval, its backbone (frequency against amplitude), the fits of the candidate 
 (:mod:`.laws`) with the one the record prefers, and sentences saying how far to trust each
 number. The steps:
 
-0. **Spikes.** Isolated samples far off the oscillation their neighbours trace (a vibrometer's
-   dropouts: :func:`.spikes.find_spikes`) are replaced, in the record and in the reference,
-   and a note names them.
+0. **Dropouts and spikes.** Runs of samples a vibrometer held or zeroed while it had no
+   signal (:func:`.spikes.find_dropouts`) are filled by linear prediction, and isolated
+   samples far off the oscillation their neighbours trace (:func:`.spikes.find_spikes`) are
+   replaced, in the record and in the reference; a note names them.
 1. **Free decays.** The record is split into its free decays (:func:`.decays.decay_segments`
    on half-period maxima of the record low-passed at :data:`SPLIT_BAND` times its dominant
    frequency: a step or ramp derivative gives one, an impulse train one per impulse); each is
@@ -100,7 +101,7 @@ from fsi_lab.dsp.laws import (
     simulate_decay,
 )
 from fsi_lab.dsp.spectrum import amplitude_spectrum, averaged_spectrum, find_peaks_interpolated
-from fsi_lab.dsp.spikes import find_spikes, without_spikes
+from fsi_lab.dsp.spikes import find_dropouts, find_spikes, without_dropouts, without_spikes
 from fsi_lab.errors import AnalysisError
 
 QUANTITIES = ("velocity", "displacement", "acceleration")
@@ -128,6 +129,11 @@ HIDDEN_RATIO = 1.5
 HIDDEN_SHARE = 0.1
 #: The decays are split on the record low-passed at this multiple of its dominant frequency.
 SPLIT_BAND = 8.0
+#: A steady forced response before a decay (:func:`_plateau_end`): the half periods it is
+#: judged on (down to PLATEAU_DOWN of the largest), the fewest in the flat part and in the
+#: decay, how much better a hinge must fit than a straight line, and how slowly (relative to
+#: the decay after it) the flat part may fall.
+PLATEAU_DOWN, PLATEAU_MIN, PLATEAU_GAIN, PLATEAU_SLOPE = 0.3, 4, 4.0, 0.2
 #: A displacement record's first HOLD_SHARE of samples that stand still (their spread within
 #: HOLD_STILL times the noise of their sample-to-sample steps) at more than HOLD_OFFSET times
 #: that noise from where the record comes to rest (its last REST_SHARE) hold a static
@@ -266,6 +272,8 @@ STIFFNESS_GAIN = 50.0
 NOISE_SEED = 20261123
 #: Confidence level of the intervals.
 LEVEL = 0.95
+#: Ratios and widenings beyond this are said to be "more than" it: their digits mean nothing.
+SAID_AT_MOST = 1000.0
 #: The band splitting's own precision, relative to a window's largest band value: its end
 #: predictions leave a residue of up to about 1e-5 of it in the lowest band of a heavily damped
 #: mode (measured on noise-free 5 Hz decays with 7.7 to 9.5 % damping, released at the
@@ -480,6 +488,8 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     out = []
     quarter = int(0.25 * fs / f_dom)
     for begin, stop in segments:
+        if (end := _plateau_end(smooth, fs, f_dom, begin, stop)) is not None:
+            begin = end                     # a steady forced response ends there
         free = _walk_back(x, fs, f_dom, begin)
         # Extrema nearly as large before the largest one: the record holds the free decay
         # from its start (release); the window opens a quarter period earlier so that its
@@ -505,6 +515,48 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     # an impulse train too dense, which the candidates' notes then name).
     enough = [w for w in out if (w[2] - w[1]) * f_dom >= MIN_CYCLES * fs]
     return enough or out
+
+
+def _plateau_end(x: np.ndarray, fs: float, f_dom: float, begin: int, stop: int) -> int | None:
+    """Where a steady forced response that holds the decay's largest sample ``begin`` ends, or
+    None when the motion decays from ``begin`` on.
+
+    A sine dwell (or a burst of forcing) switched off inside the record holds its amplitude
+    flat, then decays: the largest sample lies anywhere in the flat part, which is no free
+    decay (a dwell 2 % below the mode's frequency read that frequency 0.5 % high). The
+    logarithm of the maxima of ``|x|`` over half periods, from ``begin`` down to
+    :data:`PLATEAU_DOWN` of the largest, is fitted by a straight line (a decay) and by a hinge
+    (flat, then falling): a hinge that leaves :data:`PLATEAU_GAIN` times less residual and
+    whose flat part falls at most :data:`PLATEAU_SLOPE` times as fast as the rest marks a
+    plateau. A free decay never does: its quadratic damping makes it fall fastest at its
+    start. Returns the sample of the plateau's last half-period maximum."""
+    half = max(1, int(round(0.5 * fs / f_dom)))
+    edges = np.arange(begin, stop - half + 1, half)
+    if edges.size < 2 * PLATEAU_MIN:
+        return None
+    peaks = np.array([int(np.argmax(np.abs(x[e:e + half]))) + e for e in edges])
+    h = np.abs(x[peaks])
+    below = np.flatnonzero(h < PLATEAU_DOWN * h[0])
+    count = int(below[0]) if below.size else h.size
+    if count < 2 * PLATEAU_MIN or not np.all(h[:count] > 0):
+        return None
+    y = np.log(h[:count])
+    k = np.arange(count, dtype=np.float64)
+    line = np.polyval(np.polyfit(k, y, 1), k)
+    rss_line = float(np.sum((y - line) ** 2))
+    best = None
+    for j in range(PLATEAU_MIN, count - PLATEAU_MIN + 1):
+        level = float(np.mean(y[:j]))
+        after = k[j:] - (j - 1)
+        slope = float(np.sum((y[j:] - level) * after) / np.sum(after * after))
+        rss = float(np.sum((y[:j] - level) ** 2) + np.sum((y[j:] - level - slope * after) ** 2))
+        if best is None or rss < best[0]:
+            best = (rss, j, slope)
+    rss, j, slope = best
+    flat = float(np.polyfit(k[:j], y[:j], 1)[0])
+    if slope < 0.0 and rss * PLATEAU_GAIN <= rss_line and abs(flat) <= PLATEAU_SLOPE * -slope:
+        return int(peaks[j - 1])
+    return None
 
 
 def _refuse_comb(frequencies: np.ndarray, f_dom: float) -> None:
@@ -1409,9 +1461,10 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
             np.all(np.isfinite(c)) for c in found.cov) and np.all(np.isfinite(found.w0))
         if not usable:
             notes.append(f"the modes at {names} lie close together; fitted together to the "
-                         f"record's samples they leave {ratio:.1f} times its white noise "
-                         + ("" if found.converged else "(the fit did not converge) ")
-                         + "unexplained: their band fits are kept")
+                         + (f"record's samples they leave {_times(ratio)} its white noise "
+                            "unexplained" if found.converged else
+                            "record's samples, the fit did not converge")
+                         + ": their band fits are kept")
             continue
         # The group as fitted, the start of each refit with one mode's law replaced.
         fitted = [JointMode("quadratic", found.params[j], float(found.w0[j]),
@@ -2064,8 +2117,16 @@ def _off_peak(m: ModeIdentification) -> str:
 
 
 def _fold(factor: float) -> str:
-    """``"1.4-fold"``; a widening of a few percent as ``"1.03-fold"``, not ``"1.0-fold"``."""
+    """``"1.4-fold"``; a widening of a few percent as ``"1.03-fold"``, not ``"1.0-fold"``; one
+    beyond :data:`SAID_AT_MOST` as ``"more than 1000-fold"`` (its digits would mean nothing)."""
+    if factor >= SAID_AT_MOST:
+        return f"more than {SAID_AT_MOST:g}-fold"
     return f"{factor:.2f}-fold" if factor < 1.095 else f"{factor:.1f}-fold"
+
+
+def _times(ratio: float) -> str:
+    """``"4.4 times"``, or ``"more than 1000 times"`` beyond :data:`SAID_AT_MOST`."""
+    return f"more than {SAID_AT_MOST:g} times" if ratio >= SAID_AT_MOST else f"{ratio:.1f} times"
 
 
 def _warnings(m: ModeIdentification) -> list[str]:
@@ -2097,7 +2158,7 @@ def _warnings(m: ModeIdentification) -> list[str]:
                            f"+-{50.0 * (hi - lo) / value:.0f} % of the value")
     coloured = m.start_drift.get("band_noise", 0.0)
     if coloured > TAIL_EXCESS:
-        out.append(f"the noise in this mode's band is {coloured:.1f} times the record's white "
+        out.append(f"the noise in this mode's band is {_times(coloured)} the record's white "
                    "noise there (measured before the excitation and after its decays: noise that "
                    "is not white, as in a motion relative to a base whose accelerometer noise "
                    "is integrated, or a line such as mains hum too close to the mode to be "
@@ -2259,8 +2320,13 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         if not 0.0 < band_t[0] < band_t[1]:
             raise fail(func, f"band = {band!r}; expected (low, high) in Hz with 0 < low < high")
     follow = "displacement" if quantity == "displacement" else "velocity"
-    # Spikes first: one in a still stretch would hide it, one in the base would ring in its
-    # bands and read as motion.
+    # Dropouts and spikes first: one in a still stretch would hide it, one in the base would
+    # ring in its bands and read as motion.
+    dropouts = find_dropouts(record)
+    if dropouts.size:
+        record = without_dropouts(record, dropouts)
+    if reference is not None and (base_dropouts := find_dropouts(reference)).size:
+        reference = without_dropouts(reference, base_dropouts)
     spikes = find_spikes(record)
     if spikes.size:
         record = without_spikes(record, spikes)
@@ -2307,6 +2373,19 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                         "heavier tails than Gaussian): each is replaced by the cubic through "
                         "its two neighbours on either side (left in, their broadband energy "
                         "lifts the extrema the damping laws are fitted to)")
+    if dropouts.size:
+        at = ", ".join(f"{a / fs:.6g}" for a, _ in dropouts[:SPIKES_NAMED])
+        more = (f" and {len(dropouts) - SPIKES_NAMED} more" if len(dropouts) > SPIKES_NAMED
+                else "")
+        lengths = dropouts[:, 1] - dropouts[:, 0]
+        span = (f"{lengths.min()}" if lengths.min() == lengths.max()
+                else f"{lengths.min()} to {lengths.max()}")
+        notes.insert(0, f"{len(dropouts)} run{'s' if len(dropouts) > 1 else ''} of {span}"
+                        f" equal samples that the record jumps into or out of (from {at} "
+                        f"s{more}: dropouts, as a vibrometer that loses its signal holds or "
+                        "zeroes its output): each is filled by linear prediction from the "
+                        "samples on both sides (left in, a zeroed run's steps lift the extrema "
+                        "the damping laws are fitted to)")
     if hold is not None:
         notes.insert(0, f"the record holds still for its first {hold[0] / fs:.3g} s, "
                         f"{hold[1]:.3g} (the record's unit) away from where it comes to rest (a "

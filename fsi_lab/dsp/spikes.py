@@ -1,4 +1,4 @@
-"""Isolated spikes in a record: single samples far off what their neighbours say.
+"""Isolated spikes and dropouts in a record: samples far off what their neighbours say.
 
 A vibrometer loses its signal for an instant (speckle, a particle or a bubble in the water the
 beam crosses), a digitiser or a transfer drops a bit: one sample stands far off the oscillation
@@ -16,6 +16,15 @@ samples per cycle), so the typical difference holds the noise and that interpola
 alike. The noise is taken as Gaussian: noise with far heavier tails (Student's t with 3
 degrees of freedom) has a few samples in 1e4 flagged. Spikes within 4 samples of each other,
 and runs of spiking samples, spoil each other's marks and are not found.
+
+A dropout is a run of samples the instrument held or zeroed while it had no signal: twenty
+runs of 3 to 30 zeroed samples in a 17 Hz decay read C_f 7 to 16 % high without a word. It is
+found as :data:`DROPOUT_MIN` or more exactly equal samples that the record jumps into or out
+of by :data:`DROPOUT_Z` times its typical sample-to-sample change around them (equal samples
+of a quantised record, near an extremum, change by one step: none is taken), or as more than
+:data:`DROPOUT_MIN` of them where that change is :data:`DROPOUT_FINE` converter steps or more
+(a 24-bit converter, floating point: equal samples are then no chance, however small the
+signal), and filled by linear prediction from both sides (:func:`without_dropouts`).
 """
 
 from __future__ import annotations
@@ -49,6 +58,15 @@ MARKS = {"spike": (1 / 6, -2 / 3, 1.0, -2 / 3, 1 / 6), "kink": (0.0, -0.5, 1.0, 
 #: Floor of the typical difference, relative to the record's largest value (a record with
 #: exact zeros, as a simulation's still start).
 FLOOR = 1e-6
+#: A dropout: at least DROPOUT_MIN equal samples, entered or left by a jump of DROPOUT_Z
+#: times the typical change between samples over DROPOUT_SPAN samples on each side.
+DROPOUT_MIN, DROPOUT_Z, DROPOUT_SPAN = 3, 8.0, 50
+#: ... or a run longer than DROPOUT_MIN where the typical change is this many converter steps
+#: (the smallest change in the record): equal samples are then no chance.
+DROPOUT_FINE = 100.0
+#: Linear prediction across a dropout: the largest order, and the samples of context per
+#: order (at least) it is fitted to on each side.
+PREDICTION_ORDER, CONTEXT_PER_ORDER = 16, 4
 
 
 def _neighbour_cubic(x: np.ndarray) -> np.ndarray:
@@ -149,4 +167,129 @@ def without_spikes(x: Any, spikes: np.ndarray) -> np.ndarray:
     y = np.array(x, dtype=np.float64)
     if len(spikes):
         y[spikes] = _neighbour_cubic(y)[spikes]
+    return y
+
+
+def find_dropouts(x: Any) -> np.ndarray:
+    """Runs of samples an instrument held or zeroed (see the module notes).
+
+    Parameters
+    ----------
+    x
+        Samples in any unit U, 1-D (at least 64).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(count, 2)`` int64 array of ``[start, stop)`` sample ranges, increasing; runs that
+        touch the record's first or last sample (a still lead-in, a record that ends at rest)
+        are not dropouts.
+
+    Raises
+    ------
+    AnalysisError
+        A record that cannot be read (see :func:`._signal.as_record`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fsi_lab.dsp.spikes import find_dropouts
+    >>> t = np.arange(2000) / 1000.0
+    >>> x = np.exp(-t) * np.sin(2 * np.pi * 17 * t)
+    >>> x[510:525] = 0.0
+    >>> find_dropouts(x).tolist()
+    [[510, 525]]
+    """
+    y = as_record(x, "find_dropouts", min_samples=64, check_clipping=False,
+                  allow_constant=True)
+    same = np.diff(y) == 0.0
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], same.view(np.int8), [0]))))
+    # (a run of k equal differences is k + 1 equal samples)
+    runs = [(a, b + 1) for a, b in zip(edges[0::2], edges[1::2]) if b + 1 - a >= DROPOUT_MIN]
+    steps = np.abs(np.diff(y))
+    moving = steps[steps > 0]
+    step = float(np.min(moving)) if moving.size else 0.0
+    out = []
+    for start, stop in runs:
+        if start == 0 or stop == y.size:
+            continue
+        around = np.concatenate([steps[max(0, start - 1 - DROPOUT_SPAN):start - 1],
+                                 steps[stop:stop + DROPOUT_SPAN]])
+        around = around[around > 0]
+        if around.size < 4:
+            continue
+        typical = max(float(np.median(around)), step, FLOOR * float(np.max(np.abs(y))))
+        jump = max(abs(y[start] - y[start - 1]), abs(y[stop] - y[stop - 1]))
+        # Samples that change by a hundred converter steps or more from one to the next stay
+        # equal for four in a row by chance about once in 1e7: that is no signal either.
+        fine = typical >= DROPOUT_FINE * step and stop - start > DROPOUT_MIN
+        if jump > DROPOUT_Z * typical or fine:
+            out.append((start, stop))
+    return np.array(out, dtype=np.int64).reshape(-1, 2)
+
+
+def _predict(context: np.ndarray, count: int) -> np.ndarray | None:
+    """``count`` samples after ``context`` by a least-squares autoregressive model fitted to
+    it; None when it is too short for one."""
+    order = min(PREDICTION_ORDER, context.size // CONTEXT_PER_ORDER)
+    if order < 2:
+        return None
+    rows = np.lib.stride_tricks.sliding_window_view(context, order + 1)
+    coef, *_ = np.linalg.lstsq(rows[:, :-1], rows[:, -1], rcond=None)
+    out = np.empty(count)
+    state = list(context[-order:])
+    for k in range(count):
+        out[k] = float(np.dot(coef, state[-order:]))
+        state.append(out[k])
+    return out
+
+
+def without_dropouts(x: Any, dropouts: np.ndarray) -> np.ndarray:
+    """The record with each dropout (``[start, stop)`` ranges, as :func:`find_dropouts` gives
+    them) replaced by linear prediction from both sides: an autoregressive model fitted to the
+    samples before it predicts forwards, one fitted to those after it backwards, and the two
+    are blended across the gap (by a raised cosine); the context on each side stops at the
+    neighbouring dropouts, and a side too short for a model leaves the other's prediction
+    (a straight line between the gap's ends when neither has one).
+
+    Parameters
+    ----------
+    x
+        Samples, unit U, 1-D.
+    dropouts
+        ``(count, 2)`` increasing, non-overlapping ``[start, stop)`` ranges inside the record.
+
+    Returns
+    -------
+    numpy.ndarray
+        A copy of ``x``, U.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fsi_lab.dsp.spikes import without_dropouts
+    >>> x = np.sin(2 * np.pi * np.arange(400) / 40.0)
+    >>> y = x.copy()
+    >>> y[200:212] = 0.0
+    >>> bool(np.max(np.abs(without_dropouts(y, np.array([[200, 212]])) - x)) < 1e-9)
+    True
+    """
+    y = np.array(x, dtype=np.float64)
+    ranges = np.asarray(dropouts, dtype=np.int64).reshape(-1, 2)
+    for k, (start, stop) in enumerate(ranges):
+        gap = stop - start
+        before = int(ranges[k - 1][1]) if k else 0
+        after = int(ranges[k + 1][0]) if k + 1 < len(ranges) else y.size
+        reach = CONTEXT_PER_ORDER * PREDICTION_ORDER * 2 + gap
+        forward = _predict(y[max(before, start - reach):start], gap)
+        backward = _predict(y[stop:min(after, stop + reach)][::-1], gap)
+        if forward is None and backward is None:
+            y[start:stop] = np.linspace(y[start - 1], y[stop], gap + 2)[1:-1]
+            continue
+        if forward is None:
+            forward = backward[::-1]
+        if backward is None:
+            backward = forward[::-1]
+        weight = 0.5 + 0.5 * np.cos(np.pi * (np.arange(gap) + 1.0) / (gap + 1.0))
+        y[start:stop] = weight * forward + (1.0 - weight) * backward[::-1]
     return y
