@@ -367,7 +367,10 @@ def aggregate_tasks(paths: list[Path], sets: list[str], mass_per_length: float |
                                  "expected run files or the --out directory of fsi-lab "
                                  "sequence")
         paths = files
-    paths = list(dict.fromkeys(paths))
+    given: dict[Path, Path] = {}
+    for path in paths:                     # one file under two names counts once
+        given.setdefault(path.resolve(), path)
+    paths = list(given.values())
     _refuse_copies(paths)
     names = [path.name for path in paths]
     return [ExtractTask(str(path), tuple(sets), mass_per_length,

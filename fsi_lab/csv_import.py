@@ -5,7 +5,7 @@ m/s^2, g or V, with a prefix mm, um, mV...) gives the quantity. An optional ``ti
 ``[ms]``) column replaces the sample rate given on the command line. Values are converted to SI
 (g to m/s^2, mm/s to m/s). Files exported where the decimal mark is a comma separate their
 columns with semicolons (or tabs): their ``1,5`` reads as 1.5. Lines starting with ``#`` before
-or among the rows are comments; blank lines only above the header or after the last row (one
+or among the rows are comments; blank lines only above the first row or after the last (one
 among the rows is a missing sample, refused). What a run file gets from its profile and
 instruments and a CSV cannot say is given on import: the base acceleration column
 (``reference``) and the sensors' signal delays, so that the analysis of exported data gives the
@@ -189,16 +189,21 @@ def read_csv(path: str | Path) -> Table:
         raise InputFileError(f"{path}: {found}; expected a header row 'name [unit],...' and "
                              "data")
     separator = _separator(header)
-    # Blank lines are accepted above the header and after the last row; between, one is a
-    # missing sample: skipped, it would move every later sample by a sample period.
-    body = [(number, not _BLANK.fullmatch(line))
-            for number, line in enumerate(lines[numbers[0]:], start=numbers[0] + 1)
-            if not line.lstrip().startswith("#")]
-    last = max((number for number, row in body if row), default=0)
-    blank = next((number for number, row in body if not row and number < last), None)
-    if blank is not None:
-        text = lines[blank - 1]
-        _missing_sample(path, blank, separator in text or bool(text.strip()))
+    # Blank lines are accepted above the first row and after the last; between, one is a
+    # missing sample: skipped, it would move every later sample by a sample period. (Line
+    # numbers from 1; the file's lines are scanned in place, nothing per line is kept.)
+    def holds_row(number: int) -> bool:
+        text = lines[number - 1]
+        return not _BLANK.fullmatch(text) and not text.lstrip().startswith("#")
+
+    first = next((n for n in range(numbers[0] + 1, len(lines) + 1) if holds_row(n)), None)
+    last = next((n for n in range(len(lines), numbers[0], -1) if holds_row(n)), 0)
+    if first is not None:
+        blank = next((n for n in range(first + 1, last) if _BLANK.fullmatch(lines[n - 1])),
+                     None)
+        if blank is not None:
+            text = lines[blank - 1]
+            _missing_sample(path, blank, separator in text or bool(text.strip()))
     reader = csv.reader(itertools.chain([header], rows), delimiter=separator, strict=True)
     try:
         cells = next(reader)
@@ -265,7 +270,7 @@ def _missing_sample(path: Path, line: int, cells: bool) -> NoReturn:
     raise InputFileError(
         f"{path}: line {line} {found}: a sample is missing there (skipped, every later sample "
         "would move one sample period early); expected a row of values on every line from the "
-        "header to the last row: blank lines only above the header or after the last row, and "
+        "first row to the last: blank lines only above the first row or after the last, and "
         "'#' comment lines anywhere"
     )
 

@@ -70,7 +70,8 @@ def new_run_entry(run: PlannedRun, safety: dict[str, Any] | None) -> dict[str, A
             "point": dict(run.point), "repeat": run.repeat, "repeats": run.repeats,
             "overrides": list(run.overrides), "settle_s": run.settle_s, "status": "pending",
             "run_file": "", "start_time": "", "stop_time": "", "error": "",
-            "interrupted": False, "attempts": [], "safety": safety or {}, "results": {}}
+            "interrupted": False, "attempts": [], "safety": safety or {}, "results": {},
+            "analysed": False}
 
 
 @dataclass

@@ -198,7 +198,8 @@ class SequenceRunner:
         entry.update(status=outcome.exit_status, stop_time=utc_now(),
                      error=error, interrupted=outcome.interrupted,
                      run_file=outcome.path.name if outcome.path else "",
-                     results=compact_results(outcome.summary))
+                     results=compact_results(outcome.summary),
+                     analysed=outcome.summary is not None)
         self.file_abandoned = self.file_abandoned or outcome.file_abandoned
         stop = None
         if outcome.exit_status == "completed" and not (outcome.interrupted
@@ -263,7 +264,7 @@ class SequenceRunner:
             entry["error"] = f"analysis not stored: {exc}; run fsi-lab analyze on the run file"
             self.bus.log("ERROR", f"[sequence] {label}: {entry['error']}")
             return
-        entry.update(results=compact_results(summary), error="")
+        entry.update(results=compact_results(summary), analysed=True, error="")
 
     def _aggregate_safely(self) -> tuple[str, str] | None:
         """:meth:`_aggregate`; an aggregation that fails is logged (the runs go on, the record
@@ -471,8 +472,10 @@ def resume(directory: Path, registry: Registry) -> tuple[Plan, SequenceRecord]:
 def lacks_analysis(record: SequenceRecord, entry: dict[str, Any]) -> bool:
     """Whether ``entry`` is a completed run whose record holds no analysis results although
     its run file is there (its analysis was stopped, failed, or ended with the process)."""
-    return (entry["status"] == "completed" and bool(entry["run_file"])
-            and not entry.get("results") and (record.directory / entry["run_file"]).is_file())
+    # (records written before ``analysed`` was kept: empty results stood for none)
+    analysed = entry.get("analysed", bool(entry.get("results")))
+    return (entry["status"] == "completed" and bool(entry["run_file"]) and not analysed
+            and (record.directory / entry["run_file"]).is_file())
 
 
 def analyses_to_complete(plan: Plan, record: SequenceRecord,
@@ -516,7 +519,7 @@ def with_later_analyses(record: SequenceRecord) -> SequenceRecord:
             summary = _stored_summary(record, entry)
             if summary is not None:
                 entry.update(results=compact_results(summary), results_from="run file",
-                             error="")
+                             analysed=True, error="")
     return record
 
 
@@ -539,6 +542,7 @@ def settle_unfinished(record: SequenceRecord, entry: dict[str, Any]) -> None:
         status, error = "running", f"its run file cannot be read: {exc}"
     if status == "completed":
         entry.update(status="completed", results=compact_results(summary),
+                     analysed=summary is not None,
                      error="" if summary else "the sequence ended before the run's analysis "
                      f"was stored; fsi-lab sequence --resume {record.directory} analyses it")
         return

@@ -131,7 +131,7 @@ def format_summary(summary: dict[str, Any], registry=None) -> str:
         waiting: dict[str, list[str]] = {}
         for error in info.get("errors", []):
             provider = failed_provider(error["message"])
-            if error["plugin"] is None:         # the channel itself, before any analysis
+            if error.get("plugin") is None:     # the channel itself, before any analysis
                 lines.append(f"  not analysed: {error['message']}")
             elif provider in said:
                 waiting.setdefault(provider, []).append(error["plugin"])

@@ -188,6 +188,12 @@ def test_copies_of_one_run_are_refused_not_pooled_as_independent_runs(files, tmp
     assert code == 2 and out == ""
     assert f"{copy}: a copy of {files['level0']} (both hold run " in err
     assert "each run counts once in an aggregate: give one of them" in err
+    # one file under two names is one run, aggregated once
+    again = f"{files['level0'].parent}/./{files['level0'].name}"
+    code, out, err = run_main("aggregate", str(files["level0"]), again, "--mass-per-length",
+                              str(MASS), "--json")
+    assert code == 0, err
+    assert json.loads(out)["modes"][0]["runs"] == 1
     folder = tmp_path / "folder"
     folder.mkdir()
     shutil.copy(files["level0"], folder / "a.h5")

@@ -266,7 +266,6 @@ SAMPLES = [f"{0.01 * np.sin(2 * np.pi * 17 * k / 1000):.7f}" for k in range(60)]
     ("tip [m/s]", "", ";", 30, "has no values (separators alone)"),
     ("tip [m/s]", "", ",", 30, "has no values (separators alone)"),
     ("tip [m/s]", "", '""', 30, "has no values (separators alone)"),
-    ("tip [m/s]", "", "", 0, "is blank"),         # right after the header: the first sample
     ("tip [m/s]", "", "", 58, "is blank"),        # before the last row
     # two columns: a blank line, and a sheet's empty row among the rows
     ("tip [m/s],base [g]", ",", "", 30, "is blank"),
@@ -288,8 +287,8 @@ def test_a_blank_line_among_the_rows_is_refused_as_a_missing_sample(tmp_path, he
     proc = cli("import", str(path), "-o", str(out), "--rate", "1000")
     assert proc.returncode == 2, proc.stderr
     assert f"{path}: line {after + 2} {fragment}: a sample is missing there" in proc.stderr
-    assert ("expected a row of values on every line from the header to the last row: blank "
-            "lines only above the header or after the last row") in proc.stderr
+    assert ("expected a row of values on every line from the first row to the last: blank "
+            "lines only above the first row or after the last") in proc.stderr
     assert not out.exists()
 
 
@@ -306,11 +305,12 @@ def test_a_blank_line_in_a_time_column_names_its_line(tmp_path):
 
 @pytest.mark.parametrize("end", ["\n", "\r\n"])
 @pytest.mark.parametrize("blank", ["", "  ", "\t", " \t", ";", ",", ";;"])
-def test_blank_lines_above_the_header_and_after_the_last_row_are_accepted(tmp_path, blank, end):
-    """Blank lines around the table hide no sample: every row is read, none shifted; comment
-    lines stay accepted anywhere, after the last row too."""
-    lines = [blank, "# exported", blank, "tip [m/s]", *SAMPLES[:30], "# a note", *SAMPLES[30:],
-             blank, "# end", blank, blank]
+def test_blank_lines_above_the_first_row_and_after_the_last_are_accepted(tmp_path, blank, end):
+    """Blank lines around the table (between the header and the first row too) hide no
+    sample: every row is read, none shifted; comment lines stay accepted anywhere, after the
+    last row too."""
+    lines = [blank, "# exported", blank, "tip [m/s]", blank, *SAMPLES[:30], "# a note",
+             *SAMPLES[30:], blank, "# end", blank, blank]
     path = tmp_path / "around.csv"
     path.write_bytes((end.join(lines) + end).encode())
     run = _imported(path, "--rate", "1000")

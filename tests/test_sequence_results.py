@@ -198,3 +198,22 @@ def test_resume_analyses_a_run_without_analysis_in_a_completed_sequence(interrup
     # once recorded, resuming changes nothing
     code, text, _ = run_main("sequence", "--resume", str(out), "--json")
     assert code == 0 and json.loads(text) == data
+
+
+def test_an_analysis_that_identified_nothing_is_not_redone_on_every_resume(tmp_path):
+    """A completed run whose analysis ran to its end but found no channel to report has empty
+    results: it was taken for one without analysis and analysed again on every --resume. The
+    record now says whether the analysis ran (``analysed``); records written before it, with
+    empty results, still count as not analysed."""
+    from types import SimpleNamespace
+
+    from fsi_lab.sequence import lacks_analysis
+
+    (tmp_path / "run.h5").write_bytes(b"")
+    record = SimpleNamespace(directory=tmp_path)
+    entry = {"status": "completed", "run_file": "run.h5", "results": {}}
+    assert lacks_analysis(record, {**entry, "analysed": False})
+    assert not lacks_analysis(record, {**entry, "analysed": True})
+    assert lacks_analysis(record, entry)                          # an older record
+    assert not lacks_analysis(record, {**entry, "results": {"tip": []}})
+    assert not lacks_analysis(record, {**entry, "run_file": "gone.h5", "analysed": False})

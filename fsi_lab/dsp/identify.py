@@ -14,8 +14,10 @@ number. The steps:
    on half-period maxima of the record low-passed at :data:`SPLIT_BAND` times its dominant
    frequency: a step or ramp derivative gives one, an impulse train one per impulse); each is
    analysed on its own window, from its largest sample (a quarter period later when an
-   excitation inside the record precedes it; later still when the caller knows the excitation
-   ends later) to just before the next build-up. Decays whose base (the reference) still moves
+   excitation inside the record precedes it; from the end of a steady forced response that
+   holds the largest sample, as a sine dwell switched off inside the record: :func:`_plateau_end`;
+   later still when the caller knows the excitation ends later) to just before the next
+   build-up. Decays whose base (the reference) still moves
    are left out, and a record with none is refused (random excitation through the record), as
    is one excited too often to split (its spectrum a comb of harmonic lines: :data:`COMB_LINES`),
    with the impulse spacing it would need.
@@ -196,6 +198,9 @@ FIRST_FLOOR = 3.0
 POOR_PRECISION = 0.15
 #: A cubic stiffness is fitted only when it moves the frequency by this share or more.
 STIFFNESS_SHIFT = 2e-3
+#: Dropouts filled (:func:`_dropouts_filled`): those up to this share of a period of the
+#: record's dominant oscillation (a longer gap is beyond prediction).
+DROPOUT_PERIODS = 0.5
 #: Spikes whose times a note names (:func:`.spikes.find_spikes`).
 SPIKES_NAMED = 5
 #: A free decay's half cycles last this range of the mode's half period: beyond it the decay
@@ -457,7 +462,8 @@ class Identification:
 
 # ----------------------------------------------------------------------------- steps
 def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
-             starts: Sequence[float] | None, resolution: float = 0.0
+             starts: Sequence[float] | None, resolution: float = 0.0,
+             plateaus: list[tuple[int, int]] | None = None
              ) -> list[tuple[int, int, int]]:
     """Free-decay windows ``(start, free, stop)``: analysis starts at ``start`` (a quarter
     period before the decay's largest sample, so an extremum there is a complete one),
@@ -468,7 +474,9 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     broadband noise: a fast decay stays above it for more cycles), those below
     :data:`SPLIT_FLOOR` times that record's noise RMS, or below ``resolution`` (the level,
     unit of x, under which the processing's own residue lies: :data:`PRECISION`), counted as
-    that floor."""
+    that floor. A steady forced response that holds a decay's largest sample
+    (:func:`_plateau_end`) is left out: the decay starts at the record's largest sample near
+    its end, and ``plateaus`` (when given) gets its first and last sample."""
     n = x.size
     period = 1.0 / f_dom
     cutoff = SPLIT_BAND * f_dom
@@ -487,9 +495,14 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
                      e) for b, e in segments]
     out = []
     quarter = int(0.25 * fs / f_dom)
-    for begin, stop in segments:
-        if (end := _plateau_end(smooth, fs, f_dom, begin, stop)) is not None:
-            begin = end                     # a steady forced response ends there
+    for first, stop in segments:
+        begin = first
+        if (end := _plateau_end(smooth, fs, f_dom, first, stop)) is not None:
+            # a steady forced response ends there: its last maximum in the record itself
+            lo = max(first, end - quarter)
+            begin = lo + int(np.argmax(np.abs(x[lo:min(stop, end + quarter + 1)])))
+            if plateaus is not None:
+                plateaus.append((first, begin))
         free = _walk_back(x, fs, f_dom, begin)
         # Extrema nearly as large before the largest one: the record holds the free decay
         # from its start (release); the window opens a quarter period earlier so that its
@@ -501,7 +514,7 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
         if free == begin and begin > 0:
             free = min(begin + quarter, stop - 1)
         if starts is not None:
-            later = [int(math.ceil(s * fs)) for s in starts if begin <= s * fs < stop]
+            later = [int(math.ceil(s * fs)) for s in starts if first <= s * fs < stop]
             if later and max(later) > free:
                 free, lead = max(later), 0
         out.append((max(0, free - lead), free, stop))
@@ -517,6 +530,60 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     return enough or out
 
 
+def _dominant(record: np.ndarray, fs: float) -> Any:
+    """The record's dominant oscillation: the highest peak of its averaged spectrum that the
+    sampling resolves (decays split on the half periods of a mode with 4 samples per cycle
+    fall apart at every beat with the others), or the highest at all
+    (:class:`.spectrum.SpectralPeaks`). ``fs`` in Hz.
+
+    Raises
+    ------
+    AnalysisError
+        No spectral peak: the record holds no oscillation.
+    """
+    func = "identify"
+    freqs, amp = averaged_spectrum(record, fs, [(0, record.size)])
+    resolved = freqs <= fs / MIN_SAMPLES_PER_CYCLE
+    top = find_peaks_interpolated(freqs[resolved], amp[resolved], min_relative=0.05,
+                                  max_peaks=1, smoothing=PEAK_SMOOTHING,
+                                  fmin=2.0 * fs / record.size, _func=func)
+    if top.frequencies.size == 0:
+        top = find_peaks_interpolated(freqs, amp, min_relative=0.05, max_peaks=1,
+                                      smoothing=PEAK_SMOOTHING, fmin=2.0 * fs / record.size,
+                                      _func=func)
+    if top.frequencies.size == 0:
+        raise fail(func, "found no spectral peak: the record holds no oscillation above "
+                         f"{2.0 * fs / record.size:.3g} Hz")
+    return top
+
+
+def _dropouts_filled(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``x`` with its dropouts (:func:`.spikes.find_dropouts`) of up to :data:`DROPOUT_PERIODS`
+    of a period of its dominant oscillation filled by linear prediction; the ranges filled and
+    those left (``[start, stop)`` samples). ``fs`` in Hz."""
+    found = find_dropouts(x)
+    if not len(found):
+        return x, found, found
+    try:
+        longest = DROPOUT_PERIODS * fs / float(_dominant(x - float(np.mean(x)),
+                                                         fs).frequencies[0])
+    except AnalysisError:                    # (no oscillation to predict)
+        longest = 0.0
+    short = found[:, 1] - found[:, 0] <= longest
+    return without_dropouts(x, found[short]), found[short], found[~short]
+
+
+def _runs(ranges: np.ndarray, fs: float) -> str:
+    """``"3 runs of 5 to 28 samples (from 0.45, 0.69 s and 1 more)"``: sample ranges named."""
+    lengths = ranges[:, 1] - ranges[:, 0]
+    span = (f"{lengths.min()}" if lengths.min() == lengths.max()
+            else f"{lengths.min()} to {lengths.max()}")
+    at = ", ".join(f"{a / fs:.6g}" for a in ranges[:SPIKES_NAMED, 0])
+    more = f" and {len(ranges) - SPIKES_NAMED} more" if len(ranges) > SPIKES_NAMED else ""
+    return (f"{len(ranges)} run{'s' if len(ranges) > 1 else ''} of {span} samples (from {at} "
+            f"s{more})")
+
+
 def _plateau_end(x: np.ndarray, fs: float, f_dom: float, begin: int, stop: int) -> int | None:
     """Where a steady forced response that holds the decay's largest sample ``begin`` ends, or
     None when the motion decays from ``begin`` on.
@@ -529,7 +596,8 @@ def _plateau_end(x: np.ndarray, fs: float, f_dom: float, begin: int, stop: int) 
     (flat, then falling): a hinge that leaves :data:`PLATEAU_GAIN` times less residual and
     whose flat part falls at most :data:`PLATEAU_SLOPE` times as fast as the rest marks a
     plateau. A free decay never does: its quadratic damping makes it fall fastest at its
-    start. Returns the sample of the plateau's last half-period maximum."""
+    start. ``fs`` and ``f_dom`` (the dominant oscillation) in Hz; ``begin`` and ``stop``
+    sample indices of ``x``. Returns the sample of the plateau's last half-period maximum."""
     half = max(1, int(round(0.5 * fs / f_dom)))
     edges = np.arange(begin, stop - half + 1, half)
     if edges.size < 2 * PLATEAU_MIN:
@@ -2119,14 +2187,16 @@ def _off_peak(m: ModeIdentification) -> str:
 def _fold(factor: float) -> str:
     """``"1.4-fold"``; a widening of a few percent as ``"1.03-fold"``, not ``"1.0-fold"``; one
     beyond :data:`SAID_AT_MOST` as ``"more than 1000-fold"`` (its digits would mean nothing)."""
-    if factor >= SAID_AT_MOST:
+    if round(factor, 1) >= SAID_AT_MOST:
         return f"more than {SAID_AT_MOST:g}-fold"
     return f"{factor:.2f}-fold" if factor < 1.095 else f"{factor:.1f}-fold"
 
 
 def _times(ratio: float) -> str:
     """``"4.4 times"``, or ``"more than 1000 times"`` beyond :data:`SAID_AT_MOST`."""
-    return f"more than {SAID_AT_MOST:g} times" if ratio >= SAID_AT_MOST else f"{ratio:.1f} times"
+    if round(ratio, 1) >= SAID_AT_MOST:
+        return f"more than {SAID_AT_MOST:g} times"
+    return f"{ratio:.1f} times"
 
 
 def _warnings(m: ModeIdentification) -> list[str]:
@@ -2322,11 +2392,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     follow = "displacement" if quantity == "displacement" else "velocity"
     # Dropouts and spikes first: one in a still stretch would hide it, one in the base would
     # ring in its bands and read as motion.
-    dropouts = find_dropouts(record)
-    if dropouts.size:
-        record = without_dropouts(record, dropouts)
-    if reference is not None and (base_dropouts := find_dropouts(reference)).size:
-        reference = without_dropouts(reference, base_dropouts)
+    record, dropouts, unfilled = _dropouts_filled(record, fs)
+    base_dropouts = np.empty((0, 2), dtype=np.int64)
+    if reference is not None:
+        reference, base_dropouts, _ = _dropouts_filled(reference, fs)
     spikes = find_spikes(record)
     if spikes.size:
         record = without_spikes(record, spikes)
@@ -2338,24 +2407,12 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         record[:hold[0]] -= hold[1]
     record = record - float(np.mean(record))
     # Dominant oscillation and the noise: the spectrum of the whole record.
-    # The dominant oscillation is one the sampling resolves: decays split on the half periods
-    # of a mode with 4 samples per cycle fall apart at every beat with the others.
-    freqs, amp = averaged_spectrum(record, fs, [(0, record.size)])
-    resolved = freqs <= fs / MIN_SAMPLES_PER_CYCLE
-    top = find_peaks_interpolated(freqs[resolved], amp[resolved], min_relative=0.05,
-                                  max_peaks=1, smoothing=PEAK_SMOOTHING,
-                                  fmin=2.0 * fs / record.size, _func=func)
-    if top.frequencies.size == 0:
-        top = find_peaks_interpolated(freqs, amp, min_relative=0.05, max_peaks=1,
-                                      smoothing=PEAK_SMOOTHING, fmin=2.0 * fs / record.size,
-                                      _func=func)
-    if top.frequencies.size == 0:
-        raise fail(func, "found no spectral peak: the record holds no oscillation above "
-                         f"{2.0 * fs / record.size:.3g} Hz")
+    top = _dominant(record, fs)
     f_dom = float(top.frequencies[0])
     sigma = _noise_rms(record, fs, top.frequencies)
+    plateaus: list[tuple[int, int]] = []
     windows = _windows(record, fs, f_dom, sigma, decay_starts,
-                       PRECISION * float(np.max(np.abs(record))))
+                       PRECISION * float(np.max(np.abs(record))), plateaus)
     if not windows:
         raise fail(func, f"found no free decay of at least {MIN_WINDOW} samples")
     if reference is not None:
@@ -2363,6 +2420,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     cand_f, cand_a, notes, guards, steady = _candidates(
         record, fs, windows, int(components) if components != "auto" else "auto", band_t,
         f_dom, sigma)
+    for a, b in plateaus:
+        notes.insert(0, f"the record holds a steady oscillation from {a / fs:.4g} to "
+                        f"{b / fs:.4g} s before it decays (a forcing such as a sine dwell "
+                        "switched off there): no free decay, the decay is taken from its end")
     if spikes.size:
         at = ", ".join(f"{i / fs:.6g}" for i in spikes[:SPIKES_NAMED])
         more = f" and {spikes.size - SPIKES_NAMED} more" if spikes.size > SPIKES_NAMED else ""
@@ -2373,17 +2434,19 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                         "heavier tails than Gaussian): each is replaced by the cubic through "
                         "its two neighbours on either side (left in, their broadband energy "
                         "lifts the extrema the damping laws are fitted to)")
-    if dropouts.size:
-        at = ", ".join(f"{a / fs:.6g}" for a, _ in dropouts[:SPIKES_NAMED])
-        more = (f" and {len(dropouts) - SPIKES_NAMED} more" if len(dropouts) > SPIKES_NAMED
-                else "")
-        lengths = dropouts[:, 1] - dropouts[:, 0]
-        span = (f"{lengths.min()}" if lengths.min() == lengths.max()
-                else f"{lengths.min()} to {lengths.max()}")
-        notes.insert(0, f"{len(dropouts)} run{'s' if len(dropouts) > 1 else ''} of {span}"
-                        f" equal samples that the record jumps into or out of (from {at} "
-                        f"s{more}: dropouts, as a vibrometer that loses its signal holds or "
-                        "zeroes its output): each is filled by linear prediction from the "
+    if len(unfilled):
+        notes.insert(0, f"{_runs(unfilled, fs)} of equal samples in the record, which it "
+                        "jumps into or out of, last more than half a period of its dominant "
+                        "oscillation: beyond prediction, they are left as recorded (a decay "
+                        "across one is split there, and its extrema near one are no free "
+                        "decay's)")
+    if len(dropouts) or len(base_dropouts):
+        where = f"{_runs(dropouts, fs)} in the record" if len(dropouts) else ""
+        if len(base_dropouts):
+            where += (" and " if where else "") + f"{_runs(base_dropouts, fs)} in the reference"
+        notes.insert(0, f"{where} hold equal samples that the signal jumps into or out of: "
+                        "dropouts, as a vibrometer or a digitiser that loses its signal holds or "
+                        "zeroes its output; each is filled by linear prediction from the "
                         "samples on both sides (left in, a zeroed run's steps lift the extrema "
                         "the damping laws are fitted to)")
     if hold is not None:

@@ -22,9 +22,12 @@ runs of 3 to 30 zeroed samples in a 17 Hz decay read C_f 7 to 16 % high without 
 found as :data:`DROPOUT_MIN` or more exactly equal samples that the record jumps into or out
 of by :data:`DROPOUT_Z` times its typical sample-to-sample change around them (equal samples
 of a quantised record, near an extremum, change by one step: none is taken), or as more than
-:data:`DROPOUT_MIN` of them where that change is :data:`DROPOUT_FINE` converter steps or more
-(a 24-bit converter, floating point: equal samples are then no chance, however small the
-signal), and filled by linear prediction from both sides (:func:`without_dropouts`).
+:data:`DROPOUT_MIN` of them inside noise whose samples change by :data:`DROPOUT_FINE`
+converter steps (the record's smallest change) or more (a 24-bit converter, floating point:
+equal samples are then no chance, however small the signal), and filled by linear prediction
+from both sides (:func:`without_dropouts`). A gap of more than a fraction of a period is
+beyond prediction: the caller decides which to fill (:func:`fsi_lab.dsp.identify.identify`
+fills those up to half a period of the record's dominant oscillation).
 """
 
 from __future__ import annotations
@@ -64,6 +67,10 @@ DROPOUT_MIN, DROPOUT_Z, DROPOUT_SPAN = 3, 8.0, 50
 #: ... or a run longer than DROPOUT_MIN where the typical change is this many converter steps
 #: (the smallest change in the record): equal samples are then no chance.
 DROPOUT_FINE = 100.0
+#: Second differences at least this share of the first (median over the span): noise (white
+#: noise has about 1.7), not a smooth signal (a mode sampled at 6 or more samples per cycle has
+#: at most 1).
+DROPOUT_NOISY = 1.2
 #: Linear prediction across a dropout: the largest order, and the samples of context per
 #: order (at least) it is fitted to on each side.
 PREDICTION_ORDER, CONTEXT_PER_ORDER = 16, 4
@@ -204,33 +211,45 @@ def find_dropouts(x: Any) -> np.ndarray:
                   allow_constant=True)
     same = np.diff(y) == 0.0
     edges = np.flatnonzero(np.diff(np.concatenate(([0], same.view(np.int8), [0]))))
-    # (a run of k equal differences is k + 1 equal samples)
-    runs = [(a, b + 1) for a, b in zip(edges[0::2], edges[1::2]) if b + 1 - a >= DROPOUT_MIN]
+    # (a run of k equal differences is k + 1 equal samples; a run at either end is none)
+    starts, stops = edges[0::2], edges[1::2] + 1
+    keep = (stops - starts >= DROPOUT_MIN) & (starts > 0) & (stops < y.size)
+    starts, stops = starts[keep], stops[keep]
     steps = np.abs(np.diff(y))
-    moving = steps[steps > 0]
-    step = float(np.min(moving)) if moving.size else 0.0
+    bends = np.abs(np.diff(y, 2))
+    floor = FLOOR * float(np.max(np.abs(y)))
+    step = float(np.min(steps[steps > 0])) if np.any(steps > 0) else 0.0   # a converter's
+    jumps = np.maximum(np.abs(y[starts] - y[starts - 1]), np.abs(y[stops] - y[stops - 1]))
     out = []
-    for start, stop in runs:
-        if start == 0 or stop == y.size:
+    for start, stop, jump in zip(starts, stops, jumps):
+        if jump == 0.0:
             continue
-        around = np.concatenate([steps[max(0, start - 1 - DROPOUT_SPAN):start - 1],
-                                 steps[stop:stop + DROPOUT_SPAN]])
-        around = around[around > 0]
-        if around.size < 4:
+        window = np.r_[max(0, start - 1 - DROPOUT_SPAN):start - 1, stop:min(stop + DROPOUT_SPAN,
+                                                                              steps.size)]
+        around = steps[window]
+        moving = around[around > 0]
+        if moving.size < 4:
             continue
-        typical = max(float(np.median(around)), step, FLOOR * float(np.max(np.abs(y))))
-        jump = max(abs(y[start] - y[start - 1]), abs(y[stop] - y[stop - 1]))
-        # Samples that change by a hundred converter steps or more from one to the next stay
-        # equal for four in a row by chance about once in 1e7: that is no signal either.
-        fine = typical >= DROPOUT_FINE * step and stop - start > DROPOUT_MIN
-        if jump > DROPOUT_Z * typical or fine:
+        typical = max(float(np.median(moving)), floor)
+        if jump > DROPOUT_Z * typical:
+            out.append((start, stop))
+            continue
+        # A longer run inside noise whose samples change by a hundred converter steps (the
+        # record's smallest change): equal samples there are no chance (about once in 1e7
+        # for four), entered or left with the noise's own step. (A smooth signal, as a
+        # simulation's exact zeros after a pulse or a record printed to a few digits near an
+        # extremum, is no noise: its second differences are far smaller than its first.)
+        bend = bends[window[window < bends.size]]
+        noisy = float(np.median(bend)) >= DROPOUT_NOISY * typical
+        if (noisy and stop - start > DROPOUT_MIN and jump >= 0.25 * typical
+                and typical >= DROPOUT_FINE * step):
             out.append((start, stop))
     return np.array(out, dtype=np.int64).reshape(-1, 2)
 
 
 def _predict(context: np.ndarray, count: int) -> np.ndarray | None:
-    """``count`` samples after ``context`` by a least-squares autoregressive model fitted to
-    it; None when it is too short for one."""
+    """``count`` samples after ``context`` (samples, any unit) by a least-squares
+    autoregressive model fitted to it; None when it is too short for one."""
     order = min(PREDICTION_ORDER, context.size // CONTEXT_PER_ORDER)
     if order < 2:
         return None

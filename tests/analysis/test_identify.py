@@ -1171,6 +1171,7 @@ def test_ratios_and_widenings_beyond_a_thousand_are_not_given_digits():
     assert _times(4.44) == "4.4 times" and _times(1.9e101) == "more than 1000 times"
     assert _fold(1.03) == "1.03-fold" and _fold(2.14) == "2.1-fold"
     assert _fold(5.2e14) == "more than 1000-fold" and _fold(999.0) == "999.0-fold"
+    assert _fold(999.96) == "more than 1000-fold" and _times(999.96) == "more than 1000 times"
 
 
 @pytest.mark.parametrize("ratio, seed", [(0.98, 0), (0.985, 1), (1.02, 2)])
@@ -1197,8 +1198,11 @@ def test_a_sine_dwell_switched_off_inside_the_record_is_no_free_decay(ratio, see
                     max_step=2e-4)
     v = run.y[1] + 0.01 * np.max(np.abs(run.y[1])) * np.random.default_rng(seed).standard_normal(
         t.size)
-    (mode,) = identify(v, fs).modes
+    found = identify(v, fs)
+    (mode,) = found.modes
     (free,) = identify(v[int(off * fs):], fs).modes
+    assert any(note.startswith("the record holds a steady oscillation from ")
+               and "switched off there" in note for note in found.notes), found.notes
     assert mode.decays[0].times[0] >= off - 0.5 / WET_F
     assert mode.frequency_hz == pytest.approx(WET_F, rel=3e-4)
     (a, beta), (a_free, beta_free) = mode.quadratic.params, free.quadratic.params

@@ -166,5 +166,23 @@ def test_dropouts_no_longer_bias_c_f():
         assert beta == pytest.approx(clean[1], rel=0.02)
         count = len(find_dropouts(y))
         assert count >= 10
-        assert any(note.startswith(f"{count} runs of ") and "dropouts" in note
+        assert any(note.startswith(f"{count} runs of ") and " samples (from " in note
+                   and "in the record hold equal samples" in note and "dropouts" in note
                    for note in found.notes)
+
+
+def test_a_gap_longer_than_half_a_period_is_left_as_recorded_and_said_so():
+    """Two seconds of zeros in a 17 Hz decay (34 cycles): prediction would make up a steady
+    oscillation across them; the gap is left as recorded and a note says why, while a short
+    dropout in the same record is filled."""
+    case = decay(2000.0, noise=0.005, duration=6.0, c_f=WET_C_F)
+    x = trial(case, 4)
+    y = x.copy()
+    y[1000:5000] = 0.0
+    y[600:612] = 0.0
+    found = identify(y, case.fs)
+    assert any(note.startswith("1 run of 4000 samples (from 0.5 s) of equal samples in the "
+                               "record, which it jumps into or out of, last more than half a "
+                               "period") for note in found.notes), found.notes
+    assert any(note.startswith("1 run of 12 samples (from 0.3 s) in the record hold equal")
+               for note in found.notes), found.notes
