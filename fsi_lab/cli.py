@@ -269,13 +269,18 @@ def _analyze_batch(args) -> int:
 
     from fsi_lab.batch import AnalyseTask, analyse_file, require_mass_per_length
     from fsi_lab.executor import make_executor
+    from fsi_lab.seqfile import is_sequence_record
 
     require_mass_per_length(args.mass_per_length)
-    paths, seen = [], set()
+    paths, seen, records = [], set(), []
     for path in args.run:  # a file given twice is analysed once (two writers would clash)
         key = os.path.realpath(path)
-        if key not in seen:
-            seen.add(key)
+        if key in seen:
+            continue
+        seen.add(key)
+        if is_sequence_record(Path(path)):   # a glob of a sequence's folder catches it
+            records.append(path)
+        else:
             paths.append(path)
     tasks = [AnalyseTask(str(path), tuple(args.set), args.mass_per_length) for path in paths]
     files: list[dict[str, Any]] = [{"run": str(path), "status": "pending", "exit_code": 0}
@@ -289,6 +294,9 @@ def _analyze_batch(args) -> int:
     done = 0
     try:
         with executor:
+            for path in records:
+                bus.log("WARNING", f"{path}: a sequence's record, not a run file: left out "
+                                   "(its runs are the other files)")
             bus.log("INFO", f"analysing {len(tasks)} file{'s' * (len(tasks) != 1)} with "
                             f"{executor.describe()}")
             bus.emit(Progress("analyze", 0.0, f"0 of {len(tasks)} files"))

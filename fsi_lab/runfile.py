@@ -29,6 +29,8 @@ from fsi_lab.sources import chunks as sample_chunks
 from fsi_lab.units import QUANTITIES
 
 FORMAT = "fsi-lab run"
+#: The root attribute ``format`` of a sequence's record (:mod:`fsi_lab.seqfile`).
+SEQUENCE_FORMAT = "fsi-lab sequence"
 FORMAT_VERSION = 1
 EXIT_STATUSES = ("running", "completed", "aborted", "failed")
 #: A crash (even ``kill -9``) loses at most this much of the record delivered, s: the file is
@@ -237,6 +239,13 @@ def _open_checked(path: Path, mode: str) -> h5py.File:
         fmt = handle.attrs.get("format")
     except H5_ERRORS:
         fmt = None
+    if decode_attr(fmt) == SEQUENCE_FORMAT:
+        handle.close()
+        raise InputFileError(
+            f"{path}: a sequence's record (written by fsi-lab sequence), not a run file; its "
+            f"runs are the other .h5 files beside it: fsi-lab show {path.parent} lists them, "
+            f"fsi-lab aggregate {path.parent} pools them"
+        )
     if decode_attr(fmt) != FORMAT:
         handle.close()
         raise InputFileError(

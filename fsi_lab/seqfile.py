@@ -24,11 +24,11 @@ from fsi_lab.inputfiles import require_regular_file
 from fsi_lab.isolation import crash_or_hang
 from fsi_lab.plan import Plan, PlannedRun
 from fsi_lab.runcheck import RunFileReader
-from fsi_lab.runfile import software_version, utc_now, write_attrs
+from fsi_lab.runfile import SEQUENCE_FORMAT, software_version, utc_now, write_attrs
 
 SEQUENCE_FILE = "sequence.h5"
 LOCK_FILE = ".sequence.lock"
-FORMAT = "fsi-lab sequence"
+FORMAT = SEQUENCE_FORMAT
 FORMAT_VERSION = 1
 EXPECTED = "a sequence file written by fsi-lab sequence (layout in docs/sequence-format.md)"
 #: ``running`` while the sequence goes (or if its process was killed), then how it ended.
@@ -201,6 +201,17 @@ def load_record(directory: str | Path) -> SequenceRecord:
     if problem:
         raise InputFileError(f"{path}: damaged: {problem}; expected {EXPECTED}")
     return _read(path)
+
+
+def is_sequence_record(path: Path) -> bool:
+    """Whether ``path`` is a sequence's record (an HDF5 file whose root ``format`` is
+    :data:`FORMAT`); False for anything else, readable or not."""
+    try:
+        with h5py.File(path, "r") as handle:
+            found = handle.attrs.get("format")
+    except (OSError, ValueError):
+        return False
+    return (found.decode() if isinstance(found, bytes) else found) == FORMAT
 
 
 def _read(path: Path) -> SequenceRecord:

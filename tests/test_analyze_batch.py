@@ -184,3 +184,27 @@ def test_a_dask_cluster_analyses_the_same_files(runs, serial, dask_cluster):
                                 "scheduler": dask_cluster.scheduler_address}
     check_truth(data["files"], runs)
     same_numbers(data["files"], serial)
+
+
+def test_a_sequence_record_among_the_run_files_is_left_out_not_failed(runs, tmp_path):
+    """`fsi-lab analyze runs/heights/*.h5` also caught the sequence's record, sequence.h5,
+    and exited 2 although every run was analysed; named alone it is refused, naming what it
+    is and the commands that read its runs."""
+    import shutil
+
+    from fsi_lab.seqfile import FORMAT, SEQUENCE_FILE
+
+    folder = tmp_path / "heights"
+    folder.mkdir()
+    copies = [shutil.copy(path, folder / path.name) for path in runs]
+    record = folder / SEQUENCE_FILE
+    with h5py.File(record, "w") as handle:
+        handle.attrs["format"] = FORMAT
+    code, data, err = analyze(*sorted(folder.glob("*.h5")))
+    assert code == 0, err
+    check_truth(data["files"], copies)
+    assert f"{record}: a sequence's record, not a run file: left out" in err
+    code, out, err = run_main("analyze", str(record))
+    assert code == 2
+    assert (f"{record}: a sequence's record (written by fsi-lab sequence), not a run file; its "
+            f"runs are the other .h5 files beside it: fsi-lab show {folder} lists them") in err

@@ -198,9 +198,9 @@ FIRST_FLOOR = 3.0
 POOR_PRECISION = 0.15
 #: A cubic stiffness is fitted only when it moves the frequency by this share or more.
 STIFFNESS_SHIFT = 2e-3
-#: Dropouts filled (:func:`_dropouts_filled`): those up to this share of a period of the
-#: record's dominant oscillation (a longer gap is beyond prediction).
-DROPOUT_PERIODS = 0.5
+#: Dropouts filled (:func:`_dropouts_filled`): those up to this many periods of the record's
+#: dominant oscillation (a longer gap is beyond prediction).
+DROPOUT_PERIODS = 1.0
 #: Spikes whose times a note names (:func:`.spikes.find_spikes`).
 SPIKES_NAMED = 5
 #: A free decay's half cycles last this range of the mode's half period: beyond it the decay
@@ -559,7 +559,7 @@ def _dominant(record: np.ndarray, fs: float) -> Any:
 
 def _dropouts_filled(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``x`` with its dropouts (:func:`.spikes.find_dropouts`) of up to :data:`DROPOUT_PERIODS`
-    of a period of its dominant oscillation filled by linear prediction; the ranges filled and
+    periods of its dominant oscillation filled by linear prediction; the ranges filled and
     those left (``[start, stop)`` samples). ``fs`` in Hz."""
     found = find_dropouts(x)
     if not len(found):
@@ -2436,10 +2436,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                         "lifts the extrema the damping laws are fitted to)")
     if len(unfilled):
         notes.insert(0, f"{_runs(unfilled, fs)} of equal samples in the record, which it "
-                        "jumps into or out of, last more than half a period of its dominant "
-                        "oscillation: beyond prediction, they are left as recorded (a decay "
-                        "across one is split there, and its extrema near one are no free "
-                        "decay's)")
+                        f"jumps into or out of, last more than {DROPOUT_PERIODS:g} period of "
+                        "its dominant oscillation: beyond prediction, they are left as recorded "
+                        "(a decay across one is split there, and its extrema near one are no "
+                        "free decay's)")
     if len(dropouts) or len(base_dropouts):
         where = f"{_runs(dropouts, fs)} in the record" if len(dropouts) else ""
         if len(base_dropouts):

@@ -27,7 +27,7 @@ converter steps (the record's smallest change) or more (a 24-bit converter, floa
 equal samples are then no chance, however small the signal), and filled by linear prediction
 from both sides (:func:`without_dropouts`). A gap of more than a fraction of a period is
 beyond prediction: the caller decides which to fill (:func:`fsi_lab.dsp.identify.identify`
-fills those up to half a period of the record's dominant oscillation).
+fills those up to a period of the record's dominant oscillation).
 """
 
 from __future__ import annotations

@@ -171,7 +171,7 @@ def test_dropouts_no_longer_bias_c_f():
                    for note in found.notes)
 
 
-def test_a_gap_longer_than_half_a_period_is_left_as_recorded_and_said_so():
+def test_a_gap_longer_than_a_period_is_left_as_recorded_and_said_so():
     """Two seconds of zeros in a 17 Hz decay (34 cycles): prediction would make up a steady
     oscillation across them; the gap is left as recorded and a note says why, while a short
     dropout in the same record is filled."""
@@ -182,7 +182,7 @@ def test_a_gap_longer_than_half_a_period_is_left_as_recorded_and_said_so():
     y[600:612] = 0.0
     found = identify(y, case.fs)
     assert any(note.startswith("1 run of 4000 samples (from 0.5 s) of equal samples in the "
-                               "record, which it jumps into or out of, last more than half a "
+                               "record, which it jumps into or out of, last more than 1 "
                                "period") for note in found.notes), found.notes
     assert any(note.startswith("1 run of 12 samples (from 0.3 s) in the record hold equal")
                for note in found.notes), found.notes
