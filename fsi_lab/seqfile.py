@@ -24,7 +24,7 @@ from fsi_lab.inputfiles import require_regular_file
 from fsi_lab.isolation import crash_or_hang
 from fsi_lab.plan import Plan, PlannedRun
 from fsi_lab.runcheck import RunFileReader
-from fsi_lab.runfile import SEQUENCE_FORMAT, software_version, utc_now, write_attrs
+from fsi_lab.runfile import SEQUENCE_FORMAT, decode_attr, software_version, utc_now, write_attrs
 
 SEQUENCE_FILE = "sequence.h5"
 LOCK_FILE = ".sequence.lock"
@@ -204,14 +204,16 @@ def load_record(directory: str | Path) -> SequenceRecord:
 
 
 def is_sequence_record(path: Path) -> bool:
-    """Whether ``path`` is a sequence's record (an HDF5 file whose root ``format`` is
-    :data:`FORMAT`); False for anything else, readable or not."""
+    """Whether ``path`` is a sequence's record (a regular HDF5 file whose root ``format`` is
+    :data:`FORMAT`); False for anything else, readable or not (a pipe is not opened)."""
+    if not Path(path).is_file():
+        return False
     try:
         with h5py.File(path, "r") as handle:
             found = handle.attrs.get("format")
     except (OSError, ValueError):
         return False
-    return (found.decode() if isinstance(found, bytes) else found) == FORMAT
+    return decode_attr(found) == FORMAT
 
 
 def _read(path: Path) -> SequenceRecord:
