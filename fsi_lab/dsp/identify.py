@@ -599,10 +599,11 @@ def _plateau_end(x: np.ndarray, fs: float, f_dom: float, begin: int, stop: int) 
     start. ``fs`` and ``f_dom`` (the dominant oscillation) in Hz; ``begin`` and ``stop``
     sample indices of ``x``. Returns the sample of the plateau's last half-period maximum."""
     half = max(1, int(round(0.5 * fs / f_dom)))
-    edges = np.arange(begin, stop - half + 1, half)
-    if edges.size < 2 * PLATEAU_MIN:
+    n = (stop - begin) // half
+    if n < 2 * PLATEAU_MIN:
         return None
-    peaks = np.array([int(np.argmax(np.abs(x[e:e + half]))) + e for e in edges])
+    blocks = np.abs(x[begin:begin + n * half]).reshape(n, half)
+    peaks = begin + np.arange(n) * half + np.argmax(blocks, axis=1)
     h = np.abs(x[peaks])
     below = np.flatnonzero(h < PLATEAU_DOWN * h[0])
     count = int(below[0]) if below.size else h.size
@@ -612,18 +613,25 @@ def _plateau_end(x: np.ndarray, fs: float, f_dom: float, begin: int, stop: int) 
     k = np.arange(count, dtype=np.float64)
     line = np.polyval(np.polyfit(k, y, 1), k)
     rss_line = float(np.sum((y - line) ** 2))
-    best = None
-    for j in range(PLATEAU_MIN, count - PLATEAU_MIN + 1):
-        level = float(np.mean(y[:j]))
-        after = k[j:] - (j - 1)
-        slope = float(np.sum((y[j:] - level) * after) / np.sum(after * after))
-        rss = float(np.sum((y[:j] - level) ** 2) + np.sum((y[j:] - level - slope * after) ** 2))
-        if best is None or rss < best[0]:
-            best = (rss, j, slope)
-    rss, j, slope = best
-    flat = float(np.polyfit(k[:j], y[:j], 1)[0])
-    if slope < 0.0 and rss * PLATEAU_GAIN <= rss_line and abs(flat) <= PLATEAU_SLOPE * -slope:
-        return int(peaks[j - 1])
+    # Every hinge at once (j: half periods in the flat part), from running sums: the flat
+    # part's mean and scatter, and the falling part's least-squares slope from the hinge on.
+    j = np.arange(PLATEAU_MIN, count - PLATEAU_MIN + 1)
+    head, head2 = np.cumsum(y)[j - 1], np.cumsum(y * y)[j - 1]
+    tail = np.cumsum(y[::-1])[::-1][j]
+    tail_k = np.cumsum((k * y)[::-1])[::-1][j]
+    tail2 = np.cumsum((y * y)[::-1])[::-1][j]
+    level = head / j
+    m = count - j                                    # half periods after the hinge
+    u2 = m * (m + 1.0) * (2.0 * m + 1.0) / 6.0       # sum of (k - j + 1)^2 over them
+    zu = tail_k - (j - 1.0) * tail - level * m * (m + 1.0) / 2.0
+    z2 = tail2 - 2.0 * level * tail + m * level * level
+    rss = (head2 - head * level) + z2 - zu * zu / u2
+    best = int(np.argmin(rss))
+    hinge, slope = int(j[best]), float(zu[best] / u2[best])
+    flat = float(np.polyfit(k[:hinge], y[:hinge], 1)[0])
+    if (slope < 0.0 and float(rss[best]) * PLATEAU_GAIN <= rss_line
+            and abs(flat) <= PLATEAU_SLOPE * -slope):
+        return int(peaks[hinge - 1])
     return None
 
 
