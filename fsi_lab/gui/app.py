@@ -241,11 +241,26 @@ class MainWindow(QMainWindow):
     def open_paths(self, paths: list[str | Path]) -> None:
         """Open profiles (TOML) and run files (HDF5) given on the command line. The first run
         file is shown in the Analysis tab, which comes to the front unless a profile was given
-        too (then the Experiment tab stays); the others are listed in the Runs tab."""
+        too (then the Experiment tab stays); the others are listed in the Runs tab. A folder
+        gives its run files; a sequence's folder, or its record (``sequence.h5``, which a glob
+        of the folder catches), also its record in the Sequence tab."""
+        from fsi_lab.seqfile import SEQUENCE_FILE, is_sequence_record
+
         runs, profiles = [], 0
         for path in paths:
             path = Path(path)
-            if path.suffix.lower() in RUN_SUFFIXES or self._looks_like_hdf5(path):
+            if path.is_dir():
+                found = sorted(p for p in path.glob("*.h5") if not is_sequence_record(p))
+                if (path / SEQUENCE_FILE).is_file():
+                    self._show_sequence(path)
+                elif not found:
+                    self.notify("ERROR", f"{path}: a folder with no run file (*.h5) in it; "
+                                         "expected a profile (.toml), run files (.h5) or the "
+                                         "folder of a sequence")
+                runs.extend(found)
+            elif is_sequence_record(path):
+                self._show_sequence(path.parent)
+            elif path.suffix.lower() in RUN_SUFFIXES or self._looks_like_hdf5(path):
                 runs.append(path)
             else:
                 profiles += 1
@@ -255,6 +270,16 @@ class MainWindow(QMainWindow):
                 self._front_when_loaded.add(Path(runs[0]).resolve())
             self.open_runs(runs[:1], show=True)
             self.open_runs(runs[1:], show=False)
+
+    def _show_sequence(self, folder: Path) -> None:
+        """The sequence recorded in ``folder`` in the Sequence tab (its runs are opened as
+        run files)."""
+        self.sequence.out_dir.setText(str(folder))
+        if not self.sequence.refresh(force=True):
+            self.notify("ERROR", f"{folder}: its sequence record cannot be read")
+            return
+        self.notify("INFO", f"{folder}: a sequence's folder: its record is in the Sequence "
+                            "tab, its runs in the Runs tab")
 
     @staticmethod
     def _looks_like_hdf5(path: Path) -> bool:

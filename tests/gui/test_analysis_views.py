@@ -1,5 +1,7 @@
 """Analysis views read /analysis/<channel>/<plugin>/ of run files, tolerant of what is missing."""
 
+from pathlib import Path
+
 import numpy as np
 from conftest import (
     LOAD_TIMEOUT_MS,
@@ -101,6 +103,41 @@ def test_cli_paths_open_profiles_and_runs(qtbot, make_window, registry, tmp_path
     # a profile was given: the Experiment tab stays in front (with run files alone, the
     # Analysis tab comes to the front: tests/gui/test_layout.py)
     assert window.tabs.currentIndex() == 0
+
+
+def test_a_folder_opens_its_run_files_and_a_sequence_record_is_not_taken_for_one(
+        qtbot, make_window, registry, tmp_path):
+    """`fsi-lab gui runs/heights/*.h5` caught the sequence's record and opened nothing, and
+    `fsi-lab gui runs/heights` said "cannot read the profile (Is a directory)". A folder gives
+    its run files; a sequence's record is left to the Sequence tab (here one that cannot be
+    read, which says so); a folder without run files is named."""
+    import h5py
+
+    from fsi_lab.seqfile import FORMAT, SEQUENCE_FILE
+
+    folder = tmp_path / "heights"
+    folder.mkdir()
+    first, second = write_run(folder / "a.h5"), write_run(folder / "b.h5")
+    with h5py.File(folder / SEQUENCE_FILE, "w") as handle:
+        handle.attrs["format"] = FORMAT
+    window = make_window(registry)
+    window.open_paths([folder])
+    qtbot.waitUntil(lambda: len(window.runs.runs) == 2 and not window.busy(),
+                    timeout=LOAD_TIMEOUT_MS)
+    assert {Path(p).name for p in window.runs.runs} == {"a.h5", "b.h5"}
+    assert any(level == "ERROR" and f"{folder}: its sequence record cannot be read" in text
+               for level, text in window.messages.messages)
+    assert not any("cannot read the profile" in text for _, text in window.messages.messages)
+    other = make_window(registry)
+    other.open_paths(sorted(folder.glob("*.h5")))           # the glob catches the record
+    qtbot.waitUntil(lambda: len(other.runs.runs) == 2 and not other.busy(),
+                    timeout=LOAD_TIMEOUT_MS)
+    assert {Path(p).resolve() for p in other.runs.runs} == {first.resolve(), second.resolve()}
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    other.open_paths([empty])
+    assert any(level == "ERROR" and f"{empty}: a folder with no run file (*.h5) in it" in text
+               for level, text in other.messages.messages)
 
 
 def test_run_files_alone_open_on_the_analysis_tab(qtbot, make_window, registry, tmp_path):
