@@ -86,8 +86,9 @@ def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
                 "letter followed by letters, digits, '_', '-' or spaces (e.g. tip_velocity)"
             )
         is_time = name.lower() == "time"
-        if is_time:
-            parsed = ("s", TIME_UNITS[unit]) if unit in TIME_UNITS else None
+        if is_time:              # (in a time column 'S' and 'MS' can only mean s and ms)
+            scale = TIME_UNITS.get(unit.lower())
+            parsed = ("s", scale) if scale is not None else None
         else:
             parsed = parse_unit(unit)
         if parsed is None:

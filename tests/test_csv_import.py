@@ -375,3 +375,15 @@ def test_a_record_with_nothing_to_identify_exits_2_and_keeps_its_analysis(tmp_pa
     assert (bad["exit_code"], good["exit_code"]) == (2, 0)
     assert bad["error"].startswith("nothing was identified: channel tip: ")
     assert good["analysis"]["channels"]["tip"]["components"]
+
+
+@pytest.mark.parametrize("unit, step", [("S", 0.001), ("MS", 1.0), ("Ms", 1.0)])
+def test_a_time_column_s_unit_is_read_in_any_case(tmp_path, unit, step):
+    """An analyser that writes `Time [S]` (or `[MS]`) was refused: in a time column the
+    unit can only be seconds or milliseconds."""
+    path = tmp_path / "caps.csv"
+    path.write_text(f"Time [{unit}],tip [m/s]\n"
+                    + "".join(f"{k * step:g},{v}\n" for k, v in enumerate(SAMPLES)))
+    run = _imported(path)
+    assert run.channels["tip"].sample_rate == pytest.approx(1000.0)
+    np.testing.assert_array_equal(run.channels["tip"].data, np.array(SAMPLES, dtype=float))
