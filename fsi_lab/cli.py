@@ -392,15 +392,15 @@ def _refuse_copies(paths: list[Path]) -> None:
     are left to the extraction, which names what is wrong with them."""
     import h5py
 
+    from fsi_lab.runcheck import decode_attr
+
     seen: dict[str, Path] = {}
     for path in paths:
         try:
             with h5py.File(path, "r") as f:
-                run_uuid = f.attrs.get("uuid")
+                run_uuid = decode_attr(f.attrs.get("uuid"))
         except (OSError, ValueError):
             continue
-        if isinstance(run_uuid, bytes):
-            run_uuid = run_uuid.decode()
         if not run_uuid:
             continue
         if run_uuid in seen:

@@ -573,15 +573,21 @@ def _dropouts_filled(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray, 
     return without_dropouts(x, found[short]), found[short], found[~short]
 
 
+def _times_of(samples: np.ndarray, fs: float) -> str:
+    """``"0.45, 0.69 s and 1 more"``: the first :data:`SPIKES_NAMED` sample indices as times
+    (s, ``fs`` in Hz), and how many more there are."""
+    at = ", ".join(f"{i / fs:.6g}" for i in samples[:SPIKES_NAMED])
+    more = len(samples) - SPIKES_NAMED
+    return f"{at} s" + (f" and {more} more" if more > 0 else "")
+
+
 def _runs(ranges: np.ndarray, fs: float) -> str:
     """``"3 runs of 5 to 28 samples (from 0.45, 0.69 s and 1 more)"``: sample ranges named."""
     lengths = ranges[:, 1] - ranges[:, 0]
     span = (f"{lengths.min()}" if lengths.min() == lengths.max()
             else f"{lengths.min()} to {lengths.max()}")
-    at = ", ".join(f"{a / fs:.6g}" for a in ranges[:SPIKES_NAMED, 0])
-    more = f" and {len(ranges) - SPIKES_NAMED} more" if len(ranges) > SPIKES_NAMED else ""
-    return (f"{len(ranges)} run{'s' if len(ranges) > 1 else ''} of {span} samples (from {at} "
-            f"s{more})")
+    return (f"{len(ranges)} run{'s' if len(ranges) > 1 else ''} of {span} samples (from "
+            f"{_times_of(ranges[:, 0], fs)})")
 
 
 def _plateau_end(x: np.ndarray, fs: float, f_dom: float, begin: int, stop: int) -> int | None:
@@ -2433,11 +2439,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                         f"{b / fs:.4g} s before it decays (a forcing such as a sine dwell "
                         "switched off there): no free decay, the decay is taken from its end")
     if spikes.size:
-        at = ", ".join(f"{i / fs:.6g}" for i in spikes[:SPIKES_NAMED])
-        more = f" and {spikes.size - SPIKES_NAMED} more" if spikes.size > SPIKES_NAMED else ""
         notes.insert(0, f"{spikes.size} isolated sample{'s' if spikes.size > 1 else ''} "
                         f"stand{'' if spikes.size > 1 else 's'} far off the oscillation their "
-                        f"neighbours trace (at {at} s{more}: spikes, as a vibrometer's "
+                        f"neighbours trace (at {_times_of(spikes, fs)}: spikes, as a vibrometer's "
                         "signal dropouts or a digitiser's glitches give, or noise with far "
                         "heavier tails than Gaussian): each is replaced by the cubic through "
                         "its two neighbours on either side (left in, their broadband energy "
