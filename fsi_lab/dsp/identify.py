@@ -85,7 +85,7 @@ from typing import Any, Sequence
 
 import numpy as np
 import scipy.stats as sstats
-from scipy.signal import hilbert
+from scipy.signal import butter, hilbert, sosfiltfilt
 
 from fsi_lab.dsp._signal import _band_limited, as_record, check_rate, fail, smooth_step
 from fsi_lab.dsp.bands import ModeBands, reduce_rate, reduction_factor, split
@@ -136,6 +136,15 @@ SPLIT_BAND = 8.0
 #: decay, how much better a hinge must fit than a straight line, and how slowly (relative to
 #: the decay after it) the flat part may fall.
 PLATEAU_DOWN, PLATEAU_MIN, PLATEAU_GAIN, PLATEAU_SLOPE = 0.3, 4, 4.0, 0.2
+#: A forced response before a decay that is not steady (:func:`_forced_end`): judged in the
+#: band from f / RISE_BAND to f RISE_BAND around the dominant frequency f (4th-order
+#: Butterworth, zero phase), at RISE_SAMPLES samples per cycle or more; a half period's
+#: maximum RISE_RATIO times below a later one that reaches RISE_LEVEL of the band's largest
+#: is forced; the free decay after it rises by RISE_AFTER at most (more is a beat with another
+#: mode in the band) and holds 2 MIN_CYCLES half periods above RISE_FLOOR times the band's
+#: white noise.
+RISE_BAND, RISE_SAMPLES, RISE_RATIO, RISE_LEVEL, RISE_AFTER, RISE_FLOOR = (
+    1.15, 8.0, 2.0, 0.25, 1.3, 8.0)
 #: A displacement record's first HOLD_SHARE of samples that stand still (their spread within
 #: HOLD_STILL times the noise of their sample-to-sample steps) at more than HOLD_OFFSET times
 #: that noise from where the record comes to rest (its last REST_SHARE) hold a static
@@ -463,7 +472,8 @@ class Identification:
 # ----------------------------------------------------------------------------- steps
 def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
              starts: Sequence[float] | None, resolution: float = 0.0,
-             plateaus: list[tuple[int, int]] | None = None
+             plateaus: list[tuple[int, int]] | None = None,
+             forced: list[tuple[int, int]] | None = None
              ) -> list[tuple[int, int, int]]:
     """Free-decay windows ``(start, free, stop)``: analysis starts at ``start`` (a quarter
     period before the decay's largest sample, so an extremum there is a complete one),
@@ -476,7 +486,9 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     unit of x, under which the processing's own residue lies: :data:`PRECISION`), counted as
     that floor. A steady forced response that holds a decay's largest sample
     (:func:`_plateau_end`) is left out: the decay starts at the record's largest sample near
-    its end, and ``plateaus`` (when given) gets its first and last sample."""
+    its end, and ``plateaus`` (when given) gets its first and last sample. So is a forced
+    response that rises again after the largest sample (:func:`_forced_end`; a burst of
+    random forcing), into ``forced``."""
     n = x.size
     period = 1.0 / f_dom
     cutoff = SPLIT_BAND * f_dom
@@ -495,6 +507,12 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
                      e) for b, e in segments]
     out = []
     quarter = int(0.25 * fs / f_dom)
+    band = None
+    if fs >= RISE_SAMPLES * RISE_BAND * f_dom:
+        band = np.abs(sosfiltfilt(butter(4, [f_dom / RISE_BAND, f_dom * RISE_BAND], "bandpass",
+                                         fs=fs, output="sos"), x))
+        band_floor = RISE_FLOOR * sigma * math.sqrt((RISE_BAND - 1.0 / RISE_BAND) * f_dom
+                                                    / (0.5 * fs))
     for first, stop in segments:
         begin = first
         if (end := _plateau_end(smooth, fs, f_dom, first, stop)) is not None:
@@ -503,6 +521,12 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
             begin = lo + int(np.argmax(np.abs(x[lo:min(stop, end + quarter + 1)])))
             if plateaus is not None:
                 plateaus.append((first, begin))
+        elif band is not None and (end := _forced_end(band, fs, f_dom, first, stop,
+                                                      band_floor)) is not None:
+            lo = max(first, end - quarter)
+            begin = lo + int(np.argmax(np.abs(x[lo:min(stop, end + quarter + 1)])))
+            if forced is not None:
+                forced.append((first, begin))
         free = _walk_back(x, fs, f_dom, begin)
         # Extrema nearly as large before the largest one: the record holds the free decay
         # from its start (release); the window opens a quarter period earlier so that its
@@ -638,6 +662,50 @@ def _plateau_end(x: np.ndarray, fs: float, f_dom: float, begin: int, stop: int) 
     if (slope < 0.0 and float(rss[best]) * PLATEAU_GAIN <= rss_line
             and abs(flat) <= PLATEAU_SLOPE * -slope):
         return int(peaks[hinge - 1])
+    return None
+
+
+def _forced_end(band: np.ndarray, fs: float, f_dom: float, begin: int, stop: int,
+                floor: float) -> int | None:
+    """Where a forced response that holds the decay's largest sample ``begin`` ends, or None
+    when the motion decays from ``begin`` on.
+
+    Random forcing (a burst switched off inside the record) drives the dominant mode's
+    amplitude up and down: its largest sample lies anywhere in the burst, and the decay taken
+    from it read a 17 Hz mode at 16.5 Hz (interval +-0.12 Hz, no warning). A free decay's
+    amplitude in its own band never rises: a half-period maximum of ``band`` (the envelope,
+    ``|x|`` in the dominant mode's band, :data:`RISE_BAND`) :data:`RISE_RATIO` times below a
+    later one marks forcing before the later one. The last such rise counts when its peak
+    reaches :data:`RISE_LEVEL` of the band's largest, leaves ``2 MIN_CYCLES`` half periods
+    above ``floor`` (the band's noise, unit of ``band``) and is followed by no rise of
+    :data:`RISE_AFTER` (a beat with another mode in the band rises again and again). A rise at
+    the window's end (``stop``: the next excitation) is not looked at. ``fs`` and ``f_dom``
+    in Hz, ``begin`` and ``stop`` sample indices. Returns the sample of the rise's peak."""
+    half = max(1, int(round(0.5 * fs / f_dom)))
+    n = (stop - begin) // half
+    if n < 4 * MIN_CYCLES:
+        return None
+    blocks = band[begin:begin + n * half].reshape(n, half)
+    h = blocks.max(axis=1)
+    end = n
+    while end > 1 and h[end - 2] < h[end - 1]:      # the rise into the next excitation
+        end -= 1
+    h = h[:end]
+    if h.size < 4 * MIN_CYCLES:
+        return None
+    later = np.maximum.accumulate(h[::-1])[::-1]            # the largest from each on
+    above = np.cumsum((h > floor)[::-1])[::-1]              # half periods above the floor
+    rises = np.flatnonzero((np.maximum(h[:-1], floor) * RISE_RATIO < later[1:])
+                           & (later[1:] >= RISE_LEVEL * float(np.max(band))))
+    for k in rises[::-1]:
+        peak = k + 1 + int(np.argmax(h[k + 1:]))
+        if above[peak] < 2 * MIN_CYCLES:
+            continue
+        free = h[peak:]
+        low = np.minimum.accumulate(np.maximum(free, 3.0 * floor))
+        if np.any(free[1:] > RISE_AFTER * low[:-1]):
+            return None
+        return begin + peak * half + int(np.argmax(blocks[peak]))
     return None
 
 
@@ -1167,6 +1235,13 @@ def _pooled_half_period(decays: list[dict]) -> float | None:
     return float(sorted_values[k])
 
 
+def _damped_w(mode: "_Mode") -> float:
+    """A mode's damped angular frequency (rad/s) from its decays' zero crossings
+    (:func:`_pooled_half_period`), or its spectral peak's when they hold too few."""
+    half = _pooled_half_period(mode.decays)
+    return math.pi / half if half else 2.0 * math.pi * mode.frequency
+
+
 @dataclass
 class _Mode:
     """Working state of one mode during :func:`identify`."""
@@ -1359,6 +1434,14 @@ def _model_record(modes: list[_Mode], window: tuple[int, int, int], fs: float, f
             keep = max(1.0, reach[mode.band] * mode.frequency)
             lead = np.clip((times - anchor) * mode.frequency + keep + 1.0, 0.0, 1.0)
             decay = decay * smooth_step(lead)
+            # ... and ends, faded over a period, where it would leave ``limit``: a decay whose
+            # first cycles were left out as forced (step 8) starts among the record's cycles,
+            # and its law run back there meets no release (quadratic damping run backwards
+            # grows without bound within a few cycles).
+            over = np.flatnonzero((times < anchor) & ~(np.abs(decay) <= limit))
+            if over.size:
+                decay = np.where(times > times[over[-1]], decay, 0.0) * smooth_step(
+                    np.clip((times - times[over[-1]]) * mode.frequency, 0.0, 1.0))
             if np.all(np.isfinite(decay)) and float(np.max(np.abs(decay))) <= limit:
                 out += decay
     return out
@@ -1444,6 +1527,27 @@ def _correct(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: Mod
                 d["anchor"] = anchor - (float(t_model[idx[0]]) - float(d["times"][0]))
     for mode in modes:
         _frequency_step(mode, follow)
+
+
+def _correction_passes(modes: list[_Mode], windows: list[tuple[int, int, int]],
+                       bands: ModeBands, record: np.ndarray, fs: float, follow: str,
+                       quantity: str, sigma: float, laws: Sequence[str]) -> None:
+    """Step 6's passes: noise-free corrections (:func:`_correct`) until the quadratic law moves
+    by less than :data:`PASS_TOLERANCE` of its standard errors (a large smear, in short decays,
+    takes several; :data:`MAX_PASSES` at most), then one with the record's noise ``sigma``;
+    every law refitted after each."""
+    moved = math.inf
+    for n_pass in range(MAX_PASSES + 1):
+        last = n_pass == MAX_PASSES or (n_pass > 0 and moved < PASS_TOLERANCE)
+        before = [m.fits["quadratic"] for m in modes]
+        _correct(modes, windows, bands, record, fs, follow, quantity, sigma if last else 0.0)
+        for mode in modes:
+            _fit_all(mode, follow, laws)
+        if last:
+            break
+        moved = max(float(np.max(np.abs(m.fits["quadratic"].params - b.params)
+                                 / np.maximum(m.fits["quadratic"].se, 1e-300)))
+                    for m, b in zip(modes, before))
 
 
 def _clusters(modes: list[_Mode]) -> list[list[_Mode]]:
@@ -2425,8 +2529,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     f_dom = float(top.frequencies[0])
     sigma = _noise_rms(record, fs, top.frequencies)
     plateaus: list[tuple[int, int]] = []
+    forced: list[tuple[int, int]] = []
     windows = _windows(record, fs, f_dom, sigma, decay_starts,
-                       PRECISION * float(np.max(np.abs(record))), plateaus)
+                       PRECISION * float(np.max(np.abs(record))), plateaus, forced)
     if not windows:
         raise fail(func, f"found no free decay of at least {MIN_WINDOW} samples")
     if reference is not None:
@@ -2438,6 +2543,13 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         notes.insert(0, f"the record holds a steady oscillation from {a / fs:.4g} to "
                         f"{b / fs:.4g} s before it decays (a forcing such as a sine dwell "
                         "switched off there): no free decay, the decay is taken from its end")
+    for a, b in forced:
+        notes.insert(0, f"the oscillation at {f_dom:.4g} Hz is still forced from {a / fs:.4g} "
+                        f"to {b / fs:.4g} s: its amplitude rises {RISE_RATIO:g} times or more "
+                        "after falling, which no free decay does (a random or other excitation "
+                        f"still running); the decay is taken from {b / fs:.4g} s (if the "
+                        "excitation stopped later, give that time as the analysis's start, "
+                        "analysis.hvd.start_s)")
     if spikes.size:
         notes.insert(0, f"{spikes.size} isolated sample{'s' if spikes.size > 1 else ''} "
                         f"stand{'' if spikes.size > 1 else 's'} far off the oscillation their "
@@ -2574,8 +2686,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, _too_short(windows, dropped + followers, fs) + "; ".join(notes))
     # Step 5: first fits, then the floor judged on the fitted envelope.
     for mode in modes:
-        half = _pooled_half_period(mode.decays)
-        mode.w0 = math.pi / half if half else 2.0 * math.pi * mode.frequency
+        mode.w0 = _damped_w(mode)
         _fit_all(mode, follow, laws)
         fit = mode.fits["quadratic"]
         a = max(fit.value("a"), 0.0)
@@ -2613,26 +2724,31 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     if not modes:
         raise fail(func, "no spectral peak shows a free decay; " + "; ".join(notes))
     # Step 6: filter correction, the last pass with the record's noise.
-    # Noise-free passes until the quadratic law moves by less than PASS_TOLERANCE of its
-    # standard errors (a large smear, in short decays, takes several), then one with noise.
-    moved = math.inf
-    for n_pass in range(MAX_PASSES + 1):
-        last = n_pass == MAX_PASSES or (n_pass > 0 and moved < PASS_TOLERANCE)
-        before = [m.fits["quadratic"] for m in modes]
-        _correct(modes, windows, bands, record, fs, follow, quantity, sigma if last else 0.0)
-        for mode in modes:
-            _fit_all(mode, follow, laws)
-        if last:
-            break
-        moved = max(float(np.max(np.abs(m.fits["quadratic"].params - b.params)
-                                 / np.maximum(m.fits["quadratic"].se, 1e-300)))
-                    for m, b in zip(modes, before))
+    _correction_passes(modes, windows, bands, record, fs, follow, quantity, sigma, laws)
     notes += _joint(modes, windows, bands, record, fs, follow, quantity, sigma,
                     base_free is not None, laws)
-    # Steps 7 and 8: where the laws start to hold; backbones and natural frequencies.
-    results = []
+    # Step 8: where the laws start to hold. A start moved on measures the model again from
+    # there: its frequency was stepped over every crossing (step 6), and the cycles left out
+    # are those the law does not describe (a random burst's forced cycles ahead of its free
+    # decay pulled a 17 Hz mode to 16.49 Hz, 0.12 Hz its precision).
     for mode in modes:
         mode.drift = _stable_start(mode, follow, laws)
+    moved_on = {id(m): m.drift["dropped"] for m in modes
+                if m.joint is None and m.drift.get("dropped", 0.0) > 0.0}
+    if moved_on:
+        for mode in modes:
+            if id(mode) in moved_on:
+                for d in mode.decays:
+                    d.pop("anchor", None)
+                a = max(mode.fits["quadratic"].value("a"), 0.0)
+                mode.w0 = math.sqrt(_damped_w(mode) ** 2 + a * a)
+        _correction_passes(modes, windows, bands, record, fs, follow, quantity, sigma, laws)
+        for mode in modes:
+            mode.drift = _stable_start(mode, follow, laws)
+            mode.drift["dropped"] += moved_on.get(id(mode), 0.0)
+    # Step 7: backbones and natural frequencies.
+    results = []
+    for mode in modes:
         if mode.joint is None:
             mode.drift.update(_one_law(mode, follow))
             mode.drift.update(_noise_spread(mode))
