@@ -145,6 +145,9 @@ PLATEAU_DOWN, PLATEAU_MIN, PLATEAU_GAIN, PLATEAU_SLOPE = 0.3, 4, 4.0, 0.2
 #: white noise.
 RISE_BAND, RISE_SAMPLES, RISE_RATIO, RISE_LEVEL, RISE_AFTER, RISE_FLOOR = (
     1.15, 8.0, 2.0, 0.25, 1.3, 8.0)
+#: A start moved on (step 8) measures the model again when the cycles kept cross zero at a
+#: frequency this far (relative) from the one stepped to over them all (:func:`_pulled`).
+PULLED_SHIFT = 1e-3
 #: A displacement record's first HOLD_SHARE of samples that stand still (their spread within
 #: HOLD_STILL times the noise of their sample-to-sample steps) at more than HOLD_OFFSET times
 #: that noise from where the record comes to rest (its last REST_SHARE) hold a static
@@ -1233,6 +1236,16 @@ def _pooled_half_period(decays: list[dict]) -> float | None:
     if math.isclose(cumulative[k], half) and k + 1 < sorted_values.size:
         return float(0.5 * (sorted_values[k] + sorted_values[k + 1]))
     return float(sorted_values[k])
+
+
+def _pulled(mode: "_Mode") -> bool:
+    """Whether the zero crossings of a mode's decays, as kept, give a damped frequency more
+    than :data:`PULLED_SHIFT` (relative) and 3 standard errors off the one its linear
+    frequency was stepped to (the cycles left out pulled it)."""
+    a = max(mode.fits["quadratic"].value("a"), 0.0)
+    damped = math.sqrt(max(mode.w0 ** 2 - a * a, 1e-300))
+    shift = abs(_damped_w(mode) - damped)
+    return shift > PULLED_SHIFT * damped and shift > 3.0 * mode.w0_se
 
 
 def _damped_w(mode: "_Mode") -> float:
@@ -2734,7 +2747,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     for mode in modes:
         mode.drift = _stable_start(mode, follow, laws)
     moved_on = {id(m): m.drift["dropped"] for m in modes
-                if m.joint is None and m.drift.get("dropped", 0.0) > 0.0}
+                if m.joint is None and m.drift.get("dropped", 0.0) > 0.0 and _pulled(m)}
     if moved_on:
         for mode in modes:
             if id(mode) in moved_on:
