@@ -402,6 +402,36 @@ def test_the_modal_model_s_amplitude_axes_say_where_the_amplitude_is(qtbot, tmp_
                                                      "m"), cell
 
 
+def _text_out_of_sight(editor) -> bool:
+    """Whether part of an editor's text is out of sight: wider than a line edit (less its
+    2 px inner margins), or in lines a text editor that wraps would scroll to."""
+    from PySide6.QtWidgets import QLineEdit, QPlainTextEdit
+
+    if isinstance(editor, QLineEdit):
+        margins = editor.textMargins()
+        shown = editor.contentsRect().width() - margins.left() - margins.right() - 4
+        return editor.fontMetrics().horizontalAdvance(editor.text()) > shown
+    scroll = editor.verticalScrollBar()
+    return (editor.lineWrapMode() == QPlainTextEdit.LineWrapMode.NoWrap
+            or scroll.maximum() > 0 or scroll.value() > 0)
+
+
+def test_the_analysis_chain_is_shown_whole(qtbot, make_window, registry, tmp_path):
+    """At 1366x768 the Analysis tab's chain field showed only part of a chain of six analyses
+    (434 px of text in a line edit 162 px wide). Every analysis of the chain is in view."""
+    from fsi_lab.gui.app import settle
+
+    window = make_window(registry)  # at 1366x768
+    views = _open(qtbot, window, write_run(tmp_path / "a.h5"))
+    window.tabs.setCurrentWidget(views)
+    assert settle(window), "the layout did not settle"
+    chain = views.parameters.chain_form.values()["chain"]
+    editor = views.parameters.chain_form.editor("chain")
+    assert len(chain) == 6 and editor.isVisible()
+    assert [item.strip() for item in editor.text().split(",")] == chain
+    assert not _text_out_of_sight(editor), (editor.size(), editor.text())
+
+
 def test_the_cq_range_shows_the_fit_not_the_noise_floor(qtbot, tmp_path):
     import h5py
 
