@@ -135,6 +135,11 @@ class ComparisonCurve:
     summary
         Where a run whose datasets lack the curve keeps it in its summary: ``(section, x key,
         y key)`` of each component entry; None: nowhere.
+    x_label_for
+        Called with the runs compared, a list of ``(RunResults, channel)``, returns the x
+        axis's label for them, where what ``x`` holds depends on the run (the amplitude at its
+        specimen's measuring point, or in a modal coordinate); None, or no run compared:
+        ``x_label``. Name it with ``Deferred`` to keep Qt out of the hook's module.
     """
 
     name: str
@@ -148,6 +153,13 @@ class ComparisonCurve:
     x_name: str = "x"
     y_name: str = "y"
     summary: tuple[str, str, str] | None = None
+    x_label_for: Callable[[list[tuple[Any, str]]], str] | None = None
+
+    def __post_init__(self) -> None:
+        if self.x_label_for is not None and not callable(self.x_label_for):
+            raise TypeError(f"ComparisonCurve {self.name!r}: x_label_for must be callable "
+                            "(a function of the runs compared, or Deferred('package.module:"
+                            "function'))")
 
 
 @dataclass(frozen=True)

@@ -45,7 +45,7 @@ def changed_overrides(form: ParamForm, base: dict[str, Any], section: str,
 
 
 class ExcitationDesigner(QWidget):
-    """Plugin choice, parameter form, record settings, waveform preview and safety verdict."""
+    """Plugin choice, parameter form, safety verdict, waveform preview and record settings."""
 
     def __init__(self, session: ProfileSession, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -93,11 +93,13 @@ class ExcitationDesigner(QWidget):
         layout.addLayout(top)
         layout.addWidget(self.plugin_help)
         layout.addWidget(self.form_box)
-        layout.addWidget(self.run_box)
+        # the verdict and the waveform right under the parameters that make them: on a
+        # 1366x768 screen they are in view with them, the record's settings and the run below
         layout.addWidget(QLabel("Safety check"))
         layout.addWidget(self.verdict)
         layout.addWidget(QLabel("Waveform sent to the source"))
         layout.addWidget(self.preview)
+        layout.addWidget(self.run_box)
         self.setEnabled(False)
 
         session.opened.connect(self._opened)

@@ -1,7 +1,8 @@
 """Forms generated from parameter schemas (:class:`fsi_lab.params.Param`).
 
 One widget per parameter: a spin box with the unit as suffix for numbers, a combo box for
-choices, a check box for booleans, a line edit for strings and lists; an "auto" box for optional
+choices, a check box for booleans, a line edit for strings, and for lists an editor that wraps
+and grows to show every item (an analysis chain is wider than a panel); an "auto" box for optional
 parameters (default ``None``), whose editor then reads "auto" rather than a number the plugin
 will not use. The help text and the accepted values are the tooltip. Every
 edit is checked by the parameter's own :meth:`~fsi_lab.params.Param.check`: a refused value is
@@ -14,7 +15,8 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping, Sequence
 
-from PySide6.QtCore import Signal
+from PySide6.QtCore import QSize, Qt, Signal
+from PySide6.QtGui import QFontMetricsF, QTextOption
 from PySide6.QtWidgets import (
     QAbstractSpinBox,
     QCheckBox,
@@ -24,6 +26,8 @@ from PySide6.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QLineEdit,
+    QPlainTextEdit,
+    QSizePolicy,
     QSpinBox,
     QVBoxLayout,
     QWidget,
@@ -142,6 +146,78 @@ class _IntSpin(QSpinBox):
     minimumSizeHint = sizeHint
 
 
+class ListEdit(QPlainTextEdit):
+    """The editor of a list (comma-separated items): it wraps at its width and grows to show
+    the whole value, which a line edit cuts; used as one, Enter or leaving it after a change
+    ends the edit (``editingFinished``)."""
+
+    editingFinished = Signal()
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.setLineWrapMode(QPlainTextEdit.LineWrapMode.WidgetWidth)
+        self.setWordWrapMode(QTextOption.WrapMode.WrapAtWordBoundaryOrAnywhere)
+        self.setTabChangesFocus(True)
+        self.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.setVerticalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
+        self.document().setDocumentMargin(2)
+        #: the height of a line edit: a short list looks like any other field
+        self._line_height = QLineEdit().sizeHint().height()
+        self._dirty = False
+        self.textChanged.connect(self._changed)
+        self._fit()
+
+    def text(self) -> str:
+        # an item never holds a line break: one typed or pasted separates items
+        return ",".join(self.toPlainText().splitlines())
+
+    def setText(self, text: str) -> None:
+        self.setPlainText(text)
+        self._dirty = False
+        self._fit()
+
+    def _changed(self) -> None:
+        self._dirty = True
+        self._fit()
+
+    def _fit(self) -> None:
+        """As high as the wrapped text's lines (the text edit scrolls a line that is short of
+        its height by a pixel)."""
+        lines = max(1, self.document().lineCount())
+        text = lines * QFontMetricsF(self.font()).lineSpacing() \
+            + 2 * self.document().documentMargin() + 1
+        margins = self.contentsMargins()
+        self.setFixedHeight(max(self._line_height,
+                                math.ceil(text) + margins.top() + margins.bottom()))
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)  # the text wrapped anew at the new width
+        self._fit()
+
+    def keyPressEvent(self, event) -> None:
+        if event.key() in (Qt.Key.Key_Return, Qt.Key.Key_Enter):
+            self._finish()
+            return
+        super().keyPressEvent(event)
+
+    def focusOutEvent(self, event) -> None:
+        super().focusOutEvent(event)
+        if self._dirty:
+            self._finish()
+
+    def _finish(self) -> None:
+        self._dirty = False
+        self.editingFinished.emit()
+
+    def sizeHint(self) -> QSize:
+        # a line edit's width: the value wraps rather than widening its panel
+        return QSize(17 * self.fontMetrics().horizontalAdvance("x"), self.height())
+
+    def minimumSizeHint(self) -> QSize:
+        return QSize(self.fontMetrics().horizontalAdvance("x" * 8), self.height())
+
+
 class ParamField(QWidget):
     """The editor of one parameter, with its "auto" box and its error line.
 
@@ -199,10 +275,11 @@ class ParamField(QWidget):
             return _DoubleSpin(p)
         if p.type == "int":
             return _IntSpin(p)
-        edit = QLineEdit()
         if p.type in ("floats", "strs"):
-            edit.setPlaceholderText("comma-separated")
-        return edit
+            items = ListEdit()
+            items.setPlaceholderText("comma-separated")
+            return items
+        return QLineEdit()
 
     def _connect(self) -> None:
         e = self.editor
@@ -243,9 +320,12 @@ class ParamField(QWidget):
                 e.setValue(float(value) if value is not None else self._unset(e))
             elif isinstance(e, QSpinBox):
                 e.setValue(int(value) if value is not None else int(self._unset(e)))
+            elif self.param.type in ("floats", "strs"):
+                # ", " between items: where a long list wraps
+                e.setText("" if value is None else
+                          ", ".join(value_text(self.param, [item]) for item in value))
             else:
-                e.setText("" if value is None else value_text(self.param, value)
-                          if self.param.type in ("floats", "strs") else str(value))
+                e.setText("" if value is None else str(value))
         finally:
             e.blockSignals(False)
 

@@ -33,7 +33,7 @@ from PySide6.QtWidgets import (
 
 from fsi_lab.errors import FsiLabError
 from fsi_lab.gui.analysis.datasets import finite_pairs, per_component, summary_series, value_columns
-from fsi_lab.gui.analysis.plotting import COLOURS, robust_range
+from fsi_lab.gui.analysis.plotting import COLOURS, robust_range, set_bottom_label
 from fsi_lab.gui.export import export_figure, write_csv
 from fsi_lab.gui.figure import Figure, FlowLayout, Legend, scrolled
 from fsi_lab.gui.results import RunResults, load_results
@@ -307,9 +307,11 @@ class RunsBrowser(QWidget):
         runs = self._compared()
         plots = {}
         curves = self.registry.views().curves
+        compared = [(results, channel) for results in runs
+                    if (channel := self._channel_of(results)) is not None]
         for col, curve in enumerate(curves):
             plot = self.graphics.addPlot(row=0, col=col)
-            plot.setLabel("bottom", curve.x_label, units=curve.x_unit)
+            set_bottom_label(plot, self._x_label(curve, compared), curve.x_unit)
             plot.setLabel("left", curve.y_label, units=curve.y_unit)
             plot.setTitle(curve.name.replace("_", " "))
             plot.showGrid(x=True, y=True, alpha=0.2)
@@ -355,6 +357,17 @@ class RunsBrowser(QWidget):
                               "not computed.")
         else:
             self.note.setText(f"{len(runs)} run(s) compared")
+
+    @staticmethod
+    def _x_label(curve: ComparisonCurve, compared: list[tuple[RunResults, str]]) -> str:
+        """The curve's x label for the runs compared (its plugin's ``x_label_for``), else, or
+        when that fails, its ``x_label``."""
+        if curve.x_label_for is None or not compared:
+            return curve.x_label
+        try:
+            return str(curve.x_label_for(compared))
+        except Exception:  # noqa: BLE001 - a plugin's label must not take the comparison down
+            return curve.x_label
 
     @staticmethod
     def _label(results: RunResults, names: list[str]) -> str:

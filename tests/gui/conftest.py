@@ -279,6 +279,16 @@ def write_run(path: Path, rate: float = 1000.0, seconds: float = 4.0, analysis: 
     return path
 
 
+def with_specimen_and_convention(path: Path, convention: str, point: float = 0.08) -> Path:
+    """The run's profile (of :func:`write_run`) gains a specimen measured at ``point`` (m);
+    its equivalent-damping the amplitude convention ``convention``."""
+    with h5py.File(path, "r+") as f:
+        f.attrs["profile"] = (f.attrs["profile"] + "\n[specimen]\nlength = 0.08\n"
+                              f"measurement_point = {point}\n")
+        f["analysis/tip_velocity/equivalent-damping"].attrs["amplitude_convention"] = convention
+    return path
+
+
 def write_foreign(path: Path) -> Path:
     """A valid HDF5 file that is not an fsi-lab run file."""
     with h5py.File(path, "w") as handle:

@@ -7,6 +7,7 @@ from conftest import (
     LOAD_TIMEOUT_MS,
     RUN_TIMEOUT_MS,
     UI_TIMEOUT_MS,
+    with_specimen_and_convention,
     write_corrupt,
     write_foreign,
     write_run,
@@ -347,21 +348,10 @@ def test_the_bands_method_s_components_are_titled_by_their_bands(qtbot, make_win
     assert "bands 11.8 to 21, 1.5 to 2.5 Hz" in note and "cut-offs" not in note
 
 
-def _with_specimen_and_convention(path, convention):
-    """The run's profile gains a measuring point; equivalent-damping its amplitude convention."""
-    import h5py
-
-    with h5py.File(path, "r+") as f:
-        f.attrs["profile"] = (f.attrs["profile"]
-                              + "\n[specimen]\nlength = 0.08\nmeasurement_point = 0.08\n")
-        f["analysis/tip_velocity/equivalent-damping"].attrs["amplitude_convention"] = convention
-    return path
-
-
 def test_amplitude_axes_say_which_amplitude_they_are(qtbot, tmp_path):
     modal = ("component 0: modal: q_2 = w(x_meas) / W_2(x_meas), W_2(x_meas) = 2 (Eq. 15, "
              "int W^2 = L); component 1: modal: q_3 = w(x_meas) / W_3(x_meas), W_3(x_meas) = 2")
-    results = load_results(_with_specimen_and_convention(write_run(tmp_path / "m.h5"), modal))
+    results = load_results(with_specimen_and_convention(write_run(tmp_path / "m.h5"), modal))
     labels = {}
     for cls in (BackboneView, DampingView, EquivalentDampingView):
         view = cls()
@@ -376,13 +366,70 @@ def test_amplitude_axes_say_which_amplitude_they_are(qtbot, tmp_path):
     assert labels[EquivalentDampingView] == ("modal amplitude q = w(x_m) / W(x_m)", "m")
 
     measured = "component 0: measured (displacement amplitude at the measuring point)"
-    results = load_results(_with_specimen_and_convention(write_run(tmp_path / "w.h5"),
-                                                         measured))
+    results = load_results(with_specimen_and_convention(write_run(tmp_path / "w.h5"),
+                                                        measured))
     view = EquivalentDampingView()
     qtbot.addWidget(view)
     view.show_results(results, "tip_velocity")
     assert view._plots[(0, 0)].getAxis("bottom").labelText == \
         "displacement amplitude at x = 0.08 m"
+
+
+def test_the_modal_model_s_amplitude_axes_say_where_the_amplitude_is(qtbot, tmp_path):
+    """The modal model's backbone and damping plots said "displacement amplitude": their
+    amplitudes are those the Backbone and Damping views draw, at the measuring point."""
+    import h5py
+
+    from fsi_lab.plugins.analysis.views.modal_model_view import ModalModelView
+
+    path = with_specimen_and_convention(write_run(tmp_path / "model.h5"), "measured")
+    amp = np.linspace(0.004, 0.0005, 30)
+    with h5py.File(path, "r+") as f:
+        group = f.create_group("analysis/tip_velocity/modal-model")
+        group.attrs["status"] = "ok"
+        for side in ("measured", "model"):
+            group[f"backbone_amplitude_{side}"] = amp[None, :]
+            group[f"backbone_frequency_{side}"] = (17.2 - 9 * amp)[None, :]
+            group[f"damping_amplitude_{side}"] = amp[None, :]
+            group[f"damping_zeta_{side}"] = (0.011 + 2.1 * amp)[None, :]
+    view = ModalModelView()
+    qtbot.addWidget(view)
+    view.show_results(load_results(path), "tip_velocity")
+    assert view.filled
+    for cell in ((2, 0), (2, 1)):
+        axis = view._plots[cell].getAxis("bottom")
+        assert (axis.labelText, axis.labelUnits) == ("displacement amplitude at x = 0.08 m",
+                                                     "m"), cell
+
+
+def _text_out_of_sight(editor) -> bool:
+    """Whether part of an editor's text is out of sight: wider than a line edit (less its
+    2 px inner margins), or in lines a text editor that wraps would scroll to."""
+    from PySide6.QtWidgets import QLineEdit, QPlainTextEdit
+
+    if isinstance(editor, QLineEdit):
+        margins = editor.textMargins()
+        shown = editor.contentsRect().width() - margins.left() - margins.right() - 4
+        return editor.fontMetrics().horizontalAdvance(editor.text()) > shown
+    scroll = editor.verticalScrollBar()
+    return (editor.lineWrapMode() == QPlainTextEdit.LineWrapMode.NoWrap
+            or scroll.maximum() > 0 or scroll.value() > 0)
+
+
+def test_the_analysis_chain_is_shown_whole(qtbot, make_window, registry, tmp_path):
+    """At 1366x768 the Analysis tab's chain field showed only part of a chain of six analyses
+    (434 px of text in a line edit 162 px wide). Every analysis of the chain is in view."""
+    from fsi_lab.gui.app import settle
+
+    window = make_window(registry)  # at 1366x768
+    views = _open(qtbot, window, write_run(tmp_path / "a.h5"))
+    window.tabs.setCurrentWidget(views)
+    assert settle(window), "the layout did not settle"
+    chain = views.parameters.chain_form.values()["chain"]
+    editor = views.parameters.chain_form.editor("chain")
+    assert len(chain) == 6 and editor.isVisible()
+    assert [item.strip() for item in editor.text().split(",")] == chain
+    assert not _text_out_of_sight(editor), (editor.size(), editor.text())
 
 
 def test_the_cq_range_shows_the_fit_not_the_noise_floor(qtbot, tmp_path):

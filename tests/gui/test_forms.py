@@ -1,6 +1,16 @@
 """Forms generated from parameter schemas: widgets, tooltips, and refusal of bad values."""
 
-from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QLineEdit, QSpinBox
+from conftest import UI_TIMEOUT_MS
+from PySide6.QtCore import QEvent, Qt
+from PySide6.QtGui import QFocusEvent
+from PySide6.QtWidgets import (
+    QApplication,
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QLineEdit,
+    QSpinBox,
+)
 
 from fsi_lab.gui.forms import ParamForm
 from fsi_lab.params import Param
@@ -17,13 +27,15 @@ SCHEMA = (
 
 
 def test_one_widget_per_parameter_with_unit_and_help(qtbot):
+    from fsi_lab.gui.forms import ListEdit
+
     form = ParamForm(SCHEMA, {}, "excitation")
     qtbot.addWidget(form)
     kinds = {name: type(form.editor(name)) for name in form.fields}
     assert issubclass(kinds["amplitude"], QDoubleSpinBox)
     assert issubclass(kinds["components"], QSpinBox)
     assert kinds["window"] is QComboBox and kinds["detrend"] is QCheckBox
-    assert kinds["levels"] is QLineEdit
+    assert kinds["levels"] is ListEdit
     assert form.editor("amplitude").suffix() == " V"
     tip = form.editor("amplitude").toolTip()
     assert "Peak drive." in tip and "<= 10 V" in tip and ">= -10 V" in tip
@@ -122,3 +134,40 @@ def test_choices_and_missing_required(qtbot):
     assert form.is_valid() and form.values() == {"mode": "b", "gain": 2.0}
     assert form.overrides("bench.amplifier") == ["bench.amplifier.mode=b",
                                                  "bench.amplifier.gain=2.0"]
+
+
+def test_a_list_wraps_to_show_every_item_and_is_edited_as_a_line(qtbot):
+    """A list's editor shows every item, on as many lines as its width needs (a line edit
+    showed the part that fit); it is edited as a line edit is: Enter, or leaving it after a
+    change, commits the list, and leaving it unchanged commits nothing."""
+    chain = ["hvd", "instantaneous", "backbone", "damping", "equivalent-damping", "modal-model"]
+    form = ParamForm((Param("chain", "strs", "", [], help="Analyses."),), {"chain": chain},
+                     "analysis")
+    qtbot.addWidget(form)
+    form.resize(220, 200)
+    form.show()
+    qtbot.waitExposed(form)
+    editor = form.editor("chain")
+    one_line = QLineEdit().sizeHint().height()
+    assert editor.text() == ", ".join(chain)             # wraps after a comma
+    qtbot.waitUntil(lambda: editor.height() > 2 * one_line, timeout=UI_TIMEOUT_MS)
+    assert editor.document().lineCount() > 2
+    assert editor.verticalScrollBar().maximum() == 0     # every line in view
+
+    committed = []
+    form.changed.connect(lambda: committed.append(form.values()["chain"]))
+    editor.selectAll()
+    qtbot.keyClicks(editor, "hvd, backbone")
+    assert committed == []                               # typing is not committing
+    qtbot.keyClick(editor, Qt.Key.Key_Return)
+    assert committed == [["hvd", "backbone"]] and editor.text() == "hvd, backbone"
+    qtbot.waitUntil(lambda: editor.height() == one_line, timeout=UI_TIMEOUT_MS)
+
+    def leave():
+        QApplication.sendEvent(editor, QFocusEvent(QEvent.Type.FocusOut))
+
+    leave()
+    assert len(committed) == 1                           # nothing changed since Enter
+    qtbot.keyClicks(editor, ", damping")
+    leave()
+    assert committed[-1] == ["hvd", "backbone", "damping"] and len(committed) == 2

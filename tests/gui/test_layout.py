@@ -6,6 +6,7 @@ import pytest
 from conftest import (
     CHECK_TIMEOUT_MS,
     LOAD_TIMEOUT_MS,
+    ROOT,
     UI_TIMEOUT_MS,
     assert_readable,
     wait_checked,
@@ -82,6 +83,38 @@ def test_the_window_fits_a_1366x768_screen(qtbot, make_window, registry, sim_pro
     assert hint.width() <= 1366 and hint.height() <= 768, hint
     window.resize(1366, 768)
     qtbot.waitUntil(lambda: window.size().toTuple() == (1366, 768), timeout=CHECK_TIMEOUT_MS)
+
+
+def test_the_excitation_s_waveform_and_its_labels_are_in_view_at_1366x768(qtbot, make_window,
+                                                                         registry):
+    """At 1366x768 the waveform preview of the demo profile ended below the visible part of
+    the Experiment tab's column: its time axis label was cut off. The excitation's
+    parameters, safety verdict and waveform, with every label, are in view without
+    scrolling."""
+    from PySide6.QtCore import QPoint, QRect
+    from PySide6.QtWidgets import QLabel, QScrollArea
+
+    window = make_window(registry)  # at 1366x768
+    assert window.open_profile(ROOT / "profiles" / "wet-beam-sim.toml")
+    wait_checked(qtbot, window)
+    assert settle(window), "the layout did not settle"
+    designer = window.designer
+    scroll = designer.parentWidget()
+    while not isinstance(scroll, QScrollArea):
+        scroll = scroll.parentWidget()
+    viewport = scroll.viewport()
+    assert scroll.verticalScrollBar().value() == 0
+
+    title = next(label for label in designer.findChildren(QLabel)
+                 if label.text() == "Waveform sent to the source")
+    preview = designer.preview
+    bottom = preview.getPlotItem().getAxis("bottom")
+    assert bottom.labelText == "time" and bottom.label.isVisible()
+    for widget in (title, preview, designer.verdict, designer.form):
+        where = QRect(widget.mapTo(viewport, QPoint(0, 0)), widget.size())
+        assert widget.isVisible() and viewport.rect().contains(where), (
+            f"{widget.objectName() or widget.text()!r} at {where} is not all within the "
+            f"visible {viewport.size()}")
 
 
 def test_a_figure_resized_while_its_plots_are_hidden_fills_out_when_they_show(qtbot):

@@ -3,7 +3,7 @@
 import csv
 
 import h5py
-from conftest import LOAD_TIMEOUT_MS, write_foreign, write_run
+from conftest import LOAD_TIMEOUT_MS, with_specimen_and_convention, write_foreign, write_run
 
 
 def test_compare_two_runs_and_export(qtbot, make_window, registry, tmp_path):
@@ -115,3 +115,66 @@ def test_the_runs_legend_shows_every_entry_whole_at_1366x768(qtbot, make_window,
     assert legend.height() >= legend.heightForWidth(legend.width())
     tab = window.runs
     assert tab.rect().contains(QRect(legend.mapTo(tab, QPoint(0, 0)), legend.size()))
+
+
+#: equivalent-damping's amplitude conventions of a run with a beam model, and of one without
+MODAL = ("component 0: modal: q_2 = w(x_meas) / W_2(x_meas), W_2(x_meas) = 2 (Eq. 15, "
+         "int W^2 = L)")
+MEASURED = "component 0: measured (displacement amplitude at the measuring point)"
+
+
+def _bottom_labels(browser):
+    """(text, unit) of the x axis of each compared curve's plot, by curve (a long text is
+    broken into lines)."""
+    out = {}
+    for col, curve in enumerate(browser.registry.views().curves):
+        axis = browser.graphics.ci.getItem(0, col).getAxis("bottom")
+        out[curve.name] = (axis.labelText.replace("<br>", " "), axis.labelUnits)
+    return out
+
+
+def test_the_compared_amplitude_axes_name_the_amplitude_drawn(qtbot, make_window, registry,
+                                                              tmp_path):
+    """The Runs tab labelled its amplitude axes "displacement amplitude" and, for C_q,
+    "displacement amplitude W", whatever the runs' analyses drew: their C_q is against the
+    modal amplitude q when the run has a beam model, and their backbones against the
+    displacement at their specimen's measuring point. The axes say what the analysis views
+    say, in words that hold for every run compared."""
+    from fsi_lab.gui.app import settle
+
+    window = make_window(registry)  # at 1366x768
+    modal = [with_specimen_and_convention(write_run(tmp_path / f"{k}.h5", name=f"run {k}"),
+                                          MODAL) for k in (1, 2)]
+    measured = with_specimen_and_convention(write_run(tmp_path / "m.h5", name="run 3"),
+                                            MEASURED, point=0.06)
+    window.runs.open([*modal, measured])
+    qtbot.waitUntil(lambda: len(window.runs.runs) == 3 and not window.runs.pending,
+                    timeout=LOAD_TIMEOUT_MS)
+    window.tabs.setCurrentWidget(window.runs)
+
+    window.runs.set_checked(modal)
+    assert _bottom_labels(window.runs) == {
+        "backbone": ("displacement amplitude at x = 0.08 m", "m"),
+        "damping": ("displacement amplitude at x = 0.08 m", "m"),
+        "equivalent_damping": ("modal amplitude q = w(x_m) / W(x_m)", "m")}
+
+    window.runs.set_checked([measured])
+    assert _bottom_labels(window.runs) == {
+        "backbone": ("displacement amplitude at x = 0.06 m", "m"),
+        "damping": ("displacement amplitude at x = 0.06 m", "m"),
+        "equivalent_damping": ("displacement amplitude at x = 0.06 m", "m")}
+
+    # runs measured at different points, one C_q modal and one as measured
+    window.runs.set_checked([*modal, measured])
+    assert _bottom_labels(window.runs) == {
+        "backbone": ("displacement amplitude at the measuring point", "m"),
+        "damping": ("displacement amplitude at the measuring point", "m"),
+        "equivalent_damping": ("modal amplitude q = w(x_m) / W(x_m) or measured amplitude "
+                               "(per run)", "m")}
+    # at 1366x768 each label, on several lines, stays within its own plot's width
+    assert settle(window), "the layout did not settle"
+    for col in range(3):
+        plot = window.runs.graphics.ci.getItem(0, col)
+        label = plot.getAxis("bottom").label.sceneBoundingRect()
+        box = plot.sceneBoundingRect()
+        assert box.left() <= label.left() and label.right() <= box.right(), (col, label, box)

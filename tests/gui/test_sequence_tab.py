@@ -9,6 +9,7 @@ cannot miss the sequence, however fast the machine."""
 import re
 from pathlib import Path
 
+import pytest
 from conftest import ROOT, UI_TIMEOUT_MS
 
 from fsi_lab.gui.sequence_tab import plan_text
@@ -79,3 +80,57 @@ def test_build_start_stop_resume_and_watch_the_aggregation(qtbot, make_window, t
     # the runs' points and the medians and fitted line on the common amplitude axis
     assert len(figure.plots["c_q"].listDataItems()) == 2 + 2  # two runs, median, fit
     assert len(list(Path(out).glob("2*.h5"))) == 2
+
+
+def _record_of_one_run(folder, run, sets):
+    """A completed sequence of one run in ``folder``, its record holding the aggregation of
+    ``run`` analysed with the overrides ``sets`` (mu + M given: the run has no specimen)."""
+    from fsi_lab.aggregate import aggregate_extracts
+    from fsi_lab.aggregate_extract import ExtractTask, extract_run
+    from fsi_lab.plan import load_plan
+    from fsi_lab.seqfile import SequenceRecord
+
+    plan = folder.parent / "plan.toml"
+    plan.write_text(plan_text(ROOT / "profiles" / "wet-beam-sim.toml", "excitation.height",
+                              ["0.005"]))
+    folder.mkdir()
+    record = SequenceRecord.new(load_plan(plan), folder, {})
+    record.attrs["status"] = "completed"
+    record.runs[0].update(status="completed", run_file=str(run))
+    extract = extract_run(ExtractTask(str(run), sets, 0.05, "run 1"))
+    record.aggregate = {**aggregate_extracts([extract]), "sequence_runs": [1]}
+    record.save()
+    return folder
+
+
+@pytest.mark.parametrize("sets, amplitude", [
+    ((), "displacement amplitude at the measuring point"),
+    (("analysis.equivalent-damping.modal_scale=2",), "modal amplitude q = w(x_m) / W(x_m)")],
+    ids=["measured", "modal"])
+def test_the_aggregation_s_amplitude_axes_name_the_amplitude_drawn(qtbot, make_window, tmp_path,
+                                                                   sets, amplitude):
+    """The aggregation's plots were labelled "amplitude (m)" whichever amplitude the runs'
+    curves are on: the displacement at the measuring point, or the modal amplitude q when the
+    aggregated C_i and C_f belong to the modal coordinate. They say which, as the analysis
+    views do."""
+    from support import write_decay_run
+
+    from fsi_lab.gui.app import settle
+
+    folder = _record_of_one_run(tmp_path / "sequence", write_decay_run(tmp_path / "run.h5"),
+                                sets)
+    window = make_window()  # at 1366x768
+    window.open_paths([folder])
+    tab = window.sequence
+    window.tabs.setCurrentWidget(tab)
+    (figure,) = tab.figures
+    assert tab.record is not None and figure.points("c_q") > 0
+    labels = {key: (axis.labelText.replace("<br>", " "), axis.labelUnits)
+              for key, axis in ((key, plot.getAxis("bottom"))
+                                for key, plot in figure.plots.items())}
+    assert labels == dict.fromkeys(("backbone", "damping", "c_q"), (amplitude, "m"))
+    assert settle(window), "the layout did not settle"
+    for plot in figure.plots.values():  # each label within its own plot's width
+        label = plot.getAxis("bottom").label.sceneBoundingRect()
+        box = plot.sceneBoundingRect()
+        assert box.left() <= label.left() and label.right() <= box.right(), (label, box)

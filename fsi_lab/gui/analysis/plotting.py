@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import html
+import re
 from typing import Sequence
 
 import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt
+from PySide6.QtGui import QFontMetricsF
 
 from fsi_lab.gui.decimate import min_max_decimate
+from fsi_lab.gui.figure import MIN_PLOT_WIDTH
 
 #: Colours of the components (component k in ``COLOURS[k % len(COLOURS)]``).
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2",
@@ -20,6 +24,39 @@ MAX_COMPONENTS_DRAWN = 6
 #: pixel of the figure's width, within these bounds. The run file keeps every sample.
 DRAW_POINTS = 4000
 MIN_DRAW_POINTS = 1200
+
+
+#: The widest line of an x axis label, in pixels: the axis of a plot at its smallest (a
+#: figure's plots keep MIN_PLOT_WIDTH) less the y axis beside it.
+LABEL_LINE_WIDTH = MIN_PLOT_WIDTH - 60
+#: Where a label may break: at a space, except around "=" and "/" (a formula stays whole)
+#: and before the last word (no word alone on the last line, as the "m" of "x = 0.08 m").
+_BREAK = re.compile(r"(?<![=/]) (?![=/]|\S+$)")
+
+
+def set_bottom_label(plot: pg.PlotItem, text: str, units: str | None = None) -> None:
+    """Label the x axis of ``plot`` with ``text`` (and ``units``, which pyqtgraph appends
+    with an SI prefix), broken into lines of at most :data:`LABEL_LINE_WIDTH` where it can
+    be: plots side by side share a row's width, and a label on one line as long as
+    "displacement amplitude at the measuring point" runs into its neighbours'. A text with
+    markup (pyqtgraph's labels are HTML) is set as it is."""
+    if "<" in text:
+        plot.setLabel("bottom", text, units=units)
+        return
+    metrics = QFontMetricsF(plot.getAxis("bottom").label.font())
+    suffix = " (mm)" if units else ""  # as wide as a prefixed unit
+    lines: list[list[str]] = []
+    for chunk in _BREAK.split(text):
+        if lines and metrics.horizontalAdvance(" ".join([*lines[-1], chunk])) \
+                <= LABEL_LINE_WIDTH:
+            lines[-1].append(chunk)
+        else:
+            lines.append([chunk])
+    if lines and len(lines[-1]) > 1 \
+            and metrics.horizontalAdvance(" ".join(lines[-1]) + suffix) > LABEL_LINE_WIDTH:
+        lines.append([lines[-1].pop()])
+    plot.setLabel("bottom", "<br>".join(html.escape(" ".join(line)) for line in lines),
+                  units=units)
 
 
 def display_points(plot: pg.PlotItem) -> int:

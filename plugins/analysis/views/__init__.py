@@ -9,8 +9,9 @@ when the GUI builds its tabs. The figures are drawn as the paper draws them:
   time (HVD and zero crossings) (:mod:`.time_views`);
 - backbone: frequency against displacement and velocity amplitude (Figs. 14-16), and damping
   ratio against both (Figs. 19-20) (:mod:`.amplitude_views`);
-- the equivalent damping C_q against displacement amplitude with its first-order fit, R^2 and
-  95 % intervals of C_i and C_f (Fig. 21) (:mod:`.equivalent_damping_view`);
+- the equivalent damping C_q against amplitude (displacement, or the modal amplitude its
+  coefficients belong to) with its first-order fit, R^2 and 95 % intervals of C_i and C_f
+  (Fig. 21) (:mod:`.equivalent_damping_view`);
 - the modal model overlaid on the measurement (:mod:`.modal_model_view`);
 - spectra and FRF (:mod:`.spectrum_view`).
 
@@ -41,16 +42,21 @@ VIEWS = (
     ("Spectrum / FRF", ("spectrum", "frf"), "spectrum_view:SpectrumView"),
 )
 
+# The amplitude axes are named for the runs compared, as the views name them (.labels): the
+# displacement at the measuring point, and for C_q the coordinate its coefficients belong to.
+_MEASURED = Deferred(f"{_HERE}.labels:compared_amplitude")
 CURVES = (
-    ComparisonCurve("backbone", "backbone", "amplitude", "frequency", "displacement amplitude",
-                    "frequency", "m", "Hz", "displacement_amplitude_m", "frequency_hz",
-                    summary=("backbone", "amplitude", "frequency_hz")),
-    ComparisonCurve("damping", "damping", "amplitude", "zeta", "displacement amplitude",
-                    "damping ratio ζ", "m", None, "displacement_amplitude_m", "zeta",
-                    summary=("damping", "amplitude", "zeta")),
+    ComparisonCurve("backbone", "backbone", "amplitude", "frequency",
+                    "displacement amplitude at the measuring point", "frequency", "m", "Hz",
+                    "displacement_amplitude_m", "frequency_hz",
+                    summary=("backbone", "amplitude", "frequency_hz"), x_label_for=_MEASURED),
+    ComparisonCurve("damping", "damping", "amplitude", "zeta",
+                    "displacement amplitude at the measuring point", "damping ratio ζ", "m",
+                    None, "displacement_amplitude_m", "zeta",
+                    summary=("damping", "amplitude", "zeta"), x_label_for=_MEASURED),
     ComparisonCurve("equivalent_damping", "equivalent-damping", "amplitude", "c_q",
-                    "displacement amplitude W", "C_q", "m", "kg/(m s)",
-                    "displacement_amplitude_m", "c_q"),
+                    "amplitude", "C_q", "m", "kg/(m s)", "displacement_amplitude_m", "c_q",
+                    x_label_for=Deferred(f"{_HERE}.labels:compared_cq_amplitude")),
 )
 
 COLUMNS = (

@@ -17,7 +17,9 @@ import pyqtgraph as pg
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from fsi_lab.aggregate import main_mode
+from fsi_lab.gui.analysis.plotting import set_bottom_label
 from fsi_lab.gui.figure import Figure
+from fsi_lab.plugins.analysis.views.labels import aggregate_amplitude
 
 #: Colours of the runs' points, by run.
 PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
@@ -30,8 +32,9 @@ PLOTS = (("backbone", "backbone", "frequency (Hz)"),
 
 class AggregationCurvesView(QWidget):
     """The aggregation's mode with the most extrema: each run's backbone, damping ratio and
-    C_q against displacement amplitude (m, log axis), points coloured by run; the medians on
-    the common amplitude axis (black) and the fitted C_q line (dashed red)."""
+    C_q against amplitude (m, log axis: the displacement at the measuring point, or the modal
+    amplitude the mode's C_i and C_f belong to), points coloured by run; the medians on the
+    common amplitude axis (black) and the fitted C_q line (dashed red)."""
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -39,7 +42,7 @@ class AggregationCurvesView(QWidget):
         self.plots: dict[str, pg.PlotItem] = {}
         for col, (key, title, y_label) in enumerate(PLOTS):
             plot = self.figure.addPlot(row=0, col=col)
-            plot.setLabel("bottom", "amplitude (m)")
+            set_bottom_label(plot, "amplitude", "m")
             plot.setLabel("left", y_label)
             plot.setLogMode(x=True, y=False)
             plot.showGrid(x=True, y=True, alpha=0.3)
@@ -51,9 +54,11 @@ class AggregationCurvesView(QWidget):
 
     def draw(self, aggregate: dict[str, Any] | None) -> bool:
         """Draw the aggregation's mode with the most extrema; True when there was one."""
+        mode = main_mode(aggregate)
+        amplitude = aggregate_amplitude(mode) if mode is not None else "amplitude"
         for plot in self.plots.values():
             plot.clear()
-        mode = main_mode(aggregate)
+            set_bottom_label(plot, amplitude, "m")
         if mode is None:
             return False
         curves, axis = mode["curves"], mode["axis"]

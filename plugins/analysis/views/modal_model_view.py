@@ -11,6 +11,7 @@ from fsi_lab.gui.analysis.datasets import channel_t0, finite_pairs, per_componen
 from fsi_lab.gui.analysis.plotting import COLOURS, active_span, draw_line, draw_points, robust_range
 from fsi_lab.gui.analysis.view import View
 from fsi_lab.gui.results import RunResults
+from fsi_lab.plugins.analysis.views.labels import measured_amplitude
 
 
 class ModalModelView(View):
@@ -75,7 +76,7 @@ class ModalModelView(View):
                                    per_component(model, f"{y_name}_model")))
             if not meas and not sim:
                 continue
-            plot = self.add_plot(2, col, label, "displacement amplitude", units, "m")
+            plot = self.add_plot(2, col, label, measured_amplitude(results), units, "m")
             yield
             for k, (a, b) in enumerate(meas):
                 draw_points(plot, a, b, COLOURS[k % len(COLOURS)], f"measured {k}", 4)
