@@ -145,9 +145,9 @@ PLATEAU_DOWN, PLATEAU_MIN, PLATEAU_GAIN, PLATEAU_SLOPE = 0.3, 4, 4.0, 0.2
 #: white noise.
 RISE_BAND, RISE_SAMPLES, RISE_RATIO, RISE_LEVEL, RISE_AFTER, RISE_FLOOR = (
     1.15, 8.0, 2.0, 0.25, 1.3, 8.0)
-#: A start moved on (step 8) measures the model again when the cycles kept cross zero at a
-#: frequency this far (relative) from the one stepped to over them all (:func:`_pulled`).
-PULLED_SHIFT = 1e-3
+#: ... and not within RISE_SETTLE periods of the record's first sample, where the band filter
+#: settles: a decay recorded from its release there rises out of the filter's padding.
+RISE_SETTLE = 5.0
 #: A displacement record's first HOLD_SHARE of samples that stand still (their spread within
 #: HOLD_STILL times the noise of their sample-to-sample steps) at more than HOLD_OFFSET times
 #: that noise from where the record comes to rest (its last REST_SHARE) hold a static
@@ -510,12 +510,13 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
                      e) for b, e in segments]
     out = []
     quarter = int(0.25 * fs / f_dom)
-    band = None
+    band, band_floor = None, 0.0
     if fs >= RISE_SAMPLES * RISE_BAND * f_dom:
         band = np.abs(sosfiltfilt(butter(4, [f_dom / RISE_BAND, f_dom * RISE_BAND], "bandpass",
                                          fs=fs, output="sos"), x))
         band_floor = RISE_FLOOR * sigma * math.sqrt((RISE_BAND - 1.0 / RISE_BAND) * f_dom
                                                     / (0.5 * fs))
+    given = [] if starts is None else [s * fs for s in starts]
     for first, stop in segments:
         begin = first
         if (end := _plateau_end(smooth, fs, f_dom, first, stop)) is not None:
@@ -524,8 +525,9 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
             begin = lo + int(np.argmax(np.abs(x[lo:min(stop, end + quarter + 1)])))
             if plateaus is not None:
                 plateaus.append((first, begin))
-        elif band is not None and (end := _forced_end(band, fs, f_dom, first, stop,
-                                                      band_floor)) is not None:
+        elif (band is not None and not any(first <= s < stop for s in given)
+              and (end := _forced_end(band, fs, f_dom, first, stop, band_floor)) is not None):
+            # (a start given for this decay says where the excitation ended)
             lo = max(first, end - quarter)
             begin = lo + int(np.argmax(np.abs(x[lo:min(stop, end + quarter + 1)])))
             if forced is not None:
@@ -679,10 +681,12 @@ def _forced_end(band: np.ndarray, fs: float, f_dom: float, begin: int, stop: int
     amplitude in its own band never rises: a half-period maximum of ``band`` (the envelope,
     ``|x|`` in the dominant mode's band, :data:`RISE_BAND`) :data:`RISE_RATIO` times below a
     later one marks forcing before the later one. The last such rise counts when its peak
-    reaches :data:`RISE_LEVEL` of the band's largest, leaves ``2 MIN_CYCLES`` half periods
-    above ``floor`` (the band's noise, unit of ``band``) and is followed by no rise of
-    :data:`RISE_AFTER` (a beat with another mode in the band rises again and again). A rise at
-    the window's end (``stop``: the next excitation) is not looked at. ``fs`` and ``f_dom``
+    reaches :data:`RISE_LEVEL` of ``band``'s largest over the record, leaves ``2 MIN_CYCLES``
+    half periods above ``floor`` (the band's noise, unit of ``band``) and is followed by no
+    rise of :data:`RISE_AFTER` (a beat with another mode in the band rises again and again),
+    and when no start was given for the decay (:func:`_windows`). A rise at the window's end
+    (``stop``: the next excitation) or within :data:`RISE_SETTLE` periods of the record's
+    first sample is not looked at. ``fs`` and ``f_dom``
     in Hz, ``begin`` and ``stop`` sample indices. Returns the sample of the rise's peak."""
     half = max(1, int(round(0.5 * fs / f_dom)))
     n = (stop - begin) // half
@@ -698,8 +702,9 @@ def _forced_end(band: np.ndarray, fs: float, f_dom: float, begin: int, stop: int
         return None
     later = np.maximum.accumulate(h[::-1])[::-1]            # the largest from each on
     above = np.cumsum((h > floor)[::-1])[::-1]              # half periods above the floor
+    settled = begin + np.arange(h.size - 1) * half >= RISE_SETTLE * fs / f_dom
     rises = np.flatnonzero((np.maximum(h[:-1], floor) * RISE_RATIO < later[1:])
-                           & (later[1:] >= RISE_LEVEL * float(np.max(band))))
+                           & (later[1:] >= RISE_LEVEL * float(np.max(band))) & settled)
     for k in rises[::-1]:
         peak = k + 1 + int(np.argmax(h[k + 1:]))
         if above[peak] < 2 * MIN_CYCLES:
@@ -708,7 +713,7 @@ def _forced_end(band: np.ndarray, fs: float, f_dom: float, begin: int, stop: int
         low = np.minimum.accumulate(np.maximum(free, 3.0 * floor))
         if np.any(free[1:] > RISE_AFTER * low[:-1]):
             return None
-        return begin + peak * half + int(np.argmax(blocks[peak]))
+        return int(begin + peak * half + int(np.argmax(blocks[peak])))
     return None
 
 
@@ -1238,16 +1243,6 @@ def _pooled_half_period(decays: list[dict]) -> float | None:
     return float(sorted_values[k])
 
 
-def _pulled(mode: "_Mode") -> bool:
-    """Whether the zero crossings of a mode's decays, as kept, give a damped frequency more
-    than :data:`PULLED_SHIFT` (relative) and 3 standard errors off the one its linear
-    frequency was stepped to (the cycles left out pulled it)."""
-    a = max(mode.fits["quadratic"].value("a"), 0.0)
-    damped = math.sqrt(max(mode.w0 ** 2 - a * a, 1e-300))
-    shift = abs(_damped_w(mode) - damped)
-    return shift > PULLED_SHIFT * damped and shift > 3.0 * mode.w0_se
-
-
 def _damped_w(mode: "_Mode") -> float:
     """A mode's damped angular frequency (rad/s) from its decays' zero crossings
     (:func:`_pooled_half_period`), or its spectral peak's when they hold too few."""
@@ -1447,14 +1442,6 @@ def _model_record(modes: list[_Mode], window: tuple[int, int, int], fs: float, f
             keep = max(1.0, reach[mode.band] * mode.frequency)
             lead = np.clip((times - anchor) * mode.frequency + keep + 1.0, 0.0, 1.0)
             decay = decay * smooth_step(lead)
-            # ... and ends, faded over a period, where it would leave ``limit``: a decay whose
-            # first cycles were left out as forced (step 8) starts among the record's cycles,
-            # and its law run back there meets no release (quadratic damping run backwards
-            # grows without bound within a few cycles).
-            over = np.flatnonzero((times < anchor) & ~(np.abs(decay) <= limit))
-            if over.size:
-                decay = np.where(times > times[over[-1]], decay, 0.0) * smooth_step(
-                    np.clip((times - times[over[-1]]) * mode.frequency, 0.0, 1.0))
             if np.all(np.isfinite(decay)) and float(np.max(np.abs(decay))) <= limit:
                 out += decay
     return out
@@ -2556,13 +2543,16 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         notes.insert(0, f"the record holds a steady oscillation from {a / fs:.4g} to "
                         f"{b / fs:.4g} s before it decays (a forcing such as a sine dwell "
                         "switched off there): no free decay, the decay is taken from its end")
-    for a, b in forced:
-        notes.insert(0, f"the oscillation at {f_dom:.4g} Hz is still forced from {a / fs:.4g} "
-                        f"to {b / fs:.4g} s: its amplitude rises {RISE_RATIO:g} times or more "
-                        "after falling, which no free decay does (a random or other excitation "
-                        f"still running); the decay is taken from {b / fs:.4g} s (if the "
-                        "excitation stopped later, give that time as the analysis's start, "
-                        "analysis.hvd.start_s)")
+    if forced:
+        spans = ", ".join(f"{a / fs:.4g} to {b / fs:.4g} s" for a, b in forced)
+        notes.insert(0, f"the oscillation at {f_dom:.4g} Hz is still forced from {spans}: its "
+                        f"amplitude within +-{100 * (RISE_BAND - 1):.0f} % of that frequency "
+                        f"rises {RISE_RATIO:g}-fold or more after falling, which no free decay "
+                        "does (a random or other excitation still running); "
+                        + ("each decay is" if len(forced) > 1 else "the decay is")
+                        + " taken from the end of that span (a start given for a decay, "
+                        "analysis.hvd.start_s or identify's decay_starts, says where the "
+                        "excitation ended and turns this check off)")
     if spikes.size:
         notes.insert(0, f"{spikes.size} isolated sample{'s' if spikes.size > 1 else ''} "
                         f"stand{'' if spikes.size > 1 else 's'} far off the oscillation their "
@@ -2740,28 +2730,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     _correction_passes(modes, windows, bands, record, fs, follow, quantity, sigma, laws)
     notes += _joint(modes, windows, bands, record, fs, follow, quantity, sigma,
                     base_free is not None, laws)
-    # Step 8: where the laws start to hold. A start moved on measures the model again from
-    # there: its frequency was stepped over every crossing (step 6), and the cycles left out
-    # are those the law does not describe (a random burst's forced cycles ahead of its free
-    # decay pulled a 17 Hz mode to 16.49 Hz, 0.12 Hz its precision).
-    for mode in modes:
-        mode.drift = _stable_start(mode, follow, laws)
-    moved_on = {id(m): m.drift["dropped"] for m in modes
-                if m.joint is None and m.drift.get("dropped", 0.0) > 0.0 and _pulled(m)}
-    if moved_on:
-        for mode in modes:
-            if id(mode) in moved_on:
-                for d in mode.decays:
-                    d.pop("anchor", None)
-                a = max(mode.fits["quadratic"].value("a"), 0.0)
-                mode.w0 = math.sqrt(_damped_w(mode) ** 2 + a * a)
-        _correction_passes(modes, windows, bands, record, fs, follow, quantity, sigma, laws)
-        for mode in modes:
-            mode.drift = _stable_start(mode, follow, laws)
-            mode.drift["dropped"] += moved_on.get(id(mode), 0.0)
-    # Step 7: backbones and natural frequencies.
+    # Steps 7 and 8: where the laws start to hold; backbones and natural frequencies.
     results = []
     for mode in modes:
+        mode.drift = _stable_start(mode, follow, laws)
         if mode.joint is None:
             mode.drift.update(_one_law(mode, follow))
             mode.drift.update(_noise_spread(mode))

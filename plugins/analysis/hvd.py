@@ -41,7 +41,8 @@ PLUGIN = AnalysisPlugin(
               help="Decompose from this time on: the free decay after the excitation (a forced "
                    "start disturbs its first cycles); unset = from the largest sample of the "
                    "first free decay (automatic: the record's largest sample when it holds one "
-                   "decay), 0 = the whole record."),
+                   "decay, or with method 'bands' the end of a forced response that holds it, "
+                   "which a note names), 0 = the whole record."),
         Param("band_hz", "floats", "Hz", None, minimum=0.0, exclusive_minimum=True,
               help="[low, high]: decompose the record band-passed to this band (gain 1 from "
                    "low to high, 0 below low/2 and above 1.5 high, zero phase), so one mode is "
