@@ -31,6 +31,7 @@ from fsi_lab.errors import FsiLabError, ParameterError
 from fsi_lab.events import EventBus, Progress
 from fsi_lab.registry import Registry
 from fsi_lab.sources import head_of, samples_of
+from fsi_lab.specimen import defaults_note
 from fsi_lab.summary import json_safe
 from fsi_lab.tails import QuietTail, analysed_end
 
@@ -314,6 +315,8 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
             merge_summary(channel_summary, record.summary)
         if tail.cut:
             channel_summary["notes"] = [tail.note(), *channel_summary.get("notes", [])]
+        if (said := defaults_note(specimen)) is not None:
+            channel_summary["notes"] = [said, *channel_summary.get("notes", [])]
         summary[channel_name] = channel_summary
         if keep_typed is not None:
             keep_typed[channel_name] = provided

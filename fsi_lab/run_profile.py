@@ -8,9 +8,11 @@ extraction, :mod:`fsi_lab.aggregate_extract`, use them).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 from fsi_lab.errors import InputFileError
+from fsi_lab.specimen import SPECIMEN_PARAMS
 
 #: The sections of a run's profile the analysis reads.
 ANALYSIS_SECTIONS = ("analysis", "specimen")
@@ -39,8 +41,17 @@ def analysis_profile(run, registry, sets: list[str] | tuple[str, ...] = ()):
     # The run's own --set overrides of what analysis reads come first, the new ones after.
     recorded = [item for item in run.attrs.get("overrides", [])
                 if item.partition(".")[0].strip() in ANALYSIS_SECTIONS]
-    return parse_profile(text, f"{run.path}:/profile", registry, recorded + list(sets),
-                         sections=ANALYSIS_SECTIONS)
+    profile = parse_profile(text, f"{run.path}:/profile", registry, recorded + list(sets),
+                            sections=ANALYSIS_SECTIONS)
+    if run.profile_text.strip() or profile.specimen is None:
+        return profile
+    # Imported data: the overrides alone describe the beam, the paper's beam the rest.
+    given = {item.partition("=")[0].strip().partition(".")[2].strip()
+             for item in recorded + list(sets)
+             if item.partition("=")[0].strip().partition(".")[0].strip() == "specimen"}
+    defaulted = tuple(p.name for p in SPECIMEN_PARAMS if p.name not in given)
+    return dataclasses.replace(
+        profile, specimen=dataclasses.replace(profile.specimen, defaulted=defaulted))
 
 
 def require_something_to_analyse(run, profile) -> None:

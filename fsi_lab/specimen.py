@@ -6,7 +6,7 @@ L = 80 mm, H = 12.75 mm, thickness 0.08 mm, velocity measured at x = 80 mm.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 from fsi_lab.params import Param, validate
@@ -46,6 +46,9 @@ class Specimen:
     fluid: str
     drag_coefficient: float
     measurement_point: float
+    #: The keys neither a profile nor an override gave, for data without a profile (imported,
+    #: described by ``--set specimen.*`` alone): their values are the paper's beam's.
+    defaulted: tuple[str, ...] = field(default=(), compare=False)
 
     @classmethod
     def from_mapping(cls, values: Mapping[str, Any], where: str = "specimen") -> "Specimen":
@@ -56,3 +59,18 @@ class Specimen:
     def fluid_density(self) -> float:
         """Density of the surrounding fluid, kg/m^3."""
         return FLUID_DENSITY[self.fluid]
+
+
+def defaults_note(specimen: Specimen | None) -> str | None:
+    """The note that names a specimen's :attr:`Specimen.defaulted` keys with the values taken
+    for them (the paper's beam's), or None when there are none."""
+    if specimen is None or not specimen.defaulted:
+        return None
+    units = {p.name: p.unit for p in SPECIMEN_PARAMS}
+    taken = [f"{name} {getattr(specimen, name):g}" + (f" {units[name]}" if units[name] else "")
+             for name in specimen.defaulted]
+    listed = ", ".join(taken[:-1]) + " and " + taken[-1] if len(taken) > 1 else taken[0]
+    return (f"the beam is described by --set specimen.* alone (imported data has no profile): "
+            f"{listed} {'are' if len(taken) > 1 else 'is'} the paper's beam's; give each that "
+            "differs, --set specimen.KEY=VALUE, as the modal amplitudes, C_i and C_f in the "
+            "modal coordinate, and the modal model depend on them")

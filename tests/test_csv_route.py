@@ -90,3 +90,35 @@ def test_bad_reference_or_delay_is_refused(tmp_path, options, fragment):
     code, _, err = run_main("import", str(csv_path), "--rate", "100", "-o", str(out), *options)
     assert code == 2 and err.count("fsi-lab: error:") == 1 and fragment in err, err
     assert not out.exists()
+
+
+def test_specimen_keys_an_import_does_not_give_are_named_in_the_output(tmp_path):
+    """Imported data has no profile: ``--set specimen.fluid=water`` alone describes the beam,
+    and the other keys silently came from the paper's beam (a beam 0.2 m long analysed as
+    0.08 m long converts to another mode shape: C_f 10.3 against 32.7). The output now names
+    the keys taken from the paper's beam, with their values; none when every key is given, or
+    with --mass-per-length (no specimen)."""
+    from fsi_lab.specimen import SPECIMEN_PARAMS
+
+    fs = 2000.0
+    t = np.arange(int(3 * fs)) / fs
+    v = 0.05 * np.exp(-1.5 * t) * np.cos(2 * np.pi * 17.0 * t) \
+        + 1e-4 * np.random.default_rng(0).standard_normal(t.size)
+    csv_path = tmp_path / "decay.csv"
+    csv_path.write_text("tip [m/s]\n" + "\n".join(repr(float(x)) for x in v) + "\n")
+    out = tmp_path / "decay.h5"
+    code, _, err = run_main("import", str(csv_path), "--rate", "2000", "-o", str(out))
+    assert code == 0, err
+
+    def notes(*options):
+        code, text, err = run_main("analyze", str(out), "--json", *options)
+        assert code == 0, err
+        return [n for n in json.loads(text)["channels"]["tip"].get("notes", [])
+                if "the paper's beam" in n]
+
+    (note,) = notes("--set", "specimen.fluid=water", "--set", "specimen.length=0.08")
+    assert "length" not in note.split(":")[1] and "fluid" not in note.split(":")[1]
+    assert "width 0.01275 m" in note and "drag_coefficient 1.8" in note
+    every = [f"specimen.{p.name}={p.default}" for p in SPECIMEN_PARAMS]
+    assert notes(*[x for key in every for x in ("--set", key)]) == []
+    assert notes("--mass-per-length", "0.1346") == []
