@@ -148,7 +148,8 @@ class Spectrum(Result):
                    "peak_amplitudes": self.unit},
             attrs={"window": self.window,
                    "resolution_hz": float(self.frequency[1] - self.frequency[0])},
-            summary={"spectrum_peaks_hz": jsonable(pf), "spectrum_peak_amplitudes": jsonable(pa)},
+            summary={"spectrum_peaks_hz": jsonable(pf), "spectrum_peak_amplitudes": jsonable(pa),
+                     "spectrum_peak_amplitude_unit": self.unit},
             values=self.peaks)
 
 

@@ -51,6 +51,7 @@ def fsi_lab_summary_lines(summary, component):
     if component is not None:
         return None
     peaks = [p for p in summary.get("spectrum_peaks_hz") or [] if p is not None]
-    return SummaryText(keys=("spectrum_peaks_hz", "spectrum_peak_amplitudes"),
+    return SummaryText(keys=("spectrum_peaks_hz", "spectrum_peak_amplitudes",
+                             "spectrum_peak_amplitude_unit"),
                        inline=f": spectrum peaks {', '.join(f'{p:.2f}' for p in peaks[:6])} Hz"
                        if peaks else "")

@@ -201,6 +201,9 @@ def test_voltage_channel_cannot_be_integrated():
     assert error["plugin"] == "integrate" and "'voltage'" in error["message"]
     assert summary["drive"]["spectrum_peaks_hz"] == pytest.approx([1000 * 0.05 / (2 * math.pi)],
                                                                    rel=0.01)
+    # the peaks' amplitudes say their unit (the channel's): a peak of a 1 V sine
+    assert summary["drive"]["spectrum_peak_amplitude_unit"] == "V"
+    assert summary["drive"]["spectrum_peak_amplitudes"] == pytest.approx([1.0], rel=0.05)
 
 
 def test_frf_plugin_with_and_without_reference():
