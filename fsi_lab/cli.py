@@ -471,6 +471,7 @@ def cmd_import(args) -> int:
 
 def cmd_show(args) -> int:
     from fsi_lab.runfile import read_analysis_summary, read_run
+    from fsi_lab.summary import format_value
 
     if args.run.is_dir() or args.run.name == "sequence.h5":
         return _show_sequence(args)
@@ -480,11 +481,11 @@ def cmd_show(args) -> int:
     attrs = {k: v for k, v in run.attrs.items() if k not in ("profile", "traceback")}
     with_lengths = {name: {**run.channel_attrs[name], "samples": run.channel_samples[name]}
                     for name in run.channels}
+    excitation = {k: v for k, v in (run.excitation or {}).items() if k != "waveform"} or None
+    if excitation is not None:
+        excitation["param_units"] = _excitation_units(excitation.get("plugin"))
     info = {"run": str(args.run), "attrs": attrs, "instruments": run.instruments,
-            "channels": with_lengths,
-            "excitation": {k: v for k, v in (run.excitation or {}).items() if k != "waveform"}
-            or None,
-            "analysis": summary}
+            "channels": with_lengths, "excitation": excitation, "analysis": summary}
     warnings = []
     if attrs.get("exit_status") == "running":
         warnings.append(
@@ -512,9 +513,26 @@ def cmd_show(args) -> int:
               + (f", t0 = {t0:g} s" if t0 else ""))
     if run.reference:
         print(f"{'reference:':<18}{run.reference}")
+    if excitation is not None:
+        units = excitation["param_units"]
+        given = ", ".join(f"{k} {format_value(v)}" + (f" {units[k]}" if units.get(k) else "")
+                          for k, v in excitation.get("params", {}).items())
+        print(f"{'excitation:':<18}{excitation.get('plugin', '?')}"
+              + (f" ({given})" if given else ""))
     if summary_text:
         print(summary_text)
     return 0
+
+
+def _excitation_units(plugin: Any) -> dict[str, str]:
+    """The units of an excitation plugin's parameters, by name, from the installed plugin
+    (a run file records the values only); empty when it is not installed here."""
+    from fsi_lab.registry import load_registry
+
+    try:
+        return {p.name: p.unit for p in load_registry().get("excitation", str(plugin)).params}
+    except FsiLabError:
+        return {}
 
 
 def _show_sequence(args) -> int:

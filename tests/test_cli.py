@@ -193,6 +193,22 @@ def test_strict_and_the_text_summary_see_the_frf_warnings(tmp_path):
         f"  frf warning: {w}" for w in warnings]
 
 
+def test_show_gives_the_excitation_s_parameters_with_their_units(sim_profile, tmp_path):
+    """A run file records its excitation's parameter values only: ``show --json`` listed
+    them without units. It adds the installed plugin's units (``param_units``), and the text
+    prints the excitation with them."""
+    data, proc = cli_json("run", str(sim_profile()), "--out", str(tmp_path), "--no-analysis")
+    assert proc.returncode == 0, proc.stderr
+    shown, proc = cli_json("show", data["run"])
+    assert proc.returncode == 0, proc.stderr
+    excitation = shown["excitation"]
+    assert excitation["params"]["amplitude"] == 0.5
+    assert excitation["param_units"]["amplitude"] == "V"
+    (line,) = [ln for ln in cli("show", data["run"]).stdout.splitlines()
+               if ln.startswith("excitation:")]
+    assert f"{excitation['plugin']} (" in line and "amplitude 0.5 V" in line
+
+
 def test_analyze_keeps_the_runs_own_overrides(sim_profile, tmp_path):
     analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
     data, proc = cli_json("run", str(sim_profile(analysis=analysis)), "--out", str(tmp_path),
