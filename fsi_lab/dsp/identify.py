@@ -686,8 +686,8 @@ def _forced_end(band: np.ndarray, fs: float, f_dom: float, begin: int, stop: int
     rise of :data:`RISE_AFTER` (a beat with another mode in the band rises again and again),
     and when no start was given for the decay (:func:`_windows`). A rise at the window's end
     (``stop``: the next excitation) or within :data:`RISE_SETTLE` periods of the record's
-    first sample is not looked at. ``fs`` and ``f_dom``
-    in Hz, ``begin`` and ``stop`` sample indices. Returns the sample of the rise's peak."""
+    first sample is not looked at. ``fs`` and ``f_dom`` in Hz, ``begin`` and ``stop`` sample
+    indices. Returns the sample of the rise's peak."""
     half = max(1, int(round(0.5 * fs / f_dom)))
     n = (stop - begin) // half
     if n < 4 * MIN_CYCLES:
@@ -1241,13 +1241,6 @@ def _pooled_half_period(decays: list[dict]) -> float | None:
     if math.isclose(cumulative[k], half) and k + 1 < sorted_values.size:
         return float(0.5 * (sorted_values[k] + sorted_values[k + 1]))
     return float(sorted_values[k])
-
-
-def _damped_w(mode: "_Mode") -> float:
-    """A mode's damped angular frequency (rad/s) from its decays' zero crossings
-    (:func:`_pooled_half_period`), or its spectral peak's when they hold too few."""
-    half = _pooled_half_period(mode.decays)
-    return math.pi / half if half else 2.0 * math.pi * mode.frequency
 
 
 @dataclass
@@ -2689,7 +2682,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, _too_short(windows, dropped + followers, fs) + "; ".join(notes))
     # Step 5: first fits, then the floor judged on the fitted envelope.
     for mode in modes:
-        mode.w0 = _damped_w(mode)
+        half = _pooled_half_period(mode.decays)
+        mode.w0 = math.pi / half if half else 2.0 * math.pi * mode.frequency
         _fit_all(mode, follow, laws)
         fit = mode.fits["quadratic"]
         a = max(fit.value("a"), 0.0)

@@ -1255,6 +1255,19 @@ def test_a_burst_of_random_forcing_switched_off_inside_the_record_is_no_free_dec
     assert mode.frequency_ci[0] <= WET_F <= mode.frequency_ci[1]
 
 
+def test_a_start_given_for_a_decay_turns_the_forcing_check_off():
+    """The user's time wins over the check: from a start given inside the burst (1 s, where
+    the check would start the decay at the switch-off) the record holds no free decay, and
+    that is what the analysis says; at the switch-off itself the decay starts there, with no
+    note of forcing. A false trigger can so be undone."""
+    v = _random_burst(14)
+    with pytest.raises(AnalysisError, match="no spectral peak shows a free decay"):
+        identify(v, 2000.0, decay_starts=[1.0])
+    found = identify(v, 2000.0, decay_starts=[2.0])
+    assert not [n for n in found.notes if " is still forced from " in n]
+    assert found.free_windows[0][1] == 4000
+
+
 @pytest.mark.parametrize("ratio", [1.05, 1.1])
 def test_two_free_modes_beating_in_one_band_are_not_taken_for_forcing(ratio):
     """Two lightly damped modes released together beat: in the band the forcing check looks at
