@@ -527,10 +527,9 @@ def cmd_show(args) -> int:
 def _excitation_units(plugin: Any) -> dict[str, str]:
     """The units of an excitation plugin's parameters, by name, from the installed plugin
     (a run file records the values only); empty when it is not installed here."""
-    from fsi_lab.registry import load_registry
-
     try:
-        return {p.name: p.unit for p in load_registry().get("excitation", str(plugin)).params}
+        return {p.name: p.unit
+                for p in _loaded_plugins().get("excitation", str(plugin)).params}
     except FsiLabError:
         return {}
 
@@ -556,7 +555,7 @@ def _summary_text(path: Path, summary: dict[str, Any]) -> str:
     """:func:`format_summary` of a run file's stored summary, refused (InputFileError) when it
     is not laid out as fsi-lab writes it."""
     try:
-        return format_summary(summary)
+        return format_summary(summary, _loaded_plugins())
     except (AttributeError, KeyError, TypeError, ValueError, IndexError) as exc:
         raise InputFileError(
             f"{path}: /analysis attribute 'summary': not laid out as fsi-lab writes it "

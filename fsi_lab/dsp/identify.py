@@ -516,6 +516,7 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
                                          fs=fs, output="sos"), x))
         band_floor = RISE_FLOOR * sigma * math.sqrt((RISE_BAND - 1.0 / RISE_BAND) * f_dom
                                                     / (0.5 * fs))
+        band_top = float(np.max(band))
     given = [] if starts is None else [s * fs for s in starts]
     for first, stop in segments:
         begin = first
@@ -526,7 +527,8 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
             if plateaus is not None:
                 plateaus.append((first, begin))
         elif (band is not None and not any(first <= s < stop for s in given)
-              and (end := _forced_end(band, fs, f_dom, first, stop, band_floor)) is not None):
+              and (end := _forced_end(band, fs, f_dom, first, stop, band_floor,
+                                      RISE_LEVEL * band_top)) is not None):
             # (a start given for this decay says where the excitation ended)
             lo = max(first, end - quarter)
             begin = lo + int(np.argmax(np.abs(x[lo:min(stop, end + quarter + 1)])))
@@ -671,7 +673,7 @@ def _plateau_end(x: np.ndarray, fs: float, f_dom: float, begin: int, stop: int) 
 
 
 def _forced_end(band: np.ndarray, fs: float, f_dom: float, begin: int, stop: int,
-                floor: float) -> int | None:
+                floor: float, level: float) -> int | None:
     """Where a forced response that holds the decay's largest sample ``begin`` ends, or None
     when the motion decays from ``begin`` on.
 
@@ -681,10 +683,11 @@ def _forced_end(band: np.ndarray, fs: float, f_dom: float, begin: int, stop: int
     amplitude in its own band never rises: a half-period maximum of ``band`` (the envelope,
     ``|x|`` in the dominant mode's band, :data:`RISE_BAND`) :data:`RISE_RATIO` times below a
     later one marks forcing before the later one. The last such rise counts when its peak
-    reaches :data:`RISE_LEVEL` of ``band``'s largest over the record, leaves ``2 MIN_CYCLES``
-    half periods above ``floor`` (the band's noise, unit of ``band``) and is followed by no
-    rise of :data:`RISE_AFTER` (a beat with another mode in the band rises again and again),
-    and when no start was given for the decay (:func:`_windows`). A rise at the window's end
+    reaches ``level`` (:data:`RISE_LEVEL` of ``band``'s largest over the record, unit of
+    ``band``), leaves ``2 MIN_CYCLES`` half periods above ``floor`` (the band's noise, unit of
+    ``band``) and is followed by no rise of :data:`RISE_AFTER` (a beat with another mode in
+    the band rises again and again), and when no start was given for the decay
+    (:func:`_windows`). A rise at the window's end
     (``stop``: the next excitation) or within :data:`RISE_SETTLE` periods of the record's
     first sample is not looked at. ``fs`` and ``f_dom`` in Hz, ``begin`` and ``stop`` sample
     indices. Returns the sample of the rise's peak."""
@@ -704,7 +707,7 @@ def _forced_end(band: np.ndarray, fs: float, f_dom: float, begin: int, stop: int
     above = np.cumsum((h > floor)[::-1])[::-1]              # half periods above the floor
     settled = begin + np.arange(h.size - 1) * half >= RISE_SETTLE * fs / f_dom
     rises = np.flatnonzero((np.maximum(h[:-1], floor) * RISE_RATIO < later[1:])
-                           & (later[1:] >= RISE_LEVEL * float(np.max(band))) & settled)
+                           & (later[1:] >= level) & settled)
     for k in rises[::-1]:
         peak = k + 1 + int(np.argmax(h[k + 1:]))
         if above[peak] < 2 * MIN_CYCLES:
