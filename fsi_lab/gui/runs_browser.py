@@ -51,7 +51,8 @@ LIST_WIDTH = 240
 #: Columns of the CSV of identified values before the values, and after them.
 RUN_COLUMNS = ("run", "file", "exit_status", "start_time", "channel", "component")
 END_COLUMNS = ("errors",)
-CURVE_COLUMNS = ("run", "file", "channel", "component", "curve", "x_name", "x", "y_name", "y")
+CURVE_COLUMNS = ("run", "file", "channel", "component", "curve", "x_name", "x_axis", "x", "y_name",
+                 "y")
 
 
 def curves_of(results: RunResults, channel: str, curves: list[ComparisonCurve]
@@ -444,20 +445,24 @@ class RunsBrowser(QWidget):
         return write_csv(path, csv_columns(columns), self.summary_rows(runs, columns))
 
     def export_curves_csv(self, path: str | Path) -> Path:
-        """Every point of the ticked runs' compared curves (long format)."""
+        """Every point of the ticked runs' compared curves (long format); ``x_axis`` says what
+        each run's ``x`` holds (the curve's ``x_label_for`` that run alone)."""
         rows = []
         curves = self.registry.views().curves
         labels = {c.name: (c.x_name, c.y_name) for c in curves}
+        by_name = {c.name: c for c in curves}
         for results in self._compared():
             channel = self._channel_of(results)
             if channel is None:
                 continue
             for name, pairs in curves_of(results, channel, curves).items():
+                # what x holds in this run's own words (the modal or the measured amplitude)
+                axis = self._x_label(by_name[name], [(results, channel)])
                 for k, (x, y) in enumerate(pairs):
                     for xv, yv in zip(x, y):
                         rows.append({"run": results.name, "file": str(results.path),
                                      "channel": channel, "component": k + 1, "curve": name,
-                                     "x_name": labels[name][0], "x": float(xv),
+                                     "x_name": labels[name][0], "x_axis": axis, "x": float(xv),
                                      "y_name": labels[name][1], "y": float(yv)})
         return write_csv(path, CURVE_COLUMNS, rows)
 

@@ -178,3 +178,26 @@ def test_the_compared_amplitude_axes_name_the_amplitude_drawn(qtbot, make_window
         label = plot.getAxis("bottom").label.sceneBoundingRect()
         box = plot.sceneBoundingRect()
         assert box.left() <= label.left() and label.right() <= box.right(), (col, label, box)
+
+
+def test_curves_csv_says_which_amplitude_each_run_holds(qtbot, make_window, registry, tmp_path):
+    """A run's C_q points are against the modal amplitude q when its equivalent-damping used
+    the modal convention: the curves' CSV says so run by run, and does not call them the
+    displacement measured."""
+    window = make_window(registry)
+    modal = with_specimen_and_convention(write_run(tmp_path / "q.h5", name="run q"), MODAL)
+    measured = with_specimen_and_convention(write_run(tmp_path / "m.h5", name="run m"),
+                                            MEASURED, point=0.06)
+    window.runs.open([modal, measured])
+    qtbot.waitUntil(lambda: len(window.runs.runs) == 2 and not window.runs.pending,
+                    timeout=LOAD_TIMEOUT_MS)
+    window.runs.set_checked([modal, measured])
+    rows = list(csv.DictReader(
+        window.runs.export_curves_csv(tmp_path / "curves.csv").open()))
+    axes = {(r["run"], r["curve"]): (r["x_name"], r["x_axis"]) for r in rows}
+    assert axes[("run q", "equivalent_damping")] == (
+        "amplitude_m", "modal amplitude q = w(x_m) / W(x_m)")
+    assert axes[("run m", "equivalent_damping")] == (
+        "amplitude_m", "displacement amplitude at x = 0.06 m")
+    assert axes[("run q", "backbone")] == (
+        "displacement_amplitude_m", "displacement amplitude at x = 0.08 m")

@@ -55,7 +55,7 @@ CURVES = (
                     None, "displacement_amplitude_m", "zeta",
                     summary=("damping", "amplitude", "zeta"), x_label_for=_MEASURED),
     ComparisonCurve("equivalent_damping", "equivalent-damping", "amplitude", "c_q",
-                    "amplitude", "C_q", "m", "kg/(m s)", "displacement_amplitude_m", "c_q",
+                    "amplitude", "C_q", "m", "kg/(m s)", "amplitude_m", "c_q",
                     x_label_for=Deferred(f"{_HERE}.labels:compared_cq_amplitude")),
 )
 
