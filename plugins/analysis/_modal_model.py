@@ -38,9 +38,12 @@ falls below the component's noise floor, HVD edges left out on both sides:
 
 - ``envelope_rms_error`` = sqrt(mean((E_s - E_m)^2) / mean(E_m^2)) (dominated by the start);
 - ``envelope_log_rms_error`` = sqrt(mean(ln(E_s / E_m)^2)) (every part of the decay alike);
-- ``frequency_error_pct`` = 100 mean((f_s - f_m) / f_m) of the HVD instantaneous frequencies,
-  weighted by E_m (as the HVD's mean frequency is: the noisy tail counts little), and
-  ``frequency_rms_error_pct`` its weighted RMS;
+- ``frequency_error_pct`` = 100 mean(f_s - f_m) / F_m of the HVD instantaneous frequencies,
+  weighted by E_m (as the HVD's mean frequency is: the noisy tail counts little), over the
+  component's measured frequency F_m (not over f_m sample by sample: a phase glitch that takes
+  f_m through zero for a few samples would weigh without bound; samples where f_m is 50 % or
+  more off F_m, phase glitches, are left out), and ``frequency_rms_error_pct`` its weighted
+  RMS (:func:`frequency_errors`);
 - ``backbone_error_pct`` = 100 mean((f_s(A) - f_m) / f_m) over the measured backbone points
   inside the decay span whose amplitude A lies within the model's (f_s(A) interpolated in
   ln A), weighted by A^2 (as ``equivalent-damping`` weights its fit: additive noise puts an
@@ -133,6 +136,9 @@ from fsi_lab.plugins.analysis.results import Components, DampingCoefficients, Mo
 
 #: A model component is paired with a measured one when their mean frequencies differ by less.
 MATCH_TOLERANCE = 0.25
+#: A measured instantaneous frequency this far (relative) from its component's is a phase
+#: glitch, left out of the frequency error (:func:`frequency_errors`).
+FREQUENCY_GLITCH = 0.5
 #: Stored envelope and frequency rows: about this many points per cycle of the fastest cut-off.
 POINTS_PER_CUTOFF_CYCLE = 20
 MAX_OVERSAMPLING = 64
@@ -286,6 +292,23 @@ def component_curves(c: Any, smooth: int, method: str) -> tuple[Any, Any]:
     curve = damping_from_peaks(t, a, f, method=method, span=2, window=6, smooth=smooth,
                                decay=decay)
     return bb, curve
+
+
+def frequency_errors(measured_hz: np.ndarray, model_hz: np.ndarray, envelope: np.ndarray,
+                     reference_hz: float) -> tuple[float, float]:
+    """The model's instantaneous frequency error over a compared decay, percent: the mean and
+    the RMS of ``model_hz - measured_hz`` (Hz, sample by sample) weighted by the measured
+    ``envelope``, over the component's measured frequency ``reference_hz``. Samples whose
+    measured frequency is off ``reference_hz`` by :data:`FREQUENCY_GLITCH` or more of it are
+    left out: no oscillation of one mode does that, a phase glitch of its decomposition does
+    (where another mode or the excitation's transient crosses it), and a few of them would
+    outweigh the rest. Returns ``(mean, rms)``; NaN when no sample is left."""
+    kept = np.abs(measured_hz - reference_hz) < FREQUENCY_GLITCH * reference_hz
+    if not kept.any() or float(np.sum(envelope[kept])) <= 0.0:
+        return math.nan, math.nan
+    weight = envelope[kept] / float(np.sum(envelope[kept]))
+    rel = (model_hz[kept] - measured_hz[kept]) / reference_hz
+    return 100.0 * float(weight @ rel), 100.0 * math.sqrt(float(weight @ rel ** 2))
 
 
 def curve_errors(bb_m: Any, bb_s: Any, dc_m: Any, dc_s: Any, t_lo: float, t_hi: float
@@ -467,15 +490,13 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> ModalComparison:
         with np.errstate(divide="ignore", invalid="ignore"):
             lr = np.log(es / em)
         env_log = math.sqrt(float(np.mean(lr ** 2))) if np.all(np.isfinite(lr)) else math.inf
-        rel_f = (fr_s[win] - fr_m[win]) / fr_m[win]
-        weight = em / float(np.sum(em))
+        mean_f, rms_f = frequency_errors(fr_m[win], fr_s[win], em, f_m)
         figures = {"c_i": c_i, "c_f": c_f, "mode": mode_of(f_m, natural), "model_index": j,
                    "natural_frequency_hz": float(natural[mode_of(f_m, natural) - 1]),
                    "measured_frequency_hz": f_m, "model_frequency_hz": float(freqs_s[j]),
                    "decay_start_s": (i0 + start) / fs, "decay_end_s": (i0 + end - 1) / fs,
                    "envelope_rms_error": env_rms, "envelope_log_rms_error": env_log,
-                   "frequency_error_pct": 100.0 * float(weight @ rel_f),
-                   "frequency_rms_error_pct": 100.0 * math.sqrt(float(weight @ rel_f ** 2))}
+                   "frequency_error_pct": mean_f, "frequency_rms_error_pct": rms_f}
         # Backbone and damping curves, the same processing on both sides; if they cannot be
         # measured (too few cycles), the envelope and frequency figures still stand.
         try:

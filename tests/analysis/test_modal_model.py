@@ -359,3 +359,26 @@ def test_the_plugin_can_be_called_directly():
                               provided=provided, specimen=SPECIMEN, reference="base")
     result = PLUGIN.run(context, params)
     assert result.figures[0]["envelope_rms_error"] < 0.005
+
+
+def test_phase_glitches_of_the_measured_frequency_do_not_make_the_frequency_error():
+    """The HVD's instantaneous frequency of a measured component can glitch for a few samples
+    where another mode or the excitation's transient crosses it (at the compared decay's
+    start on the bench at 15 mm: -192, -0.05 and 966 Hz among samples near 17 Hz). Divided
+    sample by sample by the measured frequency, those few turned a model within 0.2 % into a
+    "frequency error of -7.35 %, 454 % RMS". The error is taken over the component's
+    frequency, glitches left out; a real offset of the model still shows in full."""
+    from fsi_lab.plugins.analysis._modal_model import frequency_errors
+
+    n = 2000
+    envelope = np.exp(-np.arange(n) / 800.0)
+    measured = 17.0 + 0.01 * np.random.default_rng(3).standard_normal(n)
+    glitched = measured.copy()
+    glitched[[3, 4, 5, 6, 1990]] = (-192.6, -0.049, 1.52, 966.2, 111.6)
+    for offset in (0.001, 0.05):
+        model = measured * (1.0 + offset)
+        clean = frequency_errors(measured, model, envelope, 17.0)
+        mean, rms = frequency_errors(glitched, model, envelope, 17.0)
+        assert mean == pytest.approx(100 * offset, rel=0.02) and clean[0] == pytest.approx(
+            mean, rel=0.02)
+        assert rms == pytest.approx(100 * offset, rel=0.05)
