@@ -22,6 +22,7 @@ The result is one JSON-ready dict (layout in docs/sequence-format.md, "Aggregati
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 from typing import Any
@@ -229,6 +230,37 @@ def _pooled_warnings(per_run: list[dict[str, Any]]) -> list[str]:
             "name; read them beside the pooled numbers"]
 
 
+def same_records(extracts: Sequence[RunExtract]) -> dict[int, int]:
+    """The runs (by position) whose analysed channels hold the same samples as an earlier
+    run's (:func:`~fsi_lab.aggregate_extract.record_fingerprint`), each with the position of
+    the first: one record under several files (and uuids), which pooled as independent runs
+    would narrow the intervals and show no spread between them."""
+    first: dict[str, int] = {}
+    same: dict[int, int] = {}
+    for position, extract in enumerate(extracts):
+        if not extract.fingerprint or not extract.modes:
+            continue
+        if extract.fingerprint in first:
+            same[position] = first[extract.fingerprint]
+        else:
+            first[extract.fingerprint] = position
+    return same
+
+
+def _same_record_notes(labels: list[str], same_as: dict[int, int]) -> list[str]:
+    """A note per record given more than once, naming its files."""
+    notes = []
+    for original in sorted(set(same_as.values())):
+        copies = [labels[k] for k in sorted(same_as) if same_as[k] == original]
+        notes.append(
+            f"{', '.join(copies)}: the same record as {labels[original]}, sample for sample "
+            f"(their analysed channels hold identical samples: a copy, or runs of the "
+            f"simulated bench with one bench.seed); pooled once, as {labels[original]}: "
+            f"{len(copies) + 1} copies of one record are one measurement, not "
+            f"{len(copies) + 1} independent runs")
+    return notes
+
+
 def aggregate_extracts(extracts: Sequence[RunExtract]) -> dict[str, Any]:
     """The aggregation of the runs (module notes) as one JSON-ready dict.
 
@@ -241,15 +273,24 @@ def aggregate_extracts(extracts: Sequence[RunExtract]) -> dict[str, Any]:
         analysis failed or a mode's fit did, or no mode was found, else 0.
     """
     labels = [extract.label for extract in extracts]
+    same_as = same_records(extracts)
     runs = [{"label": e.label, "run": e.path, "modes": len(e.modes), "errors": list(e.errors),
-             "exit_code": e.exit_code, "start_time": e.start_time} for e in extracts]
-    modes = [group_summary(group, labels) for group in group_modes(extracts)]
+             "exit_code": e.exit_code, "start_time": e.start_time,
+             "same_record_as": labels[same_as[k]] if k in same_as else None}
+            for k, e in enumerate(extracts)]
+    # a record given several times is pooled once (as its first file): the others lend no modes
+    pooled = [dataclasses.replace(e, modes=[]) if k in same_as else e
+              for k, e in enumerate(extracts)]
+    modes = [group_summary(group, labels) for group in group_modes(pooled)]
     ranges = [m["amplitude_range_m"] for m in modes]
     failed = [e.exit_code for e in extracts if e.exit_code]
     code = (2 if all(c == 2 for c in failed) else 1) if failed else 0
     if not failed and (not modes or any("fit_error" in m for m in modes)):
         code = 1
     return {"runs": runs, "runs_with_modes": sum(1 for e in extracts if e.modes),
+            "distinct_records": sum(1 for k, e in enumerate(extracts)
+                                    if e.modes and k not in same_as),
+            "notes": _same_record_notes(labels, same_as),
             "exit_code": code,
             "modes": modes,
             "amplitude_range_m": [min(r[0] for r in ranges), max(r[1] for r in ranges)]
@@ -324,11 +365,15 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
     lines = []
     total, good = len(agg["runs"]), agg["runs_with_modes"]
     rng = agg.get("amplitude_range_m")
+    distinct = agg.get("distinct_records", good)
     lines.append(f"{indent}aggregate of {total} run{'s' * (total != 1)}: {good} with modes"
+                 + (f" ({distinct} distinct record{'s' * (distinct != 1)})"
+                    if distinct != good else "")
                  + (f"; amplitude {1e3 * rng[0]:.3g} to {1e3 * rng[1]:.3g} mm" if rng else ""))
     for run in agg["runs"]:
         for error in run["errors"]:
             lines.append(f"{indent}  {run['label']}: {error}")
+    lines.extend(f"{indent}  note: {note}" for note in agg.get("notes", []))
     for entry in agg["modes"]:
         spread = entry["between_runs"]
         lines.append(f"{indent}mode at {entry['frequency_hz']:.4g} Hz, channel "

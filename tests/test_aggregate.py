@@ -258,10 +258,14 @@ def test_a_union_of_many_runs_is_never_more_precise_than_the_method(extracts, mo
     95 % half-widths) is added in quadrature. Thirty runs (the three levels ten times over):
     each half-width is the quadrature sum of the one without the floor (about 0.1 % on C_i and
     0.5 % on C_f) and the floor, to 1e-6; the factors are reported, the text says why."""
+    import dataclasses
+
     import fsi_lab.aggregate_fit as aggregate_fit
     from fsi_lab.accuracy import ACCURACY
 
-    runs = [extracts[f"level{k}"] for k in range(3)] * 10
+    # thirty records (each its own fingerprint: the same samples would be pooled once)
+    runs = [dataclasses.replace(extracts[f"level{k}"], fingerprint=f"{i}-{k}")
+            for i in range(10) for k in range(3)]
     agg = aggregate_extracts(runs)
     monkeypatch.setattr(aggregate_fit, "LAW_ACCURACY", {"a": 0.0, "beta": 0.0})
     (plain,) = aggregate_extracts(runs)["modes"]
@@ -331,3 +335,39 @@ def test_fsi_lab_aggregate_of_runs_with_close_modes_averages_their_joint_fits(tm
     assert mode["c_i"] == pytest.approx(C_I, rel=0.03) and covers(mode["c_i_ci95"], C_I)
     assert mode["c_f"] == pytest.approx(C_F, rel=0.06) and covers(mode["c_f_ci95"], C_F)
     assert "averaged with their inverse covariances" in format_aggregate(agg)
+
+
+def test_records_equal_sample_for_sample_are_pooled_once_naming_the_files(files, tmp_path):
+    """Run files with different uuids but the same samples (two runs of the simulated bench
+    with one bench.seed) were pooled as independent runs: "between runs sd 0" and an interval
+    narrowed by a record counted three times."""
+    import h5py
+
+    same = [write_decay_run(tmp_path / f"same{k}.h5", start=0.2, seed=5) for k in range(3)]
+    with h5py.File(same[0], "r") as a, h5py.File(same[1], "r") as b:
+        assert a.attrs["uuid"] != b.attrs["uuid"]
+    code, out, err = run_main("aggregate", *map(str, same), str(files["level0"]),
+                              "--mass-per-length", str(MASS), "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["runs_with_modes"] == 4 and data["distinct_records"] == 2
+    assert [r["same_record_as"] for r in data["runs"]] == [None, "same0.h5", "same0.h5", None]
+    assert data["notes"] == [
+        "same1.h5, same2.h5: the same record as same0.h5, sample for sample (their analysed "
+        "channels hold identical samples: a copy, or runs of the simulated bench with one "
+        "bench.seed); pooled once, as same0.h5: 3 copies of one record are one measurement, "
+        "not 3 independent runs"]
+    (mode,) = data["modes"]
+    assert mode["runs"] == 2
+    assert [r["label"] for r in mode["per_run"]] == ["same0.h5", "level0.h5"]
+    assert mode["between_runs"]["c_f"]["sd"] > 0
+    # pooled once: the union of the two distinct records, as if the copies were not given
+    code, out, _ = run_main("aggregate", str(same[0]), str(files["level0"]),
+                            "--mass-per-length", str(MASS), "--json")
+    (alone,) = json.loads(out)["modes"]
+    assert mode["c_f_ci95"] == pytest.approx(alone["c_f_ci95"])
+    code, text, _ = run_main("aggregate", *map(str, same), "--mass-per-length", str(MASS))
+    assert code == 0
+    assert text.startswith("aggregate of 3 runs: 3 with modes (1 distinct record); amplitude")
+    assert "\n  note: same1.h5, same2.h5: the same record as same0.h5, sample for sample" in text
+    assert "between runs" not in text  # one record: no spread between runs to give

@@ -156,16 +156,70 @@ def test_a_stop_on_a_mode_whose_runs_are_warned_says_so(tmp_path):
         "warnings beside it)")
 
 
-def test_repeats_on_the_simulated_bench_draw_new_noise(tmp_path):
+def test_every_run_on_the_simulated_bench_draws_new_noise(tmp_path):
+    """Repeat k took the profile's seed + k - 1, so every point or step with repeats = 1 ran
+    with the same seed: two steps of one excitation gave the same record, pooled as two runs
+    ("sd 0"), and a sweep's points shared their noise."""
     from fsi_lab.plan import load_plan
 
     plan = load_plan(write_plan(tmp_path, HEIGHTS))
     seeds = [[o for o in r.overrides if o.startswith("bench.seed=")] for r in plan.runs]
-    # repeat 1 keeps the profile's seed (0); repeat 2 of each height takes the next one
-    assert seeds == [[], ["bench.seed=1"]] * 3
+    # run 1 keeps the profile's seed (0); run i takes the profile's seed + i - 1
+    assert seeds == [[]] + [[f"bench.seed={i}"] for i in range(1, 6)]
+    again = load_plan(write_plan(tmp_path, '[[step]]\nname = "good"\n'
+                                           '[[step]]\nname = "good again"\n'))
+    assert [[o for o in r.overrides if o.startswith("bench.seed=")] for r in again.runs] == [
+        [], ["bench.seed=1"]]
+    # a seed the plan gives a point itself is kept (its repeats are then one record)
     swept = load_plan(write_plan(tmp_path, '[[step]]\nrepeats = 2\n[step.sweep]\n'
                                            '"bench.seed" = [7, 9]\n'))
     assert [r.overrides[-1] for r in swept.runs] == ["bench.seed=7"] * 2 + ["bench.seed=9"] * 2
+
+
+def test_a_sequence_started_with_the_former_seeds_resumes_with_them(tmp_path):
+    """A sequence recorded before every run got its own seed (repeat k: the profile's seed +
+    k - 1) still resumes: the runs not yet done run with the overrides it recorded."""
+    from fsi_lab.runfile import read_run
+    from fsi_lab.seqfile import load_record
+
+    steps = ('[[step]]\nname = "a"\n[[step]]\nname = "b"\n[[step]]\nname = "c"\n')
+    plan = tmp_path / "plan.toml"
+    plan.write_text(f'[plan]\nprofile = "{GOOD_PROFILE}"\n'
+                    'set = ["run.duration=0.3", "analysis.chain=spectrum"]\n' + steps)
+    out = tmp_path / "out"
+    code, _, err = run_main("sequence", str(plan), "--out", str(out), "-q")
+    assert code == 0, err
+    record = load_record(out)
+    assert [e["overrides"][-1:] for e in record.runs] == [
+        ["analysis.chain=spectrum"], ["bench.seed=1"], ["bench.seed=2"]]
+    # as the former version recorded it, interrupted after run 1: no seed on steps b and c
+    for entry in record.runs[1:]:
+        (out / entry["run_file"]).unlink()
+        entry.update(status="pending", run_file="", start_time="", stop_time="", results={},
+                     analysed=False, overrides=entry["overrides"][:-1])
+    record.attrs.update(status="interrupted")
+    record.aggregate = None
+    record.save()
+    code, text, err = run_main("sequence", "--resume", str(out), "--json")
+    assert code == 0, err
+    runs = json.loads(text)["runs"]
+    assert [r["status"] for r in runs] == ["completed"] * 3
+    former = ["run.duration=0.3", "analysis.chain=spectrum"]
+    assert [r["overrides"] for r in runs] == [former] * 3
+    for entry in runs:
+        run = read_run(out / entry["run_file"], load_data=False)
+        assert list(run.attrs["overrides"]) == former
+    # a sequence of this version resumes with the seeds the plan gives
+    again = tmp_path / "again"
+    code, _, err = run_main("sequence", str(plan), "--out", str(again), "-q")
+    assert code == 0, err
+    record = load_record(again)
+    seeded = [e["overrides"] for e in record.runs]
+    record.runs[2].update(status="pending", run_file="", results={}, analysed=False)
+    record.save()
+    code, text, err = run_main("sequence", "--resume", str(again), "--json")
+    assert code == 0, err
+    assert [r["overrides"] for r in json.loads(text)["runs"]] == seeded
 
 
 def test_the_bench_seed_sets_the_simulated_noise(tmp_path):
@@ -184,3 +238,30 @@ def test_the_bench_seed_sets_the_simulated_noise(tmp_path):
             records.append(f["channels/tip_velocity"][()])
     assert np.array_equal(records[0], records[1])      # the same seed, the same record
     assert not np.array_equal(records[0], records[2])  # another seed, other noise
+
+
+def test_a_sequence_pools_one_record_once_when_the_plan_gives_its_runs_one_seed(tmp_path):
+    """Two steps of one excitation with the seed the plan sets make one record twice: the
+    sequence's aggregation (from each run's own identification) and fsi-lab aggregate DIR
+    (identifying the files again) pool it once and say so."""
+    steps = '[[step]]\nname = "good"\n[[step]]\nname = "good again"\n'
+    plan = tmp_path / "plan.toml"
+    plan.write_text(f'[plan]\nprofile = "{GOOD_PROFILE}"\n'
+                    f'set = {BASE_SET[:-1]}, "bench.seed=3"]\n' + steps)
+    out = tmp_path / "out"
+    code, text, err = run_main("sequence", str(plan), "--out", str(out), "--json")
+    assert code == 0, err
+    agg = json.loads(text)["aggregate"]
+    assert agg["runs_with_modes"] == 2 and agg["distinct_records"] == 1
+    assert [r["same_record_as"] for r in agg["runs"]] == [None, "run 1"]
+    assert agg["notes"] == [
+        "run 2: the same record as run 1, sample for sample (their analysed channels hold "
+        "identical samples: a copy, or runs of the simulated bench with one bench.seed); "
+        "pooled once, as run 1: 2 copies of one record are one measurement, not 2 "
+        "independent runs"]
+    assert all(mode["runs"] == 1 for mode in agg["modes"])
+    code, text, err = run_main("aggregate", str(out), "--json")
+    assert code == 0, err
+    again = json.loads(text)
+    assert again["distinct_records"] == 1 and again["notes"] == agg["notes"]
+    assert [m["c_f"] for m in again["modes"]] == pytest.approx([m["c_f"] for m in agg["modes"]])
