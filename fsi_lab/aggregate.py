@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -216,18 +217,62 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
     return entry
 
 
+#: A number in a warning (its values across runs are given as a range).
+_NUMBER = re.compile(r"(?<![\w.])\d+(?:\.\d+)?")
+
+
+def _gist(warning: str) -> str:
+    """A warning's first clause: up to its first colon, semicolon or parenthesis (the rest
+    says why and what was done, in the run's own warnings)."""
+    cut = min((i for i in (warning.find(": "), warning.find("; "), warning.find(" (")) if i > 0),
+              default=len(warning))
+    return warning[:cut].strip()
+
+
+def _warning_kinds(per_run: list[dict[str, Any]]) -> list[tuple[str, int]]:
+    """The distinct warnings of the runs, shortened (:func:`_gist`), with how many runs carry
+    each, most frequent first: warnings that differ only by their numbers are one, their
+    numbers given as ranges (``up to`` a number: the largest)."""
+    kinds: dict[str, list[list[float]]] = {}
+    runs: dict[str, set[int]] = {}
+    for position, run in enumerate(per_run):
+        for warning in run["warnings"]:
+            gist = _gist(warning)
+            template = _NUMBER.sub("{}", gist.replace("{", "(").replace("}", ")"))
+            kinds.setdefault(template, []).append([float(v) for v in _NUMBER.findall(gist)])
+            runs.setdefault(template, set()).add(position)
+    out = []
+    for template, numbers in kinds.items():
+        texts, pieces = [], template.split("{}")
+        for slot in range(len(pieces) - 1):
+            values = [n[slot] for n in numbers]
+            low, high = min(values), max(values)
+            if pieces[slot].endswith("up to ") or f"{low:g}" == f"{high:g}":
+                texts.append(f"{high:g}")
+            else:
+                texts.append(f"{low:g} to {high:g}")
+        out.append(("".join(p + t for p, t in zip(pieces, [*texts, ""])),
+                    len(runs[template])))
+    return sorted(out, key=lambda kind: -kind[1])
+
+
 def _pooled_warnings(per_run: list[dict[str, Any]]) -> list[str]:
-    """A sentence when runs of the group carry warnings on the mode: pooling narrows what
-    differs between runs (their noise, their scatter), not an error every run shares, which
-    those warnings may name (a close mode's smear corrected with a model, a law that
-    misfits); empty when no run was warned."""
+    """A sentence when runs of the group carry warnings on the mode: which (each distinct
+    warning, shortened, with how many runs carry it), and that pooling narrows what differs
+    between runs (their noise, their scatter), not a bias they share, which those warnings
+    may name (a law that misfits, decays whose start is not free, a close mode's smear
+    corrected with a model); empty when no run was warned."""
     warned = [r for r in per_run if r["warnings"]]
     if not warned:
         return []
-    return [f"{len(warned)} of {len(per_run)} runs carry warnings on this mode (first, "
-            f"{warned[0]['label']}: {warned[0]['warnings'][0]}): the pooled intervals hold "
-            "the runs' noise and scatter, not an error they share, which these warnings may "
-            "name; read them beside the pooled numbers"]
+    kinds = "; ".join(f"{text} ({count} run{'s' * (count != 1)})"
+                      for text, count in _warning_kinds(per_run))
+    return [f"{len(warned)} of {len(per_run)} runs carry warnings on this mode: {kinds}. "
+            "Pooling narrows the runs' noise and scatter, not a bias they share: where these "
+            "warnings name one (a damping law that misfits, decays whose start is not free, a "
+            "smear corrected with a model), every run carries it, and the pooled interval, "
+            "narrower than each run's own, may miss the true value that the runs' own "
+            "intervals hold; read each run's warnings and interval beside the pooled numbers"]
 
 
 def same_records(extracts: Sequence[RunExtract]) -> dict[int, int]:
