@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from fsi_lab.errors import FsiLabError, InputFileError, PluginError, RunAborted
+from fsi_lab.errors import FsiLabError, InputFileError, PluginError, ProfileError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
@@ -410,6 +410,28 @@ def _refuse_copies(paths: list[Path]) -> None:
         seen[str(run_uuid)] = path
 
 
+def check_aggregate_sets(sets: list[str]) -> None:
+    """Refuse, once and before any run is read, a ``--set`` of ``fsi-lab aggregate`` that is
+    not an analysis parameter. The specimen (mu + M, the mode shape) is each run's own, held by
+    its run file: an aggregate that changed it would pool numbers that no run file explains."""
+    accepted = ("fsi-lab aggregate sets analysis parameters only: "
+                "analysis.ANALYSIS.PARAMETER=VALUE (fsi-lab plugins -v lists them), "
+                "analysis.chain, analysis.channels or analysis.reference")
+    for item in sets:
+        key = item.partition("=")[0].strip()
+        section = key.partition(".")[0].strip()
+        if section == "analysis":
+            continue
+        if section == "specimen":
+            raise ProfileError(
+                f"--set {item!r}: the specimen (the beam, its fluid, the measuring point) is "
+                "each run's own, held by its run file, and an aggregate that changed it would "
+                f"give numbers no run file explains; {accepted}; give runs without a specimen "
+                "their mu + M with --mass-per-length, or aggregate runs of the beam you mean")
+        raise ProfileError(f"--set {item!r}: {key or item!r} is not an analysis parameter "
+                           f"(the runs were recorded with their own); {accepted}")
+
+
 def cmd_aggregate(args) -> int:
     """``fsi-lab aggregate RUN.h5 ... | DIR``: the runs' modes grouped by frequency, C_i and
     C_f fitted to the union of their free decays, backbones and damping curves on one
@@ -419,6 +441,7 @@ def cmd_aggregate(args) -> int:
     from fsi_lab.executor import make_executor
 
     require_mass_per_length(args.mass_per_length)
+    check_aggregate_sets(args.set)
     tasks = aggregate_tasks(args.runs, args.set, args.mass_per_length)
     executor = make_executor(args.jobs, args.scheduler)
     bus = EventBus()
@@ -992,7 +1015,10 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
                         "run files")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override an analysis parameter of every run: "
-                        "analysis.ANALYSIS.PARAMETER=VALUE (fsi-lab plugins -v lists them)")
+                        "analysis.ANALYSIS.PARAMETER=VALUE (fsi-lab plugins -v lists them), "
+                        "analysis.chain, analysis.channels, analysis.reference; not the "
+                        "specimen, which each run file holds (--mass-per-length gives mu + M "
+                        "to runs without one)")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
                    help="mu + M for runs without a specimen (kg/m)")
     p.add_argument("--jobs", type=_jobs, metavar="N",

@@ -393,3 +393,37 @@ def test_records_equal_sample_for_sample_are_pooled_once_naming_the_files(files,
     assert text.startswith("aggregate of 3 runs: 3 with modes (1 distinct record); amplitude")
     assert "\n  note: same1.h5, same2.h5: the same record as same0.h5, sample for sample" in text
     assert "between runs" not in text  # one record: no spread between runs to give
+
+
+@pytest.mark.parametrize("item", ["specimen.fluid=air", "run.duration=3"])
+def test_aggregate_sets_analysis_parameters_only_and_says_so_once(files, item, tmp_path):
+    """`aggregate --set specimen.fluid=air` on water runs was accepted and gave an 18 times
+    larger C_i that no run file explains; `--set run.duration=3` was refused once per run,
+    after the runs were read. Both are refused once, before any run is read, saying what is
+    accepted."""
+    import hashlib
+
+    paths = [str(files[f"level{k}"]) for k in range(3)]
+    before = [hashlib.md5(open(p, "rb").read()).hexdigest() for p in paths]
+    code, out, err = run_main("aggregate", *paths, "--mass-per-length", str(MASS), "--set",
+                              item, "--json")
+    assert code == 2
+    assert json.loads(out) == {"error": json.loads(out)["error"], "exit_code": 2}
+    assert err.count("fsi-lab: error: ") == 1 and err.count(f"--set {item!r}") == 1
+    assert "identifying the modes" not in err and "level0.h5" not in err
+    assert ("fsi-lab aggregate sets analysis parameters only: analysis.ANALYSIS.PARAMETER=VALUE "
+            "(fsi-lab plugins -v lists them), analysis.chain, analysis.channels or "
+            "analysis.reference") in err
+    if item.startswith("specimen"):
+        assert "the specimen (the beam, its fluid, the measuring point) is each run's own, " \
+               "held by its run file" in err
+        assert "--mass-per-length" in err
+    else:
+        assert "'run.duration' is not an analysis parameter" in err
+    assert [hashlib.md5(open(p, "rb").read()).hexdigest() for p in paths] == before
+    # an analysis parameter is accepted, and --help says what is
+    code, out, err = run_main("aggregate", *paths, "--mass-per-length", str(MASS), "--set",
+                              "analysis.hvd.components=1", "--json")
+    assert code == 0, err
+    code, text, _ = run_main("aggregate", "--help")
+    assert "not the specimen, which each run file holds" in " ".join(text.split())
