@@ -427,3 +427,21 @@ def test_aggregate_sets_analysis_parameters_only_and_says_so_once(files, item, t
     assert code == 0, err
     code, text, _ = run_main("aggregate", "--help")
     assert "not the specimen, which each run file holds" in " ".join(text.split())
+
+
+def test_fsi_lab_aggregate_takes_directories_and_run_files_together(files, tmp_path):
+    """--help says RUN.h5|DIR [RUN.h5|DIR ...], but a directory was taken only alone: `fsi-lab
+    aggregate DIR FILE.h5` refused the directory ("is a directory, not a regular file")."""
+    folder = files["level0"].parent
+    extra = write_decay_run(tmp_path / "extra.h5", start=0.25, seed=11)
+    code, out, err = run_main("aggregate", str(folder), str(extra), str(files["level1"]),
+                              "--mass-per-length", str(MASS), "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    # the folder's five runs and the extra one; level1.h5, also in the folder, counts once
+    assert sorted(r["label"] for r in data["runs"]) == sorted(
+        ["level0.h5", "level1.h5", "level2.h5", "thicker.h5", "stiffer.h5", "extra.h5"])
+    assert [m["runs"] for m in data["modes"]] == [5, 1]
+    code, _, err = run_main("aggregate", str(folder), str(tmp_path / "empty"),
+                            "--mass-per-length", str(MASS))
+    assert code == 2 and f"{tmp_path / 'empty'}: " in err

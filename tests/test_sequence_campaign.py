@@ -265,3 +265,33 @@ def test_a_sequence_pools_one_record_once_when_the_plan_gives_its_runs_one_seed(
     again = json.loads(text)
     assert again["distinct_records"] == 1 and again["notes"] == agg["notes"]
     assert [m["c_f"] for m in again["modes"]] == pytest.approx([m["c_f"] for m in agg["modes"]])
+
+
+def test_aggregate_takes_a_sequence_s_directory_with_its_files_and_leaves_its_record_out(
+        tmp_path):
+    """`fsi-lab aggregate DIR/*.h5`, the natural glob, caught sequence.h5 and was refused
+    (exit 2); `fsi-lab aggregate DIR DIR/RUN.h5` refused the directory. The record is left out
+    with a note, the directory gives its completed runs, a file given twice counts once."""
+    steps = '[[step]]\nname = "a"\n[[step]]\nname = "b"\n'
+    out = tmp_path / "out"
+    code, _, err = run_main("sequence", str(write_plan(tmp_path, steps)), "--out", str(out),
+                            "-q")
+    assert code == 0, err
+    files = sorted(str(p) for p in out.glob("*.h5"))
+    assert str(out / SEQUENCE_FILE) in files and len(files) == 3
+    code, text, err = run_main("aggregate", *files, "--json")
+    assert code == 0, err
+    data = json.loads(text)
+    assert len(data["runs"]) == 2 and data["distinct_records"] == 2
+    assert data["notes"] == [
+        f"{out / SEQUENCE_FILE}: a sequence's record, not a run file: left out (its runs are "
+        f"the run files beside it; fsi-lab aggregate {out} pools the sequence's completed "
+        "runs)"]
+    code, text, err = run_main("aggregate", *files)
+    assert code == 0 and f"\n  note: {out / SEQUENCE_FILE}: a sequence's record" in text
+    run_file = [f for f in files if not f.endswith(SEQUENCE_FILE)][0]
+    code, text, err = run_main("aggregate", str(out), run_file, "--json")
+    assert code == 0, err
+    data = json.loads(text)
+    assert [r["label"] for r in data["runs"]] == [f"{out}: run 1", f"{out}: run 2"]
+    assert max(m["runs"] for m in data["modes"]) == 2
