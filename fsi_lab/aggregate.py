@@ -405,16 +405,33 @@ def _widening(entry: dict[str, Any]) -> str:
     return "; " + "; ".join(parts) if parts else ""
 
 
+def _amplitude_kind(entry: dict[str, Any]) -> str:
+    """What a mode's amplitudes are, from its ``amplitude_convention``: the modal coordinate
+    q (the displacement at the measuring point over the mode shape there), or the
+    displacement at the measuring point."""
+    convention = str(entry.get("amplitude_convention", ""))
+    if not convention.startswith("modal"):
+        return "displacement amplitude at the measuring point"
+    scale = entry.get("modal_scale")
+    found = re.match(r"modal: (q_\d+) ", convention)
+    name = found.group(1) if found else "q"
+    return (f"modal amplitude {name}" + (f" (the displacement at the measuring point / "
+                                         f"{abs(scale):.4g})" if scale else ""))
+
+
 def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
     """The aggregation in a few readable lines."""
     lines = []
     total, good = len(agg["runs"]), agg["runs_with_modes"]
     rng = agg.get("amplitude_range_m")
     distinct = agg.get("distinct_records", good)
+    kinds = {_amplitude_kind(entry).partition(" (")[0].partition(" q_")[0]
+             for entry in agg["modes"]}
+    kind = kinds.pop() if len(kinds) == 1 else "amplitude (each mode's, below)"
     lines.append(f"{indent}aggregate of {total} run{'s' * (total != 1)}: {good} with modes"
                  + (f" ({distinct} distinct record{'s' * (distinct != 1)})"
                     if distinct != good else "")
-                 + (f"; amplitude {1e3 * rng[0]:.3g} to {1e3 * rng[1]:.3g} mm" if rng else ""))
+                 + (f"; {kind} {1e3 * rng[0]:.3g} to {1e3 * rng[1]:.3g} mm" if rng else ""))
     for run in agg["runs"]:
         for error in run["errors"]:
             lines.append(f"{indent}  {run['label']}: {error}")
@@ -425,7 +442,8 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
                      f"{entry['channel']}: {entry['runs']} run{'s' * (entry['runs'] != 1)}"
                      + (f", {entry['decays']} decays, {entry['extrema']} extrema"
                         if "decays" in entry else "")
-                     + f", amplitude {1e3 * entry['amplitude_range_m'][0]:.3g} to "
+                     + f", {_amplitude_kind(entry)} "
+                       f"{1e3 * entry['amplitude_range_m'][0]:.3g} to "
                        f"{1e3 * entry['amplitude_range_m'][1]:.3g} mm")
         if "c_i" in entry:
             lines.append(f"{indent}  C_i = {entry['c_i']:.4g} kg/(m s) "
@@ -447,8 +465,10 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
                 s = spread[key]
                 if s["sd"] is not None:
                     parts.append(f"{label} sd {s['sd']:.3g}{unit} ({s['sd_pct']:.2g} %) "
-                                 f"vs within-run +-{s['median_half_width']:.3g}{unit}")
-            lines.append(f"{indent}  between runs: " + "; ".join(parts))
+                                 f"vs within-run 95 % +-{s['median_half_width']:.3g}{unit}")
+            lines.append(f"{indent}  between runs (the standard deviation of the runs' own "
+                         "values vs the median half-width of their own 95 % intervals): "
+                         + "; ".join(parts))
         for run in entry["per_run"]:
             lines.append(f"{indent}    {run['label']}: {run['frequency_hz']:.4f} Hz, C_i = "
                          f"{run['c_i']:.4g} kg/(m s) ({_interval(run['c_i_ci95'])}), C_f = "

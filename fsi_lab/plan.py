@@ -80,6 +80,7 @@ STEP_PARAMS: tuple[Param, ...] = (
 STOP_QUANTITIES = ("c_i", "c_f")
 #: How each quantity is written in messages.
 STOP_SYMBOLS = {"c_i": "C_i", "c_f": "C_f"}
+STOP_UNITS = {"c_i": "kg/(m s)", "c_f": "kg/m^2"}
 STOP_PARAMS: tuple[Param, ...] = (
     Param("quantity", "str", "", choices=STOP_QUANTITIES,
           help="c_i (kg/(m s)) or c_f (kg/m^2) fitted to the union of the completed runs' "

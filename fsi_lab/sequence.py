@@ -31,7 +31,7 @@ from typing import Any
 from fsi_lab.bench_access import unsafe_roles
 from fsi_lab.errors import FsiLabError, InputFileError, ProfileError, RunAborted
 from fsi_lab.events import EventBus, Progress
-from fsi_lab.plan import STOP_SYMBOLS, Plan, PlannedRun, check_plan, is_seed, load_plan
+from fsi_lab.plan import STOP_SYMBOLS, STOP_UNITS, Plan, PlannedRun, check_plan, is_seed, load_plan
 from fsi_lab.registry import Registry
 from fsi_lab.runfile import read_analysis_summary, read_run, utc_now
 from fsi_lab.seqfile import SEQUENCE_FILE, SequenceRecord, compact_results, holder, load_record
@@ -367,9 +367,9 @@ class SequenceRunner:
         half = max(value - low, high - value) / abs(value) if value else float("inf")
         if half >= stop.relative_half_width:
             return None
-        name = STOP_SYMBOLS[stop.quantity]
-        reason = (f"stopped after {completed} completed runs: {name} = {value:.4g} "
-                  f"(95 %: {low:.4g} to {high:.4g}, +-{100 * half:.3g} %) at "
+        name, unit = STOP_SYMBOLS[stop.quantity], STOP_UNITS[stop.quantity]
+        reason = (f"stopped after {completed} completed runs: {name} = {value:.4g} {unit} "
+                  f"(95 %: {low:.4g} to {high:.4g} {unit}, +-{100 * half:.3g} %) at "
                   f"{mode['frequency_hz']:.4g} Hz is within the plan's "
                   f"+-{100 * stop.relative_half_width:g} %")
         warned = sum(1 for run in mode.get("per_run", []) if run.get("warnings"))

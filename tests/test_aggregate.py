@@ -190,8 +190,12 @@ def test_fsi_lab_aggregate_files_and_directories(files, tmp_path):
     folder = files["level0"].parent
     code, text, _ = run_main("aggregate", str(folder), "--mass-per-length", str(MASS))
     assert code == 0
-    assert text.startswith("aggregate of 5 runs: 5 with modes; amplitude ")
+    # (no beam model: the amplitudes are those measured)
+    assert text.startswith("aggregate of 5 runs: 5 with modes; displacement amplitude at the "
+                           "measuring point ")
     assert "mode at 20 Hz, channel tip: 4 runs, 4 decays" in text
+    assert re.search(r"4 decays, \d+ extrema, displacement amplitude at the measuring point "
+                     r"[0-9.e-]+ to [0-9.e-]+ mm\n", text), text
     assert "mode at 30 Hz, channel tip: 1 run, 1 decays" in text
     # each run's own frequency: the mode is at 20 Hz
     thicker = re.search(r"\n    thicker\.h5: ([0-9.]+) Hz", text)
@@ -390,7 +394,8 @@ def test_records_equal_sample_for_sample_are_pooled_once_naming_the_files(files,
     assert mode["c_f_ci95"] == pytest.approx(alone["c_f_ci95"])
     code, text, _ = run_main("aggregate", *map(str, same), "--mass-per-length", str(MASS))
     assert code == 0
-    assert text.startswith("aggregate of 3 runs: 3 with modes (1 distinct record); amplitude")
+    assert text.startswith("aggregate of 3 runs: 3 with modes (1 distinct record); displacement "
+                           "amplitude at the measuring point")
     assert "\n  note: same1.h5, same2.h5: the same record as same0.h5, sample for sample" in text
     assert "between runs" not in text  # one record: no spread between runs to give
 

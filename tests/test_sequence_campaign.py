@@ -9,6 +9,7 @@ The kill comes at a point of the sequence (when run 2's results are being kept),
 delay."""
 
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -129,6 +130,10 @@ def test_stop_when_ends_the_sequence_once_the_interval_is_narrow_enough(tmp_path
     mode = data["aggregate"]["modes"][0]
     low, high = mode["c_i_ci95"]
     assert max(high - mode["c_i"], mode["c_i"] - low) < 0.05 * mode["c_i"]
+    # the number and its interval with their unit
+    assert data["stopped_early"].startswith(
+        f"stopped after 2 completed runs: C_i = {mode['c_i']:.4g} kg/(m s) (95 %: {low:.4g} "
+        f"to {high:.4g} kg/(m s), +-")
     assert len(list(out.glob("2*.h5"))) == 2
     # nothing left to resume
     code, again, _ = run_main("sequence", "--resume", str(out), "--json")
@@ -289,6 +294,16 @@ def test_aggregate_takes_a_sequence_s_directory_with_its_files_and_leaves_its_re
         "runs)"]
     code, text, err = run_main("aggregate", *files)
     assert code == 0 and f"\n  note: {out / SEQUENCE_FILE}: a sequence's record" in text
+    # the amplitudes are the modal coordinate q_2 = w / W_2 (W_2 = 2 at the tip), not the
+    # displacement measured, and the spread between runs says what it compares
+    assert text.startswith("aggregate of 2 runs: 2 with modes; modal amplitude ")
+    assert re.search(r"\nmode at 17\.06 Hz, channel tip_velocity: 2 runs, 2 decays, \d+ "
+                     r"extrema, modal amplitude q_2 \(the displacement at the measuring point "
+                     r"/ 2\) [0-9.e-]+ to [0-9.e-]+ mm\n", text), text
+    assert ("\n  between runs (the standard deviation of the runs' own values vs the median "
+            "half-width of their own 95 % intervals): C_i sd ") in text
+    assert re.search(r"C_f sd [0-9.e-]+ kg/m\^2 \([0-9.e-]+ %\) vs within-run 95 % "
+                     r"\+-[0-9.e-]+ kg/m\^2", text), text
     run_file = [f for f in files if not f.endswith(SEQUENCE_FILE)][0]
     code, text, err = run_main("aggregate", str(out), run_file, "--json")
     assert code == 0, err
