@@ -22,7 +22,9 @@ The result is one JSON-ready dict (layout in docs/sequence-format.md, "Aggregati
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import re
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -215,18 +217,93 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
     return entry
 
 
+#: A number in a warning (its values across runs are given as a range).
+_NUMBER = re.compile(r"(?<![\w.])\d+(?:\.\d+)?")
+
+
+def _gist(warning: str) -> str:
+    """A warning's first clause: up to its first colon, semicolon or parenthesis (the rest
+    says why and what was done, in the run's own warnings)."""
+    cut = min((i for i in (warning.find(": "), warning.find("; "), warning.find(" (")) if i > 0),
+              default=len(warning))
+    return warning[:cut].strip()
+
+
+def _warning_kinds(per_run: list[dict[str, Any]]) -> list[tuple[str, int]]:
+    """The distinct warnings of the runs, shortened (:func:`_gist`), with how many runs carry
+    each, most frequent first: warnings that differ only by their numbers are one, their
+    numbers given as ranges (``up to`` a number: the largest)."""
+    kinds: dict[str, list[list[float]]] = {}
+    runs: dict[str, set[int]] = {}
+    for position, run in enumerate(per_run):
+        for warning in run["warnings"]:
+            gist = _gist(warning)
+            template = _NUMBER.sub("{}", gist.replace("{", "(").replace("}", ")"))
+            kinds.setdefault(template, []).append([float(v) for v in _NUMBER.findall(gist)])
+            runs.setdefault(template, set()).add(position)
+    out = []
+    for template, numbers in kinds.items():
+        texts, pieces = [], template.split("{}")
+        for slot in range(len(pieces) - 1):
+            values = [n[slot] for n in numbers]
+            low, high = min(values), max(values)
+            if pieces[slot].endswith("up to ") or f"{low:g}" == f"{high:g}":
+                texts.append(f"{high:g}")
+            else:
+                texts.append(f"{low:g} to {high:g}")
+        out.append(("".join(p + t for p, t in zip(pieces, [*texts, ""])),
+                    len(runs[template])))
+    return sorted(out, key=lambda kind: -kind[1])
+
+
 def _pooled_warnings(per_run: list[dict[str, Any]]) -> list[str]:
-    """A sentence when runs of the group carry warnings on the mode: pooling narrows what
-    differs between runs (their noise, their scatter), not an error every run shares, which
-    those warnings may name (a close mode's smear corrected with a model, a law that
-    misfits); empty when no run was warned."""
+    """A sentence when runs of the group carry warnings on the mode: which (each distinct
+    warning, shortened, with how many runs carry it), and that pooling narrows what differs
+    between runs (their noise, their scatter), not a bias they share, which those warnings
+    may name (a law that misfits, decays whose start is not free, a close mode's smear
+    corrected with a model); empty when no run was warned."""
     warned = [r for r in per_run if r["warnings"]]
     if not warned:
         return []
-    return [f"{len(warned)} of {len(per_run)} runs carry warnings on this mode (first, "
-            f"{warned[0]['label']}: {warned[0]['warnings'][0]}): the pooled intervals hold "
-            "the runs' noise and scatter, not an error they share, which these warnings may "
-            "name; read them beside the pooled numbers"]
+    kinds = "; ".join(f"{text} ({count} run{'s' * (count != 1)})"
+                      for text, count in _warning_kinds(per_run))
+    return [f"{len(warned)} of {len(per_run)} runs carry warnings on this mode: {kinds}. "
+            "Pooling narrows the runs' noise and scatter, not a bias they share: where these "
+            "warnings name one (a damping law that misfits, decays whose start is not free, a "
+            "smear corrected with a model), every run carries it, and the pooled interval, "
+            "narrower than each run's own, may miss the true value that the runs' own "
+            "intervals hold; read each run's warnings and interval beside the pooled numbers"]
+
+
+def same_records(extracts: Sequence[RunExtract]) -> dict[int, int]:
+    """The runs (by position) whose analysed channels hold the same samples as an earlier
+    run's (:func:`~fsi_lab.aggregate_extract.record_fingerprint`), each with the position of
+    the first: one record under several files (and uuids), which pooled as independent runs
+    would narrow the intervals and show no spread between them."""
+    first: dict[str, int] = {}
+    same: dict[int, int] = {}
+    for position, extract in enumerate(extracts):
+        if not extract.fingerprint or not extract.modes:
+            continue
+        if extract.fingerprint in first:
+            same[position] = first[extract.fingerprint]
+        else:
+            first[extract.fingerprint] = position
+    return same
+
+
+def _same_record_notes(labels: list[str], same_as: dict[int, int]) -> list[str]:
+    """A note per record given more than once, naming its files."""
+    notes = []
+    for original in sorted(set(same_as.values())):
+        copies = [labels[k] for k in sorted(same_as) if same_as[k] == original]
+        notes.append(
+            f"{', '.join(copies)}: the same record as {labels[original]}, sample for sample "
+            f"(their analysed channels hold identical samples: a copy, or runs of the "
+            f"simulated bench with one bench.seed); pooled once, as {labels[original]}: "
+            f"{len(copies) + 1} copies of one record are one measurement, not "
+            f"{len(copies) + 1} independent runs")
+    return notes
 
 
 def aggregate_extracts(extracts: Sequence[RunExtract]) -> dict[str, Any]:
@@ -241,15 +318,24 @@ def aggregate_extracts(extracts: Sequence[RunExtract]) -> dict[str, Any]:
         analysis failed or a mode's fit did, or no mode was found, else 0.
     """
     labels = [extract.label for extract in extracts]
+    same_as = same_records(extracts)
     runs = [{"label": e.label, "run": e.path, "modes": len(e.modes), "errors": list(e.errors),
-             "exit_code": e.exit_code, "start_time": e.start_time} for e in extracts]
-    modes = [group_summary(group, labels) for group in group_modes(extracts)]
+             "exit_code": e.exit_code, "start_time": e.start_time,
+             "same_record_as": labels[same_as[k]] if k in same_as else None}
+            for k, e in enumerate(extracts)]
+    # a record given several times is pooled once (as its first file): the others lend no modes
+    pooled = [dataclasses.replace(e, modes=[]) if k in same_as else e
+              for k, e in enumerate(extracts)]
+    modes = [group_summary(group, labels) for group in group_modes(pooled)]
     ranges = [m["amplitude_range_m"] for m in modes]
     failed = [e.exit_code for e in extracts if e.exit_code]
     code = (2 if all(c == 2 for c in failed) else 1) if failed else 0
     if not failed and (not modes or any("fit_error" in m for m in modes)):
         code = 1
     return {"runs": runs, "runs_with_modes": sum(1 for e in extracts if e.modes),
+            "distinct_records": sum(1 for k, e in enumerate(extracts)
+                                    if e.modes and k not in same_as),
+            "notes": _same_record_notes(labels, same_as),
             "exit_code": code,
             "modes": modes,
             "amplitude_range_m": [min(r[0] for r in ranges), max(r[1] for r in ranges)]
@@ -319,23 +405,45 @@ def _widening(entry: dict[str, Any]) -> str:
     return "; " + "; ".join(parts) if parts else ""
 
 
+def _amplitude_kind(entry: dict[str, Any]) -> str:
+    """What a mode's amplitudes are, from its ``amplitude_convention``: the modal coordinate
+    q (the displacement at the measuring point over the mode shape there), or the
+    displacement at the measuring point."""
+    convention = str(entry.get("amplitude_convention", ""))
+    if not convention.startswith("modal"):
+        return "displacement amplitude at the measuring point"
+    scale = entry.get("modal_scale")
+    found = re.match(r"modal: (q_\d+) ", convention)
+    name = found.group(1) if found else "q"
+    return (f"modal amplitude {name}" + (f" (the displacement at the measuring point / "
+                                         f"{abs(scale):.4g})" if scale else ""))
+
+
 def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
     """The aggregation in a few readable lines."""
     lines = []
     total, good = len(agg["runs"]), agg["runs_with_modes"]
     rng = agg.get("amplitude_range_m")
+    distinct = agg.get("distinct_records", good)
+    kinds = {_amplitude_kind(entry).partition(" (")[0].partition(" q_")[0]
+             for entry in agg["modes"]}
+    kind = kinds.pop() if len(kinds) == 1 else "amplitude (each mode's, below)"
     lines.append(f"{indent}aggregate of {total} run{'s' * (total != 1)}: {good} with modes"
-                 + (f"; amplitude {1e3 * rng[0]:.3g} to {1e3 * rng[1]:.3g} mm" if rng else ""))
+                 + (f" ({distinct} distinct record{'s' * (distinct != 1)})"
+                    if distinct != good else "")
+                 + (f"; {kind} {1e3 * rng[0]:.3g} to {1e3 * rng[1]:.3g} mm" if rng else ""))
     for run in agg["runs"]:
         for error in run["errors"]:
             lines.append(f"{indent}  {run['label']}: {error}")
+    lines.extend(f"{indent}  note: {note}" for note in agg.get("notes", []))
     for entry in agg["modes"]:
         spread = entry["between_runs"]
         lines.append(f"{indent}mode at {entry['frequency_hz']:.4g} Hz, channel "
                      f"{entry['channel']}: {entry['runs']} run{'s' * (entry['runs'] != 1)}"
                      + (f", {entry['decays']} decays, {entry['extrema']} extrema"
                         if "decays" in entry else "")
-                     + f", amplitude {1e3 * entry['amplitude_range_m'][0]:.3g} to "
+                     + f", {_amplitude_kind(entry)} "
+                       f"{1e3 * entry['amplitude_range_m'][0]:.3g} to "
                        f"{1e3 * entry['amplitude_range_m'][1]:.3g} mm")
         if "c_i" in entry:
             lines.append(f"{indent}  C_i = {entry['c_i']:.4g} kg/(m s) "
@@ -357,8 +465,10 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
                 s = spread[key]
                 if s["sd"] is not None:
                     parts.append(f"{label} sd {s['sd']:.3g}{unit} ({s['sd_pct']:.2g} %) "
-                                 f"vs within-run +-{s['median_half_width']:.3g}{unit}")
-            lines.append(f"{indent}  between runs: " + "; ".join(parts))
+                                 f"vs within-run 95 % +-{s['median_half_width']:.3g}{unit}")
+            lines.append(f"{indent}  between runs (the standard deviation of the runs' own "
+                         "values vs the median half-width of their own 95 % intervals): "
+                         + "; ".join(parts))
         for run in entry["per_run"]:
             lines.append(f"{indent}    {run['label']}: {run['frequency_hz']:.4f} Hz, C_i = "
                          f"{run['c_i']:.4g} kg/(m s) ({_interval(run['c_i_ci95'])}), C_f = "

@@ -142,6 +142,28 @@ class RunExtract:
     exit_code: int = 0
     start_time: str = ""
     overrides: list[str] = field(default_factory=list)
+    #: a hash of the samples of the channels analysed (:func:`record_fingerprint`): records
+    #: equal sample for sample have the same one ("": not known)
+    fingerprint: str = ""
+
+
+def record_fingerprint(channels: dict[str, Any]) -> str:
+    """A hash of ``channels``' samples (name: channel, as analysed: float64, up to where the
+    analysis stops), with their names and sample rates: two run files whose analysed channels
+    hold the same samples give the same one, whatever their uuids (a copy given a new uuid, or
+    two runs of the simulated bench with one ``bench.seed``: one record, not two
+    measurements). "" for no channel."""
+    import hashlib
+
+    if not channels:
+        return ""
+    digest = hashlib.blake2b(digest_size=16)
+    for name in sorted(channels):
+        channel = channels[name]
+        data = np.ascontiguousarray(channel.data, dtype=np.float64)
+        digest.update(f"{name}\0{float(channel.sample_rate)!r}\0{data.size}\0".encode())
+        digest.update(memoryview(data).cast("B"))
+    return digest.hexdigest()
 
 
 def _plugin_params(registry, profile, name: str, **fixed) -> dict[str, Any]:
@@ -259,6 +281,7 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
     reference = profile.analysis.get("reference")
     # the record up to where its own analysis stops (its quiet tail left out, as run_chain does)
     channels, _ = cut_quiet_tail(run.channels, names + ([reference] if reference else []))
+    identified: list[str] = []
     for name in names:
         if name not in channels:
             out.errors.append(f"channel {name!r} is not in the run")
@@ -270,9 +293,11 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
         try:
             result = hvd.run(context, hvd_params)
             _modes(out, name, identification_of(result), context, eq_params, mass)
+            identified.append(name)
         except (FsiLabError, AnalysisError) as exc:
             out.errors.append(f"channel {name}: {exc}")
             out.exit_code = 1
+    out.fingerprint = record_fingerprint({name: channels[name] for name in identified})
     return out
 
 
@@ -301,6 +326,8 @@ def extract_identified(task: ExtractTask, identified: dict[str, tuple[Any, Any]]
                         registry, path=str(task.path))
     out.start_time = str(run.attrs.get("start_time", ""))
     out.overrides = list(run.attrs.get("overrides", []))
+    out.fingerprint = record_fingerprint({name: context.channel for name, (_, context)
+                                          in identified.items()})
     return out
 
 

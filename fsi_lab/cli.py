@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from fsi_lab.errors import FsiLabError, InputFileError, PluginError, RunAborted
+from fsi_lab.errors import FsiLabError, InputFileError, PluginError, ProfileError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
@@ -359,31 +359,53 @@ def _analyze_batch(args) -> int:
 
 
 def aggregate_tasks(paths: list[Path], sets: list[str], mass_per_length: float | None):
-    """The run files ``fsi-lab aggregate`` takes: the files given, or of one directory the
-    completed runs of its sequence (labelled by their place in it), or its run files."""
+    """The run files ``fsi-lab aggregate`` takes, and notes on what it left out: of each
+    argument, a run file itself, or of a directory the completed runs of its sequence
+    (labelled by their place in it, after the directory's name when several arguments are
+    given) or its run files. A sequence's record (``sequence.h5``, which a glob of its
+    directory catches) is left out with a note; a file given twice (also inside a directory
+    given) counts once."""
+    import dataclasses
+
     from fsi_lab.aggregate_extract import ExtractTask
-    from fsi_lab.seqfile import SEQUENCE_FILE, load_record
+    from fsi_lab.seqfile import SEQUENCE_FILE, is_sequence_record, load_record
     from fsi_lab.sequence import extract_tasks
 
-    if len(paths) == 1 and paths[0].is_dir():
-        directory = paths[0]
-        if (directory / SEQUENCE_FILE).exists():
-            return extract_tasks(load_record(directory), sets, mass_per_length)
-        files = sorted(p for p in directory.glob("*.h5") if p.name != SEQUENCE_FILE)
-        if not files:
-            raise InputFileError(f"{directory}: holds no run file (*.h5) and no sequence; "
-                                 "expected run files or the --out directory of fsi-lab "
-                                 "sequence")
-        paths = files
-    given: dict[Path, Path] = {}
-    for path in paths:                     # one file under two names counts once
-        given.setdefault(path.resolve(), path)
-    paths = list(given.values())
-    _refuse_copies(paths)
-    names = [path.name for path in paths]
-    return [ExtractTask(str(path), tuple(sets), mass_per_length,
-                        path.name if names.count(path.name) == 1 else str(path))
-            for path in paths]
+    found: list[ExtractTask] = []
+    notes: list[str] = []
+    several = len(paths) > 1
+    for path in paths:
+        if path.is_dir():
+            if (path / SEQUENCE_FILE).exists():
+                tasks = extract_tasks(load_record(path), sets, mass_per_length)
+                found.extend(dataclasses.replace(task, label=f"{path}: {task.label}")
+                             if several else task for task in tasks)
+                continue
+            files = sorted(p for p in path.glob("*.h5") if not is_sequence_record(p))
+            if not files:
+                raise InputFileError(f"{path}: holds no run file (*.h5) and no sequence; "
+                                     "expected run files or the --out directory of fsi-lab "
+                                     "sequence")
+            found.extend(ExtractTask(str(file), tuple(sets), mass_per_length) for file in files)
+        elif is_sequence_record(path):
+            notes.append(f"{path}: a sequence's record, not a run file: left out (its runs are "
+                         f"the run files beside it; fsi-lab aggregate {path.parent} pools the "
+                         "sequence's completed runs)")
+        else:
+            found.append(ExtractTask(str(path), tuple(sets), mass_per_length))
+    if not found:
+        raise InputFileError(f"{', '.join(map(str, paths))}: no run file to aggregate; "
+                             "expected run files (.h5) or directories of them, or the --out "
+                             "directory of fsi-lab sequence")
+    given: dict[Path, ExtractTask] = {}
+    for task in found:                     # one file under two names counts once
+        given.setdefault(Path(task.path).resolve(), task)
+    tasks = list(given.values())
+    _refuse_copies([Path(task.path) for task in tasks])
+    names = [Path(task.path).name for task in tasks]
+    return [task if task.label else dataclasses.replace(
+                task, label=Path(task.path).name if names.count(Path(task.path).name) == 1
+                else task.path) for task in tasks], notes
 
 
 def _refuse_copies(paths: list[Path]) -> None:
@@ -410,6 +432,28 @@ def _refuse_copies(paths: list[Path]) -> None:
         seen[str(run_uuid)] = path
 
 
+def check_aggregate_sets(sets: list[str]) -> None:
+    """Refuse, once and before any run is read, a ``--set`` of ``fsi-lab aggregate`` that is
+    not an analysis parameter. The specimen (mu + M, the mode shape) is each run's own, held by
+    its run file: an aggregate that changed it would pool numbers that no run file explains."""
+    accepted = ("fsi-lab aggregate sets analysis parameters only: "
+                "analysis.ANALYSIS.PARAMETER=VALUE (fsi-lab plugins -v lists them), "
+                "analysis.chain, analysis.channels or analysis.reference")
+    for item in sets:
+        key = item.partition("=")[0].strip()
+        section = key.partition(".")[0].strip()
+        if section == "analysis":
+            continue
+        if section == "specimen":
+            raise ProfileError(
+                f"--set {item!r}: the specimen (the beam, its fluid, the measuring point) is "
+                "each run's own, held by its run file, and an aggregate that changed it would "
+                f"give numbers no run file explains; {accepted}; give runs without a specimen "
+                "their mu + M with --mass-per-length, or aggregate runs of the beam you mean")
+        raise ProfileError(f"--set {item!r}: {key or item!r} is not an analysis parameter "
+                           f"(the runs were recorded with their own); {accepted}")
+
+
 def cmd_aggregate(args) -> int:
     """``fsi-lab aggregate RUN.h5 ... | DIR``: the runs' modes grouped by frequency, C_i and
     C_f fitted to the union of their free decays, backbones and damping curves on one
@@ -419,7 +463,8 @@ def cmd_aggregate(args) -> int:
     from fsi_lab.executor import make_executor
 
     require_mass_per_length(args.mass_per_length)
-    tasks = aggregate_tasks(args.runs, args.set, args.mass_per_length)
+    check_aggregate_sets(args.set)
+    tasks, notes = aggregate_tasks(args.runs, args.set, args.mass_per_length)
     executor = make_executor(args.jobs, args.scheduler)
     bus = EventBus()
     console = Console(args.quiet or args.json, args.verbose)
@@ -436,6 +481,7 @@ def cmd_aggregate(args) -> int:
 
             extracts = extract_runs(tasks, executor, done)
         agg = aggregate_extracts(extracts)
+        agg["notes"] = notes + agg["notes"]
     finally:
         console.close()
     for run in agg["runs"]:
@@ -988,11 +1034,16 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
                                          "backbones and damping on one amplitude axis, the "
                                          "spread between runs")
     p.add_argument("runs", type=Path, nargs="+", metavar="RUN.h5|DIR",
-                   help="run files, or a directory: the completed runs of its sequence, or its "
-                        "run files")
+                   help="run files and directories, in any mix: of a directory, the completed "
+                        "runs of its sequence, or its run files; a sequence's record "
+                        "(sequence.h5, as a glob of its directory catches it) is left out with "
+                        "a note")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override an analysis parameter of every run: "
-                        "analysis.ANALYSIS.PARAMETER=VALUE (fsi-lab plugins -v lists them)")
+                        "analysis.ANALYSIS.PARAMETER=VALUE (fsi-lab plugins -v lists them), "
+                        "analysis.chain, analysis.channels, analysis.reference; not the "
+                        "specimen, which each run file holds (--mass-per-length gives mu + M "
+                        "to runs without one)")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
                    help="mu + M for runs without a specimen (kg/m)")
     p.add_argument("--jobs", type=_jobs, metavar="N",

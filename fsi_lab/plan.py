@@ -80,6 +80,7 @@ STEP_PARAMS: tuple[Param, ...] = (
 STOP_QUANTITIES = ("c_i", "c_f")
 #: How each quantity is written in messages.
 STOP_SYMBOLS = {"c_i": "C_i", "c_f": "C_f"}
+STOP_UNITS = {"c_i": "kg/(m s)", "c_f": "kg/m^2"}
 STOP_PARAMS: tuple[Param, ...] = (
     Param("quantity", "str", "", choices=STOP_QUANTITIES,
           help="c_i (kg/(m s)) or c_f (kg/m^2) fitted to the union of the completed runs' "
@@ -338,7 +339,7 @@ def parse_plan(text: str, path: Path) -> Plan:
                                  MAX_PROFILE_BYTES, error=ProfileError)
     except ProfileError as exc:
         raise ProfileError(f"{path}: plan.profile: {exc}") from None
-    _seed_repeats(runs, profile_text, str(profile_path))
+    _seed_runs(runs, profile_text, str(profile_path))
     total = len(runs)
     return Plan(path=path, text=text, name=plan["name"], profile_path=profile_path,
                 profile_text=profile_text, on_failure=plan["on_failure"],
@@ -374,14 +375,17 @@ def _expand(step: dict[str, Any], number: int, plan: dict[str, Any],
     return runs
 
 
-def _seed_repeats(runs: list[dict[str, Any]], profile_text: str, where: str) -> None:
-    """Give the repeats of a point new noise on a simulated bench.
+def _seed_runs(runs: list[dict[str, Any]], profile_text: str, where: str) -> None:
+    """Give every run of the plan its own noise on a simulated bench.
 
-    A simulated bench with one seed makes the same record every time, so repeats would agree
-    exactly and an aggregation would count one record several times. Repeat ``k`` of a point
-    whose overrides leave ``bench.seed`` alone runs with the base profile's seed + ``k - 1``,
-    written as one more ``--set`` so its run file says so. A real bench has no seed: nothing
-    is added when the base profile's bench is not embedded.
+    A simulated bench with one seed makes the same record every time, so runs with one seed
+    (the repeats of a point, or the points of steps with ``repeats = 1`` whose excitation is
+    the same) would be the same record, or share their noise, and an aggregation would count
+    one record several times. Run ``i`` of the plan (numbered from 1 in the order carried out)
+    whose overrides leave ``bench.seed`` alone runs with the base profile's seed + ``i - 1``,
+    written as one more ``--set`` so its run file says so: deterministic from the plan, so a
+    resumed sequence gives its runs the same seeds. A real bench has no seed: nothing is added
+    when the base profile's bench is not embedded.
     """
     bench = parse_toml(profile_text, where).get("bench")
     bench = bench if isinstance(bench, dict) else {}
@@ -389,10 +393,14 @@ def _seed_repeats(runs: list[dict[str, Any]], profile_text: str, where: str) -> 
     if bench.get("embedded") is not True or not isinstance(base, int) or isinstance(base, bool):
         return
     for run in runs:
-        if run["repeat"] > 1 and not any(o.split("=", 1)[0].strip() == "bench.seed"
-                                         for o in run["overrides"]):
-            seed = (base + run["repeat"] - 1) % 2**32
+        if run["index"] > 1 and not any(is_seed(o) for o in run["overrides"]):
+            seed = (base + run["index"] - 1) % 2**32
             run["overrides"] = (*run["overrides"], f"bench.seed={seed}")
+
+
+def is_seed(override: str) -> bool:
+    """Whether ``override`` (``KEY=VALUE``) sets ``bench.seed``."""
+    return override.split("=", 1)[0].strip() == "bench.seed"
 
 
 def load_plan(path: str | Path) -> Plan:

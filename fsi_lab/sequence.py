@@ -31,7 +31,7 @@ from typing import Any
 from fsi_lab.bench_access import unsafe_roles
 from fsi_lab.errors import FsiLabError, InputFileError, ProfileError, RunAborted
 from fsi_lab.events import EventBus, Progress
-from fsi_lab.plan import STOP_SYMBOLS, Plan, PlannedRun, check_plan, load_plan
+from fsi_lab.plan import STOP_SYMBOLS, STOP_UNITS, Plan, PlannedRun, check_plan, is_seed, load_plan
 from fsi_lab.registry import Registry
 from fsi_lab.runfile import read_analysis_summary, read_run, utc_now
 from fsi_lab.seqfile import SEQUENCE_FILE, SequenceRecord, compact_results, holder, load_record
@@ -367,9 +367,9 @@ class SequenceRunner:
         half = max(value - low, high - value) / abs(value) if value else float("inf")
         if half >= stop.relative_half_width:
             return None
-        name = STOP_SYMBOLS[stop.quantity]
-        reason = (f"stopped after {completed} completed runs: {name} = {value:.4g} "
-                  f"(95 %: {low:.4g} to {high:.4g}, +-{100 * half:.3g} %) at "
+        name, unit = STOP_SYMBOLS[stop.quantity], STOP_UNITS[stop.quantity]
+        reason = (f"stopped after {completed} completed runs: {name} = {value:.4g} {unit} "
+                  f"(95 %: {low:.4g} to {high:.4g} {unit}, +-{100 * half:.3g} %) at "
                   f"{mode['frequency_hz']:.4g} Hz is within the plan's "
                   f"+-{100 * stop.relative_half_width:g} %")
         warned = sum(1 for run in mode.get("per_run", []) if run.get("warnings"))
@@ -449,9 +449,20 @@ def resume(directory: Path, registry: Registry) -> tuple[Plan, SequenceRecord]:
                 f"started ({attrs['start_time']}); resuming would not carry out the plan it "
                 f"recorded: put the file back as it was (the record holds it: fsi-lab show "
                 f"{directory} --json) or start a new sequence in another directory")
-    if [list(r.overrides) for r in plan.runs] != [e["overrides"] for e in record.runs]:
-        raise ProfileError(f"{plan.path}: expands into other runs than the sequence in "
-                           f"{directory} recorded; start a new sequence in another directory")
+    recorded = [list(e["overrides"]) for e in record.runs]
+    if [list(r.overrides) for r in plan.runs] != recorded:
+        def unseeded(overrides):
+            return [o for o in overrides if not is_seed(o)]
+
+        if [unseeded(r.overrides) for r in plan.runs] != [unseeded(o) for o in recorded]:
+            raise ProfileError(f"{plan.path}: expands into other runs than the sequence in "
+                               f"{directory} recorded; start a new sequence in another "
+                               "directory")
+        # a sequence started by a version that seeded the simulated bench otherwise (repeat k
+        # with the profile's seed + k - 1): its runs keep the seeds it recorded
+        plan = dataclasses.replace(plan, runs=tuple(
+            dataclasses.replace(run, overrides=tuple(overrides))
+            for run, overrides in zip(plan.runs, recorded)))
     for entry in record.runs:
         if entry["status"] == "running":
             settle_unfinished(record, entry)

@@ -78,25 +78,47 @@ def test_c_i_and_c_f_fitted_to_the_union_of_the_runs_hold_the_truth(extracts):
     assert agg["amplitude_range_m"] == [low, high]
 
 
-def test_a_pooled_mode_says_when_its_runs_were_warned(extracts):
-    """Pooling narrows the interval by what differs between runs, not by an error they share:
-    when runs carry warnings on the mode, the pooled mode says so (JSON and text); clean runs
-    give none."""
+def test_a_pooled_mode_says_which_warnings_its_runs_carry(extracts):
+    """Pooling narrows the interval by what differs between runs, not by a bias they share:
+    the pooled mode said only "N of M runs carry warnings" and quoted the first; it names each
+    distinct warning (its first clause, numbers as ranges) with how many runs carry it, and
+    says plainly that a shared bias is not narrowed (JSON and text); clean runs give none."""
     import dataclasses
 
     runs = [extracts[f"level{k}"] for k in range(3)]
     (clean,) = aggregate_extracts(runs)["modes"]
     assert clean["warnings"] == [] and all(not r["warnings"] for r in clean["per_run"])
-    said = "the band filters smear this mode's first cycles by up to 40 %"
-    warned = dataclasses.replace(runs[1], modes=[dataclasses.replace(runs[1].modes[0],
-                                                                     warnings=[said])])
-    agg = aggregate_extracts([runs[0], warned, runs[2]])
+    halves = ("the larger and the smaller half of the cycles give C_i and C_f that differ by "
+              "up to {} standard errors: the damping is not one law over this amplitude range "
+              "(coupling with other modes, an amplitude-dependent drag); their intervals are "
+              "widened {}-fold")
+    poor = "C_f is poorly determined: its 95 % interval is +-{} % of the value"
+    said = [[halves.format(2.1, 1.1), poor.format(12)], [halves.format(2.8, 1.4)],
+            [poor.format(20)]]
+    warned = [dataclasses.replace(run, modes=[dataclasses.replace(run.modes[0], warnings=w)])
+              for run, w in zip(runs, said)]
+    agg = aggregate_extracts(warned)
     (mode,) = agg["modes"]
     assert mode["warnings"] == [
-        f"1 of 3 runs carry warnings on this mode (first, {runs[1].label}: {said}): the "
-        "pooled intervals hold the runs' noise and scatter, not an error they share, which "
-        "these warnings may name; read them beside the pooled numbers"]
-    assert "\n  warning: 1 of 3 runs carry warnings on this mode" in format_aggregate(agg)
+        "3 of 3 runs carry warnings on this mode: the larger and the smaller half of the "
+        "cycles give C_i and C_f that differ by up to 2.8 standard errors (2 runs); C_f is "
+        "poorly determined (2 runs). Pooling narrows the runs' noise and scatter, not a bias "
+        "they share: where these warnings name one (a damping law that misfits, decays whose "
+        "start is not free, a smear corrected with a model), every run carries it, and the "
+        "pooled interval, narrower than each run's own, may miss the true value that the "
+        "runs' own intervals hold; read each run's warnings and interval beside the pooled "
+        "numbers"]
+    assert [r["warnings"] for r in mode["per_run"]] == said
+    assert "\n  warning: 3 of 3 runs carry warnings on this mode: the larger" \
+        in format_aggregate(agg)
+    # numbers not after "up to" are given as their range
+    spread = [dataclasses.replace(run, modes=[dataclasses.replace(
+        run.modes[0], warnings=[f"only {c} cycles above the noise floor: too few"])])
+        for run, c in zip(runs, (3.5, 4.5, 4.5))]
+    (mode,) = aggregate_extracts(spread)["modes"]
+    assert mode["warnings"][0].startswith(
+        "3 of 3 runs carry warnings on this mode: only 3.5 to 4.5 cycles above the noise "
+        "floor (3 runs). Pooling")
 
 
 def test_the_runs_curves_on_one_amplitude_axis(extracts):
@@ -168,8 +190,12 @@ def test_fsi_lab_aggregate_files_and_directories(files, tmp_path):
     folder = files["level0"].parent
     code, text, _ = run_main("aggregate", str(folder), "--mass-per-length", str(MASS))
     assert code == 0
-    assert text.startswith("aggregate of 5 runs: 5 with modes; amplitude ")
+    # (no beam model: the amplitudes are those measured)
+    assert text.startswith("aggregate of 5 runs: 5 with modes; displacement amplitude at the "
+                           "measuring point ")
     assert "mode at 20 Hz, channel tip: 4 runs, 4 decays" in text
+    assert re.search(r"4 decays, \d+ extrema, displacement amplitude at the measuring point "
+                     r"[0-9.e-]+ to [0-9.e-]+ mm\n", text), text
     assert "mode at 30 Hz, channel tip: 1 run, 1 decays" in text
     # each run's own frequency: the mode is at 20 Hz
     thicker = re.search(r"\n    thicker\.h5: ([0-9.]+) Hz", text)
@@ -258,10 +284,14 @@ def test_a_union_of_many_runs_is_never_more_precise_than_the_method(extracts, mo
     95 % half-widths) is added in quadrature. Thirty runs (the three levels ten times over):
     each half-width is the quadrature sum of the one without the floor (about 0.1 % on C_i and
     0.5 % on C_f) and the floor, to 1e-6; the factors are reported, the text says why."""
+    import dataclasses
+
     import fsi_lab.aggregate_fit as aggregate_fit
     from fsi_lab.accuracy import ACCURACY
 
-    runs = [extracts[f"level{k}"] for k in range(3)] * 10
+    # thirty records (each its own fingerprint: the same samples would be pooled once)
+    runs = [dataclasses.replace(extracts[f"level{k}"], fingerprint=f"{i}-{k}")
+            for i in range(10) for k in range(3)]
     agg = aggregate_extracts(runs)
     monkeypatch.setattr(aggregate_fit, "LAW_ACCURACY", {"a": 0.0, "beta": 0.0})
     (plain,) = aggregate_extracts(runs)["modes"]
@@ -331,3 +361,92 @@ def test_fsi_lab_aggregate_of_runs_with_close_modes_averages_their_joint_fits(tm
     assert mode["c_i"] == pytest.approx(C_I, rel=0.03) and covers(mode["c_i_ci95"], C_I)
     assert mode["c_f"] == pytest.approx(C_F, rel=0.06) and covers(mode["c_f_ci95"], C_F)
     assert "averaged with their inverse covariances" in format_aggregate(agg)
+
+
+def test_records_equal_sample_for_sample_are_pooled_once_naming_the_files(files, tmp_path):
+    """Run files with different uuids but the same samples (two runs of the simulated bench
+    with one bench.seed) were pooled as independent runs: "between runs sd 0" and an interval
+    narrowed by a record counted three times."""
+    import h5py
+
+    same = [write_decay_run(tmp_path / f"same{k}.h5", start=0.2, seed=5) for k in range(3)]
+    with h5py.File(same[0], "r") as a, h5py.File(same[1], "r") as b:
+        assert a.attrs["uuid"] != b.attrs["uuid"]
+    code, out, err = run_main("aggregate", *map(str, same), str(files["level0"]),
+                              "--mass-per-length", str(MASS), "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["runs_with_modes"] == 4 and data["distinct_records"] == 2
+    assert [r["same_record_as"] for r in data["runs"]] == [None, "same0.h5", "same0.h5", None]
+    assert data["notes"] == [
+        "same1.h5, same2.h5: the same record as same0.h5, sample for sample (their analysed "
+        "channels hold identical samples: a copy, or runs of the simulated bench with one "
+        "bench.seed); pooled once, as same0.h5: 3 copies of one record are one measurement, "
+        "not 3 independent runs"]
+    (mode,) = data["modes"]
+    assert mode["runs"] == 2
+    assert [r["label"] for r in mode["per_run"]] == ["same0.h5", "level0.h5"]
+    assert mode["between_runs"]["c_f"]["sd"] > 0
+    # pooled once: the union of the two distinct records, as if the copies were not given
+    code, out, _ = run_main("aggregate", str(same[0]), str(files["level0"]),
+                            "--mass-per-length", str(MASS), "--json")
+    (alone,) = json.loads(out)["modes"]
+    assert mode["c_f_ci95"] == pytest.approx(alone["c_f_ci95"])
+    code, text, _ = run_main("aggregate", *map(str, same), "--mass-per-length", str(MASS))
+    assert code == 0
+    assert text.startswith("aggregate of 3 runs: 3 with modes (1 distinct record); displacement "
+                           "amplitude at the measuring point")
+    assert "\n  note: same1.h5, same2.h5: the same record as same0.h5, sample for sample" in text
+    assert "between runs" not in text  # one record: no spread between runs to give
+
+
+@pytest.mark.parametrize("item", ["specimen.fluid=air", "run.duration=3"])
+def test_aggregate_sets_analysis_parameters_only_and_says_so_once(files, item, tmp_path):
+    """`aggregate --set specimen.fluid=air` on water runs was accepted and gave an 18 times
+    larger C_i that no run file explains; `--set run.duration=3` was refused once per run,
+    after the runs were read. Both are refused once, before any run is read, saying what is
+    accepted."""
+    import hashlib
+
+    paths = [str(files[f"level{k}"]) for k in range(3)]
+    before = [hashlib.md5(open(p, "rb").read()).hexdigest() for p in paths]
+    code, out, err = run_main("aggregate", *paths, "--mass-per-length", str(MASS), "--set",
+                              item, "--json")
+    assert code == 2
+    assert json.loads(out) == {"error": json.loads(out)["error"], "exit_code": 2}
+    assert err.count("fsi-lab: error: ") == 1 and err.count(f"--set {item!r}") == 1
+    assert "identifying the modes" not in err and "level0.h5" not in err
+    assert ("fsi-lab aggregate sets analysis parameters only: analysis.ANALYSIS.PARAMETER=VALUE "
+            "(fsi-lab plugins -v lists them), analysis.chain, analysis.channels or "
+            "analysis.reference") in err
+    if item.startswith("specimen"):
+        assert "the specimen (the beam, its fluid, the measuring point) is each run's own, " \
+               "held by its run file" in err
+        assert "--mass-per-length" in err
+    else:
+        assert "'run.duration' is not an analysis parameter" in err
+    assert [hashlib.md5(open(p, "rb").read()).hexdigest() for p in paths] == before
+    # an analysis parameter is accepted, and --help says what is
+    code, out, err = run_main("aggregate", *paths, "--mass-per-length", str(MASS), "--set",
+                              "analysis.hvd.components=1", "--json")
+    assert code == 0, err
+    code, text, _ = run_main("aggregate", "--help")
+    assert "not the specimen, which each run file holds" in " ".join(text.split())
+
+
+def test_fsi_lab_aggregate_takes_directories_and_run_files_together(files, tmp_path):
+    """--help says RUN.h5|DIR [RUN.h5|DIR ...], but a directory was taken only alone: `fsi-lab
+    aggregate DIR FILE.h5` refused the directory ("is a directory, not a regular file")."""
+    folder = files["level0"].parent
+    extra = write_decay_run(tmp_path / "extra.h5", start=0.25, seed=11)
+    code, out, err = run_main("aggregate", str(folder), str(extra), str(files["level1"]),
+                              "--mass-per-length", str(MASS), "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    # the folder's five runs and the extra one; level1.h5, also in the folder, counts once
+    assert sorted(r["label"] for r in data["runs"]) == sorted(
+        ["level0.h5", "level1.h5", "level2.h5", "thicker.h5", "stiffer.h5", "extra.h5"])
+    assert [m["runs"] for m in data["modes"]] == [5, 1]
+    code, _, err = run_main("aggregate", str(folder), str(tmp_path / "empty"),
+                            "--mass-per-length", str(MASS))
+    assert code == 2 and f"{tmp_path / 'empty'}: " in err
