@@ -41,6 +41,26 @@ class AnalyseTask:
     mass_per_length: float | None = None
 
 
+#: Why an analysis that identified nothing was not stored (``not_stored`` in its summary).
+KEPT = ("this analysis is not stored: the file keeps the analysis stored in it before, which "
+        "identified modes (fsi-lab show prints it)")
+
+
+def earlier_identification(path: Path, registry) -> bool:
+    """Whether the analysis stored in run file ``path`` identified something: a new analysis
+    that identifies nothing does not replace it (a damaged record, an override that asks for
+    what the record cannot give must not destroy results already written)."""
+    from fsi_lab.runfile import read_analysis_summary
+    from fsi_lab.summary import nothing_identified
+
+    try:
+        earlier = read_analysis_summary(path)
+    except InputFileError:  # a damaged /analysis is replaced
+        return False
+    return bool(earlier) and nothing_identified(earlier, registry) is None \
+        and any(info.get("components") for info in (earlier.get("channels") or {}).values())
+
+
 def peak_rss_mib() -> float:
     """The largest resident memory this process has used so far, MiB."""
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -63,6 +83,7 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     """
     from fsi_lab.runfile import read_run, require_analysable
     from fsi_lab.store import analyse_and_store
+    from fsi_lab.summary import nothing_identified
 
     registry = registry if registry is not None else worker_registry()
     run = read_run(task.path, load_data=False, lazy=True)  # a channel is read when used
@@ -70,7 +91,14 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     profile = analysis_profile(run, registry, task.sets)
     require_mass_per_length(task.mass_per_length)
     require_something_to_analyse(run, profile)
+    earlier = earlier_identification(Path(task.path), registry)
+
+    def keep_earlier(summary: dict[str, Any]) -> bool:
+        return earlier and nothing_identified(summary, registry) is not None
+
     summary = analyse_and_store(Path(task.path), run.channels, profile.analysis,
                                 profile.analysis_params, registry, profile.specimen,
-                                task.mass_per_length, bus)
+                                task.mass_per_length, bus, keep_earlier)
+    if keep_earlier(summary):
+        summary["not_stored"] = KEPT
     return {"summary": summary, "worker": {"pid": os.getpid(), "peak_rss_mib": peak_rss_mib()}}

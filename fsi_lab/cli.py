@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from fsi_lab.errors import FsiLabError, InputFileError, PluginError, RunAborted
+from fsi_lab.errors import FsiLabError, InputFileError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
@@ -241,7 +241,8 @@ def cmd_analyze(args) -> int:
         print(format_summary(summary, registry))
     refused = nothing_identified(summary, registry)
     if refused:
-        print(f"fsi-lab: error: {args.run[0]}: {refused}", file=sys.stderr)
+        kept = f"; {summary['not_stored']}" if summary.get("not_stored") else ""
+        print(f"fsi-lab: error: {args.run[0]}: {refused}{kept}", file=sys.stderr)
         return 2
     return _strict_exit(summary, 0) if args.strict else 0
 
@@ -309,6 +310,8 @@ def _analyze_batch(args) -> int:
                                  worker=result.value["worker"],
                                  exit_code=EXIT_STRICT if args.strict and problems else 0)
                     refused = nothing_identified(summary, _loaded_plugins())
+                    if refused and summary.get("not_stored"):
+                        refused += f"; {summary['not_stored']}"
                     if refused:
                         entry.update(error=refused, exit_code=2)
                         bus.log("ERROR", f"{entry['run']}: {refused}")
@@ -820,30 +823,11 @@ def strict_problems(summary: dict[str, Any]) -> list[str]:
 
 
 def nothing_identified(summary: dict[str, Any], registry) -> str | None:
-    """Why nothing in an analysed record was identified, or None: on every channel the analysis
-    that provides its components (the decomposition into modes) was refused and none came out
-    (a record of noise, or of no free decay), so the exit code says so (2: a signal the
-    analysis cannot handle) although what could be computed was stored. A channel missing from
-    the run counts as refused."""
-    reasons = []
-    for name, info in (summary.get("channels") or {}).items():
-        if info.get("components"):
-            return None
-        # (an error of no analysis: the channel itself is missing from the run)
-        refused = [error for error in info.get("errors", [])
-                   if error.get("plugin") is None
-                   or _provides(registry, error.get("plugin"), "components")]
-        if not refused:
-            return None
-        reasons.append(f"channel {name}: {refused[0]['message']}")
-    return "nothing was identified: " + "; ".join(reasons) if reasons else None
+    """Why nothing in an analysed record was identified, or None
+    (:func:`fsi_lab.summary.nothing_identified`)."""
+    from fsi_lab.summary import nothing_identified as why
 
-
-def _provides(registry, analysis: Any, kind: str) -> bool:
-    try:
-        return registry.get("analysis", analysis).provides == kind
-    except PluginError:  # an analysis no longer installed provides nothing
-        return False
+    return why(summary, registry)
 
 
 def _strict_exit(summary: dict[str, Any], code: int) -> int:

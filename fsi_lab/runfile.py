@@ -6,6 +6,7 @@ import contextlib
 import datetime as _dt
 import itertools
 import json
+import math
 import os
 import stat
 import uuid as _uuid
@@ -356,10 +357,40 @@ def _read_run(path: Path, load_data: bool, lazy: bool = False) -> RunData:
     return RunData(path, attrs, channels, channel_attrs, instruments, excitation, samples)
 
 
+#: A channel's samples beyond this many times the range its instruments could record (the
+#: digitiser's input range over the channel's sensitivity) are damaged or implausible data.
+IMPLAUSIBLE = 2.0
+#: Up to this many such samples are left to the analysis, which replaces isolated spikes (a
+#: flipped bit) and says so; more are refused.
+ISOLATED_GLITCHES = 8
+
+
+def recorded_full_scale(run: RunData, name: str) -> tuple[float, str] | None:
+    """The largest value, in the channel's units, channel ``name`` of ``run`` could hold (the
+    digitiser's input range for its input, ``ranges_v`` of ``/instruments/acquisition/
+    settings``, over its sensitivity) and how it follows, or None when the run file does not
+    record them (imported data, an acquisition without ``ranges_v``)."""
+    attrs = run.channel_attrs.get(name, {})
+    settings = (run.instruments.get("acquisition") or {}).get("settings") or {}
+    ranges = settings.get("ranges_v")
+    try:
+        volts = float(ranges[str(int(attrs["input"]))])
+        sensitivity = float(attrs["sensitivity"])
+    except (KeyError, TypeError, ValueError, IndexError):
+        return None
+    if not (math.isfinite(volts) and volts > 0 and math.isfinite(sensitivity)
+            and sensitivity > 0):
+        return None
+    return volts / sensitivity, (f"the digitiser's input {int(attrs['input'])} range of "
+                                 f"{volts:g} V over the sensitivity of {sensitivity:g} "
+                                 f"{attrs.get('sensitivity_units', 'V per unit')}")
+
+
 def require_analysable(run: RunData, minimum: int = 2) -> None:
     """Raise InputFileError unless ``run`` (read with its data, or lazily: then read a chunk at
     a time) has channels of at least ``minimum`` finite samples each (what ``fsi-lab analyze``
-    needs)."""
+    needs), none of them, beyond a few isolated glitches, far outside the range the run's
+    instruments could record (:func:`recorded_full_scale`)."""
     if not run.channels:
         raise InputFileError(f"{run.path}: /channels holds no channel; expected recorded "
                              "channels to analyse")
@@ -370,12 +401,19 @@ def require_analysable(run: RunData, minimum: int = 2) -> None:
                 f"{run.path}: /channels/{name} holds {count} sample{'s' if count != 1 else ''}; "
                 f"expected at least {minimum} to analyse")
         count, first = 0, -1
+        scale = recorded_full_scale(run, name)
+        limit = IMPLAUSIBLE * scale[0] if scale is not None else math.inf
+        beyond, where, value = 0, -1, 0.0
         try:
             for start, chunk in sample_chunks(samples_of(channel)):
                 bad = np.flatnonzero(~np.isfinite(chunk))
                 if bad.size and first < 0:
                     first = start + int(bad[0])
                 count += bad.size
+                far = np.flatnonzero(np.abs(np.nan_to_num(chunk)) > limit)
+                if far.size and where < 0:
+                    where, value = start + int(far[0]), float(chunk[far[0]])
+                beyond += far.size
         except H5_ERRORS as exc:
             raise RunFileReader(run.path).refuse(
                 f"/channels/{name}", f"its samples cannot be read ({exc})",
@@ -384,6 +422,16 @@ def require_analysable(run: RunData, minimum: int = 2) -> None:
             raise InputFileError(
                 f"{run.path}: /channels/{name} holds {count} NaN or infinite samples (the "
                 f"first at index {first}); expected finite samples to analyse")
+        if beyond > ISOLATED_GLITCHES:
+            full, how = scale
+            units = run.channel_attrs.get(name, {}).get("units", "")
+            raise InputFileError(
+                f"{run.path}: /channels/{name} holds {beyond} samples beyond {IMPLAUSIBLE:g} "
+                f"times the +-{full:.4g} {units} its instruments could record ({how}), the "
+                f"first at index {where}: {value:.4g} {units}; these are damaged or "
+                "implausible data, not a record to analyse (a damaged file, or a channel "
+                "written by another tool in other units); expected samples within the "
+                "recorded range")
 
 
 def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
