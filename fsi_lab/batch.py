@@ -61,6 +61,40 @@ def earlier_identification(path: Path, registry) -> bool:
         and any(info.get("components") for info in (earlier.get("channels") or {}).values())
 
 
+def cut_short(run) -> str | None:
+    """A warning when ``run`` (a :class:`~fsi_lab.runfile.RunData`) did not complete: it was
+    aborted (Ctrl+C, SIGTERM, Abort), failed, or never finished (its exit status still
+    ``running``: the process died); its record may stop mid-decay, so every number read from
+    it says so. None for a completed run, or imported data."""
+    import tomllib
+
+    status = run.attrs.get("exit_status") or "completed"
+    if status == "completed":
+        return None
+    lengths = [run.channel_samples.get(name, 0) / channel.sample_rate
+               for name, channel in run.channels.items() if channel.sample_rate > 0]
+    recorded = max(lengths, default=0.0)
+    planned = None
+    try:
+        planned = tomllib.loads(run.profile_text).get("run", {}).get("duration")
+        for item in run.attrs.get("overrides", []):
+            key, _, value = item.partition("=")
+            if key.strip() == "run.duration":
+                planned = value
+        planned = float(planned) if planned is not None else None
+    except (tomllib.TOMLDecodeError, AttributeError, TypeError, ValueError):
+        planned = None
+    length = f"{recorded:.4g} s" + (f" of the {planned:g} s planned" if planned else "")
+    why = {"running": "never finished (its exit status is still 'running': the process that "
+                      "ran it died, by kill -9, a crash or a power cut)",
+           "aborted": "was aborted (Ctrl+C, SIGTERM or Abort)"}.get(
+        status, f"ended {status}" + (f" ({run.attrs['error']})" if run.attrs.get("error")
+                                     else ""))
+    return (f"the run {why}: its record holds {length}, cut short where the run stopped, so "
+            "a decay may end early or still be forced and every number here is read from a "
+            "record the run did not finish")
+
+
 def peak_rss_mib() -> float:
     """The largest resident memory this process has used so far, MiB."""
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -98,7 +132,8 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
 
     summary = analyse_and_store(Path(task.path), run.channels, profile.analysis,
                                 profile.analysis_params, registry, profile.specimen,
-                                task.mass_per_length, bus, keep_earlier)
+                                task.mass_per_length, bus, keep_earlier,
+                                tuple(filter(None, [cut_short(run)])))
     if keep_earlier(summary):
         summary["not_stored"] = KEPT
     return {"summary": summary, "worker": {"pid": os.getpid(), "peak_rss_mib": peak_rss_mib()}}

@@ -50,7 +50,7 @@ from fsi_lab.events import EventBus, Progress
 from fsi_lab.registry import Registry
 from fsi_lab.segments import SEGMENT_SAMPLES, Segment, SegmentPlan, plan_segments
 from fsi_lab.sources import LazyChannelData, WindowSource, samples_of
-from fsi_lab.summary import json_safe
+from fsi_lab.summary import add_warnings, json_safe
 
 #: Length of the Welch segments of a segmented record's spectrum, s.
 WELCH_S = 8.0
@@ -400,12 +400,13 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                         plan: SegmentPlan, specimen: Any = None,
                         mass_per_length: float | None = None,
                         bus: EventBus | None = None,
-                        keep_earlier: Callable[[dict[str, Any]], bool] | None = None
-                        ) -> dict[str, Any]:
+                        keep_earlier: Callable[[dict[str, Any]], bool] | None = None,
+                        warnings: tuple[str, ...] = ()) -> dict[str, Any]:
     """Analyse the record of run file ``path`` in the segments of ``plan`` and store the
     results in it (module notes); returns the ``analyze --json`` object. When
     ``keep_earlier`` says so of the summary, the rewrite is dropped: the file is left as it
-    was, with the analysis it held.
+    was, with the analysis it held. ``warnings`` (about the record as a whole) head every
+    channel's warnings.
 
     Parameters
     ----------
@@ -492,6 +493,7 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                 summary["channels"][name] = {"errors": [{
                     "plugin": None, "message": f"channel {name!r} is not in the run; channels "
                                                f"are {', '.join(cut) or 'none'}"}]}
+        add_warnings(summary, warnings)
         if keep_earlier is not None and keep_earlier(summary):
             raise _KeepEarlier
         write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})

@@ -195,3 +195,11 @@ def _provides(registry, analysis: Any, kind: str) -> bool:
         return registry.get("analysis", analysis).provides == kind
     except FsiLabError:  # an analysis no longer installed provides nothing
         return False
+
+
+def add_warnings(summary: dict[str, Any], warnings: list[str] | tuple[str, ...]) -> None:
+    """Put ``warnings`` (about the whole record, e.g. a run that did not finish) first among
+    the ``warnings`` of every channel of ``summary``, so that ``--strict`` counts them."""
+    for info in (summary.get("channels") or {}).values():
+        if warnings and isinstance(info, dict):
+            info["warnings"] = [*warnings, *info.get("warnings", [])]

@@ -266,3 +266,32 @@ def test_a_reanalysis_that_identifies_nothing_keeps_the_earlier_analysis(tmp_pat
                               "--json")
     assert code == 2 and "this analysis is not stored" in json.loads(out)["files"][0]["error"]
     assert path.read_bytes() == before
+
+
+@pytest.mark.parametrize("status, why", [
+    ("aborted", "the run was aborted (Ctrl+C, SIGTERM or Abort)"),
+    ("running", "the run never finished (its exit status is still 'running': the process "
+                "that ran it died, by kill -9, a crash or a power cut)"),
+])
+def test_analysing_a_run_that_did_not_complete_warns_that_its_record_is_cut_short(
+        measured_run, tmp_path, status, why):
+    def stopped(handle):  # as the run leaves its file: half the planned 0.5 s, and its status
+        handle.attrs["exit_status"] = status
+        for name in handle["channels"]:
+            handle[f"channels/{name}"].resize((500,))
+    path = _damaged(measured_run, tmp_path, stopped)
+    expected = f"{why}: its record holds 0.25 s of the 0.5 s planned, cut short"
+    code, out, err = run_main("analyze", str(path))
+    assert code == 0, err
+    assert f"warning: {expected}" in out, out
+    from fsi_lab.runfile import read_analysis_summary
+    assert read_analysis_summary(path)["channels"]["tip_velocity"]["warnings"][0] \
+        .startswith(expected)
+    code, out, err = run_main("analyze", str(path), "--strict")
+    assert code == 3 and f"[strict] channel tip_velocity: {expected}" in err, err
+
+
+def test_analysing_a_completed_run_gives_no_such_warning(measured_run, tmp_path):
+    path = _damaged(measured_run, tmp_path, lambda handle: None)
+    code, out, err = run_main("analyze", str(path), "--json")
+    assert code == 0 and "cut short" not in out, out
