@@ -210,6 +210,10 @@ def cmd_sequence(args) -> int:
     else:
         print(seq.format_record(record))
     code = seq.EXIT_FOR_STATUS[status]
+    if code == 0 and record.attrs.get("nothing_identified"):  # as fsi-lab run of one such run
+        print(f"fsi-lab: error: {directory}: nothing was identified: "
+              f"{record.attrs['nothing_identified']}", file=sys.stderr)
+        code = 2
     if runner.file_abandoned:  # as for fsi-lab run: HDF5 may crash in its own shutdown
         sys.stdout.flush()
         sys.stderr.flush()

@@ -340,6 +340,11 @@ def parse_plan(text: str, path: Path) -> Plan:
         raise ProfileError(f"{path}: plan.profile: {exc}") from None
     _seed_repeats(runs, profile_text, str(profile_path))
     total = len(runs)
+    if stop_when is not None and stop_when.min_runs > total:
+        raise ProfileError(f"{path}: plan.stop_when.min_runs: {stop_when.min_runs} is more than "
+                           f"the plan's {total} run{'s' * (total != 1)}, so [plan.stop_when] "
+                           f"can never act; expected at most {total} (or more runs in the "
+                           "plan)")
     return Plan(path=path, text=text, name=plan["name"], profile_path=profile_path,
                 profile_text=profile_text, on_failure=plan["on_failure"],
                 runs=tuple(PlannedRun(total=total, **run) for run in runs),
