@@ -31,6 +31,21 @@ def require_mass_per_length(value: float | None) -> None:
         raise InputFileError(f"--mass-per-length {value}: expected kg/m > 0")
 
 
+def require_no_specimen(run, profile, mass_per_length: float | None) -> None:
+    """InputFileError when ``--mass-per-length`` is given for a run that has a specimen (its
+    profile's ``[specimen]``, or ``specimen.*`` overrides of imported data): the specimen gives
+    mu + M, and two beams for one record would leave the stored numbers unexplained."""
+    if mass_per_length is None or profile.specimen is None:
+        return
+    where = ("its profile's [specimen]" if run.profile_text.strip()
+             else "the specimen.* overrides given for it")
+    raise InputFileError(
+        f"{run.path}: --mass-per-length {mass_per_length:g}: this run has a specimen "
+        f"({where}), which gives mu + M; --mass-per-length is for data without one; expected "
+        "no --mass-per-length, or the beam the run should be analysed as given with --set "
+        "specimen.KEY=VALUE")
+
+
 @dataclass(frozen=True)
 class AnalyseTask:
     """One file of ``fsi-lab analyze``: the run file, the ``--set`` overrides and
@@ -124,6 +139,7 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     require_analysable(run)
     profile = analysis_profile(run, registry, task.sets)
     require_mass_per_length(task.mass_per_length)
+    require_no_specimen(run, profile, task.mass_per_length)
     require_something_to_analyse(run, profile)
     earlier = earlier_identification(Path(task.path), registry)
 

@@ -967,7 +967,8 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     p.add_argument("--strict", action="store_true",
                    help="exit 3 when a result was refused or carries a warning")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
-                   help="mu + M for data without a specimen (kg/m)")
+                   help="mu + M for data without a specimen (kg/m); refused for a run that "
+                        "has one (give its beam with --set specimen.KEY=VALUE)")
     common(p)
     p.set_defaults(func=cmd_analyze)
 

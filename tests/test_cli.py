@@ -351,3 +351,29 @@ def test_only_failures_for_want_of_a_failed_result_alone_are_named_once():
         "  failed hvd", "  failed modal-model", "  failed after-integrate",
         "  no result, for want of hvd's (hvd failed, above)"]
     assert lines[-1].endswith(": integrate, damping")
+
+
+def test_mass_per_length_is_refused_for_a_run_that_has_a_specimen(sim_profile, tmp_path,
+                                                                    imported_run):
+    from support import run_main
+
+    analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
+    code, out, err = run_main("run", str(sim_profile(analysis=analysis, duration=0.5)),
+                              "--out", str(tmp_path / "runs"))
+    assert code == 0, err
+    path = next((tmp_path / "runs").glob("*.h5"))
+    before = path.read_bytes()
+    for extra in ([], ["--jobs", "1"]):
+        code, out, err = run_main("analyze", str(path), "--mass-per-length", "0.2", *extra)
+        assert code == 2, err
+        assert f"{path}: --mass-per-length 0.2: this run has a specimen (its profile's " \
+            "[specimen]), which gives mu + M; --mass-per-length is for data without one" in err
+        assert path.read_bytes() == before  # nothing analysed, nothing written
+    # imported data given a beam by --set specimen.* too: one or the other
+    code, out, err = run_main("analyze", str(imported_run), "--mass-per-length", "0.2",
+                              "--set", "specimen.fluid=water")
+    assert code == 2 and "this run has a specimen (the specimen.* overrides given for it)" \
+        in err, err
+    # and without a specimen it is what gives mu + M
+    code, out, err = run_main("analyze", str(imported_run), "--mass-per-length", "0.2")
+    assert code in (0, 2) and "--mass-per-length" not in err, err
