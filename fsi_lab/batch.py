@@ -76,6 +76,14 @@ def earlier_identification(path: Path, registry) -> bool:
         and any(info.get("components") for info in (earlier.get("channels") or {}).values())
 
 
+def analysed_with(task: AnalyseTask) -> tuple[str, ...]:
+    """What the analysis of ``task`` is computed with beyond the run's own settings, as
+    stored in ``/analysis`` attribute ``overrides``: its ``--set`` texts, and
+    ``--mass-per-length=VALUE``."""
+    return tuple(task.sets) + ((f"--mass-per-length={task.mass_per_length:g}",)
+                               if task.mass_per_length is not None else ())
+
+
 def cut_short(run) -> str | None:
     """A warning when ``run`` (a :class:`~fsi_lab.runfile.RunData`) did not complete: it was
     aborted (Ctrl+C, SIGTERM, Abort), failed, or never finished (its exit status still
@@ -149,7 +157,8 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     summary = analyse_and_store(Path(task.path), run.channels, profile.analysis,
                                 profile.analysis_params, registry, profile.specimen,
                                 task.mass_per_length, bus, keep_earlier,
-                                tuple(filter(None, [cut_short(run)])))
+                                tuple(filter(None, [cut_short(run)])),
+                                analysed_with(task))
     if keep_earlier(summary):
         summary["not_stored"] = KEPT
     return {"summary": summary, "worker": {"pid": os.getpid(), "peak_rss_mib": peak_rss_mib()}}

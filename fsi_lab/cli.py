@@ -477,7 +477,7 @@ def cmd_import(args) -> int:
 
 
 def cmd_show(args) -> int:
-    from fsi_lab.runfile import read_analysis_summary, read_run
+    from fsi_lab.runfile import read_analysis_overrides, read_analysis_summary, read_run
     from fsi_lab.summary import format_value
 
     if args.run.is_dir() or args.run.name == "sequence.h5":
@@ -491,8 +491,10 @@ def cmd_show(args) -> int:
     excitation = {k: v for k, v in (run.excitation or {}).items() if k != "waveform"} or None
     if excitation is not None:
         excitation["param_units"] = _excitation_units(excitation.get("plugin"))
+    analysed_with = read_analysis_overrides(args.run) if summary else []
     info = {"run": str(args.run), "attrs": attrs, "instruments": run.instruments,
-            "channels": with_lengths, "excitation": excitation, "analysis": summary}
+            "channels": with_lengths, "excitation": excitation, "analysis": summary,
+            "analysis_overrides": analysed_with}
     warnings = []
     if attrs.get("exit_status") == "running":
         warnings.append(
@@ -526,6 +528,8 @@ def cmd_show(args) -> int:
                           for k, v in excitation.get("params", {}).items())
         print(f"{'excitation:':<18}{excitation.get('plugin', '?')}"
               + (f" ({given})" if given else ""))
+    if analysed_with:  # the stored numbers are not the run's own settings' (fsi-lab analyze)
+        print(f"{'analysed with:':<18}{' '.join(analysed_with)} (beyond the run's own settings)")
     if summary_text:
         print(summary_text)
     return 0

@@ -435,7 +435,7 @@ def require_analysable(run: RunData, minimum: int = 2) -> None:
 
 
 def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
-                   summary: Mapping[str, Any]) -> None:
+                   summary: Mapping[str, Any], attrs: Mapping[str, Any] | None = None) -> None:
     """Replace ``/analysis`` with new results, leaving everything else as it was.
 
     ``groups`` maps ``"<channel>/<plugin>"`` to a dict with ``datasets``, ``units``, ``attrs``
@@ -458,7 +458,7 @@ def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
         temporary file; the run file is unchanged.
     """
     with rewrite_analysis(path) as handle:
-        _write_results(handle, path, groups, summary)
+        _write_results(handle, path, groups, summary, attrs)
 
 
 @contextlib.contextmanager
@@ -605,12 +605,13 @@ def _text(name: bytes) -> str:
 
 
 def _write_results(handle: h5py.File, path: Path, groups: Mapping[str, Mapping[str, Any]],
-                   summary: Mapping[str, Any]) -> None:
-    """The new results into the (empty) ``/analysis`` of the open rewrite ``handle``."""
+                   summary: Mapping[str, Any], attrs: Mapping[str, Any] | None = None) -> None:
+    """The new results into the (empty) ``/analysis`` of the open rewrite ``handle``, with
+    ``attrs`` (``overrides``: what ``fsi-lab analyze`` was given) beside the summary."""
     root = handle["analysis"]
     where = "/analysis"
     try:
-        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
+        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary), **(attrs or {})})
         for key, content in groups.items():
             where = f"/analysis/{key}"
             group = root.create_group(key)
@@ -655,6 +656,24 @@ def _fsync(path: Path, flags: int) -> None:
         os.fsync(fd)
     finally:
         os.close(fd)
+
+
+def read_analysis_overrides(path: str | Path) -> list[str]:
+    """The ``--set`` overrides (and ``--mass-per-length``) the stored analysis was computed
+    with beyond the run's own (``/analysis`` attribute ``overrides``); empty when none were
+    given, or the analysis is the run's own."""
+    def read(path: Path) -> list[str]:
+        with _open_checked(path, "r") as handle:
+            group = handle.get("analysis")
+            value = decode_attr(group.attrs.get("overrides", "[]")) \
+                if isinstance(group, h5py.Group) else []
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise RunFileReader(path).refuse("/analysis attribute 'overrides'",
+                                             "is not a list of texts",
+                                             "the JSON list of texts fsi-lab analyze writes")
+        return value
+
+    return _read_safely(Path(path), read)
 
 
 def read_analysis_summary(path: str | Path) -> dict[str, Any] | None:

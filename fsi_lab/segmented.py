@@ -401,12 +401,13 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                         mass_per_length: float | None = None,
                         bus: EventBus | None = None,
                         keep_earlier: Callable[[dict[str, Any]], bool] | None = None,
-                        warnings: tuple[str, ...] = ()) -> dict[str, Any]:
+                        warnings: tuple[str, ...] = (),
+                        overrides: tuple[str, ...] = ()) -> dict[str, Any]:
     """Analyse the record of run file ``path`` in the segments of ``plan`` and store the
     results in it (module notes); returns the ``analyze --json`` object. When
     ``keep_earlier`` says so of the summary, the rewrite is dropped: the file is left as it
     was, with the analysis it held. ``warnings`` (about the record as a whole) head every
-    channel's warnings.
+    channel's warnings; ``overrides`` are stored as ``/analysis`` attribute ``overrides``.
 
     Parameters
     ----------
@@ -496,7 +497,8 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
         add_warnings(summary, warnings)
         if keep_earlier is not None and keep_earlier(summary):
             raise _KeepEarlier
-        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
+        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary),
+                           "overrides": list(overrides)})
     bus.emit(Progress("analysis", 1.0, "analysis done"))
     return summary
 

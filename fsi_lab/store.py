@@ -23,14 +23,16 @@ def analyse_and_store(path: Path, channels: Mapping[str, ChannelData],
                       mass_per_length: float | None = None,
                       bus: EventBus | None = None,
                       keep_earlier: Callable[[dict[str, Any]], bool] | None = None,
-                      warnings: tuple[str, ...] = ()) -> dict[str, Any]:
+                      warnings: tuple[str, ...] = (),
+                      overrides: tuple[str, ...] = ()) -> dict[str, Any]:
     """Run the chain and store it in the run file; returns the ``analyze --json`` object.
 
     A record whose used channels hold more samples than the analysis's budget
     (``segment_samples``) is analysed in segments (:mod:`fsi_lab.segmented`). When
     ``keep_earlier`` says so of the new summary, nothing is written: the file keeps the
     analysis it held (the file is left exactly as it was). ``warnings`` (about the record as a
-    whole) head every channel's warnings."""
+    whole) head every channel's warnings. ``overrides`` (what ``fsi-lab analyze`` was given
+    beyond the run's own settings) are stored as ``/analysis`` attribute ``overrides``."""
     from fsi_lab.chain import run_chain
     from fsi_lab.runfile import write_analysis
     from fsi_lab.segmented import analyse_in_segments, segment_plan
@@ -39,12 +41,12 @@ def analyse_and_store(path: Path, channels: Mapping[str, ChannelData],
     plan = segment_plan(channels, analysis)
     if plan is not None:
         return analyse_in_segments(path, channels, analysis, params, registry, plan, specimen,
-                                   mass_per_length, bus, keep_earlier, warnings)
+                                   mass_per_length, bus, keep_earlier, warnings, overrides)
 
     groups, channel_summaries = run_chain(channels, analysis, params, registry, specimen,
                                           mass_per_length, bus)
     summary = {"run": str(path), "channels": channel_summaries}
     add_warnings(summary, warnings)
     if keep_earlier is None or not keep_earlier(summary):
-        write_analysis(path, groups, summary)
+        write_analysis(path, groups, summary, {"overrides": list(overrides)})
     return summary

@@ -377,3 +377,27 @@ def test_mass_per_length_is_refused_for_a_run_that_has_a_specimen(sim_profile, t
     # and without a specimen it is what gives mu + M
     code, out, err = run_main("analyze", str(imported_run), "--mass-per-length", "0.2")
     assert code in (0, 2) and "--mass-per-length" not in err, err
+
+
+def test_the_stored_analysis_records_the_overrides_it_was_computed_with(tmp_path):
+    from support import run_main, write_decay_run
+
+    path = write_decay_run(tmp_path / "decay.h5")
+    code, out, err = run_main("analyze", str(path), "--mass-per-length", "0.1", "--set",
+                              "analysis.hvd.components=1")
+    assert code == 0, err
+    with h5py.File(path, "r") as handle:
+        assert json.loads(handle["analysis"].attrs["overrides"]) == [
+            "analysis.hvd.components=1", "--mass-per-length=0.1"]
+    code, out, err = run_main("show", str(path))
+    assert code == 0 and "analysed with:    analysis.hvd.components=1 --mass-per-length=0.1 " \
+        "(beyond the run's own settings)" in out, out
+    code, out, err = run_main("show", str(path), "--json")
+    assert json.loads(out)["analysis_overrides"] == ["analysis.hvd.components=1",
+                                                     "--mass-per-length=0.1"]
+    # analysed again with the run's own settings: none, and show says nothing of them
+    code, out, err = run_main("analyze", str(path))
+    with h5py.File(path, "r") as handle:
+        assert json.loads(handle["analysis"].attrs["overrides"]) == []
+    code, out, err = run_main("show", str(path))
+    assert code == 0 and "analysed with:" not in out
