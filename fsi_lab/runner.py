@@ -31,7 +31,7 @@ import numpy as np
 from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close, unsafe_roles
 from fsi_lab.bench_lock import BenchLock
 from fsi_lab.contract import ROLE_INTERFACES, BenchContext, Instrument
-from fsi_lab.errors import FsiLabError, InstrumentError, RunAborted
+from fsi_lab.errors import FsiLabError, InputFileError, InstrumentError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
 from fsi_lab.preflight import check_safety, run_setting
 from fsi_lab.profile import Profile
@@ -82,6 +82,16 @@ class RunOutcome:
         }
 
 
+def require_directory(out_dir: Path) -> None:
+    """InputFileError when ``out_dir`` (``--out``), or the first of its parents that exists,
+    is not a directory: the run file could not be created, and nothing may be driven first."""
+    existing = next((p for p in (Path(out_dir), *Path(out_dir).parents) if p.exists()), None)
+    if existing is not None and not existing.is_dir():
+        beside = f" ({existing} is a file)" if existing != Path(out_dir) else ""
+        raise InputFileError(f"{out_dir}: is not a directory{beside}; expected the directory "
+                             "of the run file (--out)")
+
+
 class Runner:
     """Runs one profile on its bench and writes one run file.
 
@@ -121,6 +131,7 @@ class Runner:
         run starts, so that a run killed mid-way is found again); the file is created by
         :meth:`run`."""
         if self._file is None:
+            require_directory(self.out_dir)
             self._file = new_run_path(self.out_dir)
         return self._file[0]
 
@@ -141,6 +152,7 @@ class Runner:
     def run(self) -> RunOutcome:
         """Carry out the run. Raises only for problems found before anything was started
         (bad profile, safety limits); every later problem ends up in the outcome."""
+        require_directory(self.out_dir)  # before anything reaches an instrument
         waveform, rate, report = check_safety(self.profile, self.registry)
         require_safe(report, self.profile.path)
         self.bus.log("INFO", f"safety check passed: peak drive {report.peak_drive_v:.3g} V, "

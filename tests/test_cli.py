@@ -401,3 +401,22 @@ def test_the_stored_analysis_records_the_overrides_it_was_computed_with(tmp_path
         assert json.loads(handle["analysis"].attrs["overrides"]) == []
     code, out, err = run_main("show", str(path))
     assert code == 0 and "analysed with:" not in out
+
+
+@pytest.mark.parametrize("out, problem", [
+    ("ok.csv", "ok.csv: is not a directory; expected the directory of the run file (--out)"),
+    ("ok.csv/runs", "ok.csv/runs: is not a directory ({tmp}/ok.csv is a file); expected the "
+                    "directory of the run file (--out)"),
+])
+def test_run_refuses_an_out_that_is_not_a_directory_before_anything_is_driven(
+        sim_profile, tmp_path, out, problem):
+    from support import run_main
+
+    existing = tmp_path / "ok.csv"
+    existing.write_text("a,b\n1,2\n")
+    code, text, err = run_main("run", str(sim_profile(duration=0.5)), "--out",
+                               str(tmp_path / out))
+    assert code == 2, err
+    assert err.strip() == f"fsi-lab: error: {tmp_path}/{problem.format(tmp=tmp_path)}", err
+    assert "safety check passed" not in err and "configuring" not in err
+    assert text == "" and existing.read_text() == "a,b\n1,2\n"
