@@ -306,9 +306,13 @@ class Runner:
             self.bus.log("INFO", f"{role}: {identity}")
         self._record_settings(writer)
 
-    def _record_settings(self, writer: RunFileWriter) -> None:
-        """Store each instrument's settings: the profile's, updated by what the driver reports."""
+    def _record_settings(self, writer: RunFileWriter, roles: tuple[str, ...] | None = None
+                         ) -> None:
+        """Store each instrument's settings (of ``roles``, or every one): the profile's,
+        updated by what the driver reports."""
         for role, instrument in self.instruments.items():
+            if roles is not None and role not in roles:
+                continue
             settings = {**self.profile.roles[role].settings, **instrument.settings()}
             writer.write_instrument(role, {}, settings)
 
@@ -343,6 +347,8 @@ class Runner:
 
         acquisition.arm()
         amplifier.enable_output(True)
+        # what switching the output on set: the amplifier's watchdog, armed (or not offered)
+        self._record_settings(writer, ("amplifier",))
         self.bus.emit(StateChanged("armed"))
         self._check_abort()
         if self._stop.is_set():
