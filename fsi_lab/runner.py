@@ -203,7 +203,9 @@ class Runner:
             self.bus.emit(StateChanged(outcome.exit_status, outcome.error or ""))
             if signals.pending:
                 outcome.interrupted = True
-                self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
+                if outcome.exit_status == "completed":  # (an aborted run has no analysis)
+                    self.bus.log("WARNING", "interrupted while finalizing the completed record: "
+                                            "the analysis is skipped")
             elif outcome.exit_status == "completed" and self.analyze \
                     and self.profile.analysis["chain"]:
                 self._analyse_into(outcome)
