@@ -92,6 +92,8 @@ REFUSED = [
     ('[[step]]\nsweep = { a = { from = 0.1, to = 1, points = 50 }, b = { from = 1, to = 2, '
      'points = 50 } }\n', "plan.toml: step 1: ", "makes the plan 2,500 runs long"),
     ('[[step]]\nsettle = 1\n', "plan.toml: step 1: ", "step.settle: unknown key"),
+    ('[[step]]\nrepeat = 2\n', "plan.toml: step 1: ", "step.repeat: unknown key; allowed keys "
+                                                    "are name, repeats, set, settle_s, sweep"),
     ('', "plan.toml: ", "step: missing; expected one or more [[step]] tables"),
     ('[[step]]\n[extra]\n', "plan.toml: ", "extra: unknown key"),
 ]
@@ -115,6 +117,8 @@ def test_a_bad_run_refuses_the_whole_plan_before_anything_is_driven(tmp_path, ba
                              "'continue'"),
     ('settle_s = -1', "plan.settle_s: -1.0 is out of bounds; expected a number >= 0 s and <= "
                       "86400 s"),
+    ('stop_whn = 1', "plan.stop_whn: unknown key; allowed keys are name, on_failure, profile, "
+                     "set, settle_s, stop_when"),
 ])
 def test_a_bad_plan_table_is_refused(tmp_path, base, plan_extra, problem):
     code, data, _ = sequence(str(write_plan(tmp_path, "[[step]]\n", plan_extra=plan_extra)),
