@@ -31,6 +31,21 @@ def require_mass_per_length(value: float | None) -> None:
         raise InputFileError(f"--mass-per-length {value}: expected kg/m > 0")
 
 
+def require_no_specimen(run, profile, mass_per_length: float | None) -> None:
+    """InputFileError when ``--mass-per-length`` is given for a run that has a specimen (its
+    profile's ``[specimen]``, or ``specimen.*`` overrides of imported data): the specimen gives
+    mu + M, and two beams for one record would leave the stored numbers unexplained."""
+    if mass_per_length is None or profile.specimen is None:
+        return
+    where = ("its profile's [specimen]" if run.profile_text.strip()
+             else "the specimen.* overrides given for it")
+    raise InputFileError(
+        f"{run.path}: --mass-per-length {mass_per_length:g}: this run has a specimen "
+        f"({where}), which gives mu + M; --mass-per-length is for data without one; expected "
+        "no --mass-per-length, or the beam the run should be analysed as given with --set "
+        "specimen.KEY=VALUE")
+
+
 @dataclass(frozen=True)
 class AnalyseTask:
     """One file of ``fsi-lab analyze``: the run file, the ``--set`` overrides and
@@ -39,6 +54,68 @@ class AnalyseTask:
     path: str
     sets: tuple[str, ...] = ()
     mass_per_length: float | None = None
+
+
+#: Why an analysis that identified nothing was not stored (``not_stored`` in its summary).
+KEPT = ("this analysis is not stored: the file keeps the analysis stored in it before, which "
+        "identified modes (fsi-lab show prints it)")
+
+
+def earlier_identification(path: Path, registry) -> bool:
+    """Whether the analysis stored in run file ``path`` identified something: a new analysis
+    that identifies nothing does not replace it (a damaged record, an override that asks for
+    what the record cannot give must not destroy results already written)."""
+    from fsi_lab.runfile import read_analysis_summary
+    from fsi_lab.summary import nothing_identified
+
+    try:
+        earlier = read_analysis_summary(path)
+    except InputFileError:  # a damaged /analysis is replaced
+        return False
+    return bool(earlier) and nothing_identified(earlier, registry) is None \
+        and any(info.get("components") for info in (earlier.get("channels") or {}).values())
+
+
+def analysed_with(task: AnalyseTask) -> tuple[str, ...]:
+    """What the analysis of ``task`` is computed with beyond the run's own settings, as
+    stored in ``/analysis`` attribute ``overrides``: its ``--set`` texts, and
+    ``--mass-per-length=VALUE``."""
+    return tuple(task.sets) + ((f"--mass-per-length={task.mass_per_length:g}",)
+                               if task.mass_per_length is not None else ())
+
+
+def cut_short(run) -> str | None:
+    """A warning when ``run`` (a :class:`~fsi_lab.runfile.RunData`) did not complete: it was
+    aborted (Ctrl+C, SIGTERM, Abort), failed, or never finished (its exit status still
+    ``running``: the process died); its record may stop mid-decay, so every number read from
+    it says so. None for a completed run, or imported data."""
+    import tomllib
+
+    status = run.attrs.get("exit_status") or "completed"
+    if status == "completed":
+        return None
+    lengths = [run.channel_samples.get(name, 0) / channel.sample_rate
+               for name, channel in run.channels.items() if channel.sample_rate > 0]
+    recorded = max(lengths, default=0.0)
+    planned = None
+    try:
+        planned = tomllib.loads(run.profile_text).get("run", {}).get("duration")
+        for item in run.attrs.get("overrides", []):
+            key, _, value = item.partition("=")
+            if key.strip() == "run.duration":
+                planned = value
+        planned = float(planned) if planned is not None else None
+    except (tomllib.TOMLDecodeError, AttributeError, TypeError, ValueError):
+        planned = None
+    length = f"{recorded:.4g} s" + (f" of the {planned:g} s planned" if planned else "")
+    why = {"running": "never finished (its exit status is still 'running': the process that "
+                      "ran it died, by kill -9, a crash or a power cut)",
+           "aborted": "was aborted (Ctrl+C, SIGTERM or Abort)"}.get(
+        status, f"ended {status}" + (f" ({run.attrs['error']})" if run.attrs.get("error")
+                                     else ""))
+    return (f"the run {why}: its record holds {length}, cut short where the run stopped, so "
+            "a decay may end early or still be forced and every number here is read from a "
+            "record the run did not finish")
 
 
 def peak_rss_mib() -> float:
@@ -63,14 +140,25 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     """
     from fsi_lab.runfile import read_run, require_analysable
     from fsi_lab.store import analyse_and_store
+    from fsi_lab.summary import nothing_identified
 
     registry = registry if registry is not None else worker_registry()
     run = read_run(task.path, load_data=False, lazy=True)  # a channel is read when used
     require_analysable(run)
     profile = analysis_profile(run, registry, task.sets)
     require_mass_per_length(task.mass_per_length)
+    require_no_specimen(run, profile, task.mass_per_length)
     require_something_to_analyse(run, profile)
+    earlier = earlier_identification(Path(task.path), registry)
+
+    def keep_earlier(summary: dict[str, Any]) -> bool:
+        return earlier and nothing_identified(summary, registry) is not None
+
     summary = analyse_and_store(Path(task.path), run.channels, profile.analysis,
                                 profile.analysis_params, registry, profile.specimen,
-                                task.mass_per_length, bus)
+                                task.mass_per_length, bus, keep_earlier,
+                                tuple(filter(None, [cut_short(run)])),
+                                analysed_with(task))
+    if keep_earlier(summary):
+        summary["not_stored"] = KEPT
     return {"summary": summary, "worker": {"pid": os.getpid(), "peak_rss_mib": peak_rss_mib()}}

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from fsi_lab.errors import FsiLabError, InputFileError, PluginError, ProfileError, RunAborted
+from fsi_lab.errors import FsiLabError, InputFileError, ProfileError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
@@ -210,6 +210,10 @@ def cmd_sequence(args) -> int:
     else:
         print(seq.format_record(record))
     code = seq.EXIT_FOR_STATUS[status]
+    if code == 0 and record.attrs.get("nothing_identified"):  # as fsi-lab run of one such run
+        print(f"fsi-lab: error: {directory}: nothing was identified: "
+              f"{record.attrs['nothing_identified']}", file=sys.stderr)
+        code = 2
     if runner.file_abandoned:  # as for fsi-lab run: HDF5 may crash in its own shutdown
         sys.stdout.flush()
         sys.stderr.flush()
@@ -241,7 +245,8 @@ def cmd_analyze(args) -> int:
         print(format_summary(summary, registry))
     refused = nothing_identified(summary, registry)
     if refused:
-        print(f"fsi-lab: error: {args.run[0]}: {refused}", file=sys.stderr)
+        kept = f"; {summary['not_stored']}" if summary.get("not_stored") else ""
+        print(f"fsi-lab: error: {args.run[0]}: {refused}{kept}", file=sys.stderr)
         return 2
     return _strict_exit(summary, 0) if args.strict else 0
 
@@ -309,6 +314,8 @@ def _analyze_batch(args) -> int:
                                  worker=result.value["worker"],
                                  exit_code=EXIT_STRICT if args.strict and problems else 0)
                     refused = nothing_identified(summary, _loaded_plugins())
+                    if refused and summary.get("not_stored"):
+                        refused += f"; {summary['not_stored']}"
                     if refused:
                         entry.update(error=refused, exit_code=2)
                         bus.log("ERROR", f"{entry['run']}: {refused}")
@@ -516,7 +523,7 @@ def cmd_import(args) -> int:
 
 
 def cmd_show(args) -> int:
-    from fsi_lab.runfile import read_analysis_summary, read_run
+    from fsi_lab.runfile import read_analysis_overrides, read_analysis_summary, read_run
     from fsi_lab.summary import format_value
 
     if args.run.is_dir() or args.run.name == "sequence.h5":
@@ -530,8 +537,10 @@ def cmd_show(args) -> int:
     excitation = {k: v for k, v in (run.excitation or {}).items() if k != "waveform"} or None
     if excitation is not None:
         excitation["param_units"] = _excitation_units(excitation.get("plugin"))
+    analysed_with = read_analysis_overrides(args.run) if summary else []
     info = {"run": str(args.run), "attrs": attrs, "instruments": run.instruments,
-            "channels": with_lengths, "excitation": excitation, "analysis": summary}
+            "channels": with_lengths, "excitation": excitation, "analysis": summary,
+            "analysis_overrides": analysed_with}
     warnings = []
     if attrs.get("exit_status") == "running":
         warnings.append(
@@ -565,6 +574,8 @@ def cmd_show(args) -> int:
                           for k, v in excitation.get("params", {}).items())
         print(f"{'excitation:':<18}{excitation.get('plugin', '?')}"
               + (f" ({given})" if given else ""))
+    if analysed_with:  # the stored numbers are not the run's own settings' (fsi-lab analyze)
+        print(f"{'analysed with:':<18}{' '.join(analysed_with)} (beyond the run's own settings)")
     if summary_text:
         print(summary_text)
     return 0
@@ -866,30 +877,11 @@ def strict_problems(summary: dict[str, Any]) -> list[str]:
 
 
 def nothing_identified(summary: dict[str, Any], registry) -> str | None:
-    """Why nothing in an analysed record was identified, or None: on every channel the analysis
-    that provides its components (the decomposition into modes) was refused and none came out
-    (a record of noise, or of no free decay), so the exit code says so (2: a signal the
-    analysis cannot handle) although what could be computed was stored. A channel missing from
-    the run counts as refused."""
-    reasons = []
-    for name, info in (summary.get("channels") or {}).items():
-        if info.get("components"):
-            return None
-        # (an error of no analysis: the channel itself is missing from the run)
-        refused = [error for error in info.get("errors", [])
-                   if error.get("plugin") is None
-                   or _provides(registry, error.get("plugin"), "components")]
-        if not refused:
-            return None
-        reasons.append(f"channel {name}: {refused[0]['message']}")
-    return "nothing was identified: " + "; ".join(reasons) if reasons else None
+    """Why nothing in an analysed record was identified, or None
+    (:func:`fsi_lab.summary.nothing_identified`)."""
+    from fsi_lab.summary import nothing_identified as why
 
-
-def _provides(registry, analysis: Any, kind: str) -> bool:
-    try:
-        return registry.get("analysis", analysis).provides == kind
-    except PluginError:  # an analysis no longer installed provides nothing
-        return False
+    return why(summary, registry)
 
 
 def _strict_exit(summary: dict[str, Any], code: int) -> int:
@@ -1025,7 +1017,8 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     p.add_argument("--strict", action="store_true",
                    help="exit 3 when a result was refused or carries a warning")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
-                   help="mu + M for data without a specimen (kg/m)")
+                   help="mu + M for data without a specimen (kg/m); refused for a run that "
+                        "has one (give its beam with --set specimen.KEY=VALUE)")
     common(p)
     p.set_defaults(func=cmd_analyze)
 

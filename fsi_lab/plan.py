@@ -311,6 +311,7 @@ def parse_plan(text: str, path: Path) -> Plan:
             raise ParameterError("plan: missing; expected a [plan] table naming the profile")
         table = dict(table)
         stop = table.pop("stop_when", None)
+        _refuse_unknown(table, PLAN_PARAMS, "plan", "stop_when")
         plan = validate(PLAN_PARAMS, table, "plan")
         if stop is not None and not isinstance(stop, dict):
             raise ParameterError(f"plan.stop_when: got {stop!r}; expected a table "
@@ -341,10 +342,26 @@ def parse_plan(text: str, path: Path) -> Plan:
         raise ProfileError(f"{path}: plan.profile: {exc}") from None
     _seed_runs(runs, profile_text, str(profile_path))
     total = len(runs)
+    if stop_when is not None and stop_when.min_runs > total:
+        raise ProfileError(f"{path}: plan.stop_when.min_runs: {stop_when.min_runs} is more than "
+                           f"the plan's {total} run{'s' * (total != 1)}, so [plan.stop_when] "
+                           f"can never act; expected at most {total} (or more runs in the "
+                           "plan)")
     return Plan(path=path, text=text, name=plan["name"], profile_path=profile_path,
                 profile_text=profile_text, on_failure=plan["on_failure"],
                 runs=tuple(PlannedRun(total=total, **run) for run in runs),
                 stop_when=stop_when)
+
+
+def _refuse_unknown(table: dict[str, Any], schema: tuple[Param, ...], where: str,
+                    *tables: str) -> None:
+    """ParameterError naming the first unknown key of ``table`` and every allowed one: the
+    parameters of ``schema`` and the sub-tables ``tables`` (taken out before validation)."""
+    allowed = {p.name for p in schema} | set(tables)
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise ParameterError(f"{where}.{unknown[0]}: unknown key; allowed keys are "
+                             f"{', '.join(sorted(allowed))}")
 
 
 def _expand(step: dict[str, Any], number: int, plan: dict[str, Any],
@@ -352,6 +369,7 @@ def _expand(step: dict[str, Any], number: int, plan: dict[str, Any],
     """The runs of one ``[[step]]`` table (``before`` runs precede it)."""
     step = dict(step)
     sweep = step.pop("sweep", {})
+    _refuse_unknown(step, STEP_PARAMS, "step", "sweep")
     values = validate(STEP_PARAMS, step, "step")
     if not isinstance(sweep, dict):
         raise ParameterError(f"step.sweep: got {sweep!r}; expected a table of parameter paths, "

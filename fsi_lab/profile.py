@@ -23,7 +23,7 @@ from fsi_lab.modelling import MODEL_PARAMS
 from fsi_lab.params import Param, Schema, find, validate
 from fsi_lab.registry import Registry
 from fsi_lab.specimen import SPECIMEN_PARAMS, Specimen
-from fsi_lab.units import QUANTITIES, QUANTITY_OF_UNIT
+from fsi_lab.units import QUANTITIES, QUANTITY_OF_UNIT, SI_UNIT, STANDARD_GRAVITY
 
 RUN_PARAMS: tuple[Param, ...] = (
     Param("name", "str", "", "", help="Free text describing the run."),
@@ -57,8 +57,8 @@ SHAKER_PARAMS: tuple[Param, ...] = (
 
 CHANNEL_PARAMS: tuple[Param, ...] = (
     Param("quantity", "str", "", choices=QUANTITIES, help="What the channel measures."),
-    Param("unit", "str", "", choices=tuple(QUANTITY_OF_UNIT),
-          help="Unit the calibrated channel is stored in."),
+    Param("unit", "str", "", choices=tuple(SI_UNIT.values()),
+          help="Unit the calibrated channel is stored in (SI: an acceleration in m/s^2)."),
     Param("sensitivity", "float", "V/unit", 1.0, minimum=1e-6, maximum=1e6,
           help="Sensor sensitivity: volts at the digitiser per unit of the quantity."),
     Param("input", "int", "", minimum=1, maximum=64, help="Digitiser input number."),
@@ -366,6 +366,15 @@ def _channel(name: str, table: Any, roles: Mapping[str, RoleConfig] | None) -> C
         )
     if not isinstance(table, dict):
         raise ParameterError(f"{where}: expected a table ([{where}]), got {table!r}")
+    if table.get("unit") == "g":  # read as m/s^2 by the analysis: refused before a run
+        sensitivity = table.get("sensitivity")
+        per_si = (f"{sensitivity} V/g is {float(sensitivity) / STANDARD_GRAVITY:.6g} V/(m/s^2)"
+                  if isinstance(sensitivity, (int, float)) and not isinstance(sensitivity, bool)
+                  else f"S V/g is S/{STANDARD_GRAVITY:g} V/(m/s^2)")
+        raise ParameterError(
+            f"{where}.unit: 'g' is not accepted for a recorded channel (runs store SI units, "
+            "and the analysis and the modal model read an acceleration in m/s^2); expected "
+            f"'m/s^2' with the sensitivity in V/(m/s^2): {per_si}")
     values = validate(CHANNEL_PARAMS, table, where)
     implied = QUANTITY_OF_UNIT[values["unit"]]
     if implied != values["quantity"]:

@@ -6,6 +6,7 @@ import contextlib
 import datetime as _dt
 import itertools
 import json
+import math
 import os
 import stat
 import uuid as _uuid
@@ -356,10 +357,40 @@ def _read_run(path: Path, load_data: bool, lazy: bool = False) -> RunData:
     return RunData(path, attrs, channels, channel_attrs, instruments, excitation, samples)
 
 
+#: A channel's samples beyond this many times the range its instruments could record (the
+#: digitiser's input range over the channel's sensitivity) are damaged or implausible data.
+IMPLAUSIBLE = 2.0
+#: Up to this many such samples are left to the analysis, which replaces isolated spikes (a
+#: flipped bit) and says so; more are refused.
+ISOLATED_GLITCHES = 8
+
+
+def recorded_full_scale(run: RunData, name: str) -> tuple[float, str] | None:
+    """The largest value, in the channel's units, channel ``name`` of ``run`` could hold (the
+    digitiser's input range for its input, ``ranges_v`` of ``/instruments/acquisition/
+    settings``, over its sensitivity) and how it follows, or None when the run file does not
+    record them (imported data, an acquisition without ``ranges_v``)."""
+    attrs = run.channel_attrs.get(name, {})
+    settings = (run.instruments.get("acquisition") or {}).get("settings") or {}
+    ranges = settings.get("ranges_v")
+    try:
+        volts = float(ranges[str(int(attrs["input"]))])
+        sensitivity = float(attrs["sensitivity"])
+    except (KeyError, TypeError, ValueError, IndexError):
+        return None
+    if not (math.isfinite(volts) and volts > 0 and math.isfinite(sensitivity)
+            and sensitivity > 0):
+        return None
+    return volts / sensitivity, (f"the digitiser's input {int(attrs['input'])} range of "
+                                 f"{volts:g} V over the sensitivity of {sensitivity:g} "
+                                 f"{attrs.get('sensitivity_units', 'V per unit')}")
+
+
 def require_analysable(run: RunData, minimum: int = 2) -> None:
     """Raise InputFileError unless ``run`` (read with its data, or lazily: then read a chunk at
     a time) has channels of at least ``minimum`` finite samples each (what ``fsi-lab analyze``
-    needs)."""
+    needs), none of them, beyond a few isolated glitches, far outside the range the run's
+    instruments could record (:func:`recorded_full_scale`)."""
     if not run.channels:
         raise InputFileError(f"{run.path}: /channels holds no channel; expected recorded "
                              "channels to analyse")
@@ -370,12 +401,19 @@ def require_analysable(run: RunData, minimum: int = 2) -> None:
                 f"{run.path}: /channels/{name} holds {count} sample{'s' if count != 1 else ''}; "
                 f"expected at least {minimum} to analyse")
         count, first = 0, -1
+        scale = recorded_full_scale(run, name)
+        limit = IMPLAUSIBLE * scale[0] if scale is not None else math.inf
+        beyond, where, value = 0, -1, 0.0
         try:
             for start, chunk in sample_chunks(samples_of(channel)):
                 bad = np.flatnonzero(~np.isfinite(chunk))
                 if bad.size and first < 0:
                     first = start + int(bad[0])
                 count += bad.size
+                far = np.flatnonzero(np.abs(np.nan_to_num(chunk)) > limit)
+                if far.size and where < 0:
+                    where, value = start + int(far[0]), float(chunk[far[0]])
+                beyond += far.size
         except H5_ERRORS as exc:
             raise RunFileReader(run.path).refuse(
                 f"/channels/{name}", f"its samples cannot be read ({exc})",
@@ -384,10 +422,20 @@ def require_analysable(run: RunData, minimum: int = 2) -> None:
             raise InputFileError(
                 f"{run.path}: /channels/{name} holds {count} NaN or infinite samples (the "
                 f"first at index {first}); expected finite samples to analyse")
+        if beyond > ISOLATED_GLITCHES:
+            full, how = scale
+            units = run.channel_attrs.get(name, {}).get("units", "")
+            raise InputFileError(
+                f"{run.path}: /channels/{name} holds {beyond} samples beyond {IMPLAUSIBLE:g} "
+                f"times the +-{full:.4g} {units} its instruments could record ({how}), the "
+                f"first at index {where}: {value:.4g} {units}; these are damaged or "
+                "implausible data, not a record to analyse (a damaged file, or a channel "
+                "written by another tool in other units); expected samples within the "
+                "recorded range")
 
 
 def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
-                   summary: Mapping[str, Any]) -> None:
+                   summary: Mapping[str, Any], attrs: Mapping[str, Any] | None = None) -> None:
     """Replace ``/analysis`` with new results, leaving everything else as it was.
 
     ``groups`` maps ``"<channel>/<plugin>"`` to a dict with ``datasets``, ``units``, ``attrs``
@@ -410,7 +458,7 @@ def write_analysis(path: str | Path, groups: Mapping[str, Mapping[str, Any]],
         temporary file; the run file is unchanged.
     """
     with rewrite_analysis(path) as handle:
-        _write_results(handle, path, groups, summary)
+        _write_results(handle, path, groups, summary, attrs)
 
 
 @contextlib.contextmanager
@@ -557,12 +605,13 @@ def _text(name: bytes) -> str:
 
 
 def _write_results(handle: h5py.File, path: Path, groups: Mapping[str, Mapping[str, Any]],
-                   summary: Mapping[str, Any]) -> None:
-    """The new results into the (empty) ``/analysis`` of the open rewrite ``handle``."""
+                   summary: Mapping[str, Any], attrs: Mapping[str, Any] | None = None) -> None:
+    """The new results into the (empty) ``/analysis`` of the open rewrite ``handle``, with
+    ``attrs`` (``overrides``: what ``fsi-lab analyze`` was given) beside the summary."""
     root = handle["analysis"]
     where = "/analysis"
     try:
-        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
+        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary), **(attrs or {})})
         for key, content in groups.items():
             where = f"/analysis/{key}"
             group = root.create_group(key)
@@ -607,6 +656,24 @@ def _fsync(path: Path, flags: int) -> None:
         os.fsync(fd)
     finally:
         os.close(fd)
+
+
+def read_analysis_overrides(path: str | Path) -> list[str]:
+    """The ``--set`` overrides (and ``--mass-per-length``) the stored analysis was computed
+    with beyond the run's own (``/analysis`` attribute ``overrides``); empty when none were
+    given, or the analysis is the run's own."""
+    def read(path: Path) -> list[str]:
+        with _open_checked(path, "r") as handle:
+            group = handle.get("analysis")
+            value = decode_attr(group.attrs.get("overrides", "[]")) \
+                if isinstance(group, h5py.Group) else []
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise RunFileReader(path).refuse("/analysis attribute 'overrides'",
+                                             "is not a list of texts",
+                                             "the JSON list of texts fsi-lab analyze writes")
+        return value
+
+    return _read_safely(Path(path), read)
 
 
 def read_analysis_summary(path: str | Path) -> dict[str, Any] | None:

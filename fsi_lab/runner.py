@@ -31,7 +31,7 @@ import numpy as np
 from fsi_lab.bench_access import OPEN_ORDER, bench_context, safe_and_close, unsafe_roles
 from fsi_lab.bench_lock import BenchLock
 from fsi_lab.contract import ROLE_INTERFACES, BenchContext, Instrument
-from fsi_lab.errors import FsiLabError, InstrumentError, RunAborted
+from fsi_lab.errors import FsiLabError, InputFileError, InstrumentError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, Progress, StateChanged
 from fsi_lab.preflight import check_safety, run_setting
 from fsi_lab.profile import Profile
@@ -82,6 +82,16 @@ class RunOutcome:
         }
 
 
+def require_directory(out_dir: Path) -> None:
+    """InputFileError when ``out_dir`` (``--out``), or the first of its parents that exists,
+    is not a directory: the run file could not be created, and nothing may be driven first."""
+    existing = next((p for p in (Path(out_dir), *Path(out_dir).parents) if p.exists()), None)
+    if existing is not None and not existing.is_dir():
+        beside = f" ({existing} is a file)" if existing != Path(out_dir) else ""
+        raise InputFileError(f"{out_dir}: is not a directory{beside}; expected the directory "
+                             "of the run file (--out)")
+
+
 class Runner:
     """Runs one profile on its bench and writes one run file.
 
@@ -121,6 +131,7 @@ class Runner:
         run starts, so that a run killed mid-way is found again); the file is created by
         :meth:`run`."""
         if self._file is None:
+            require_directory(self.out_dir)
             self._file = new_run_path(self.out_dir)
         return self._file[0]
 
@@ -141,6 +152,7 @@ class Runner:
     def run(self) -> RunOutcome:
         """Carry out the run. Raises only for problems found before anything was started
         (bad profile, safety limits); every later problem ends up in the outcome."""
+        require_directory(self.out_dir)  # before anything reaches an instrument
         waveform, rate, report = check_safety(self.profile, self.registry)
         require_safe(report, self.profile.path)
         self.bus.log("INFO", f"safety check passed: peak drive {report.peak_drive_v:.3g} V, "
@@ -191,7 +203,9 @@ class Runner:
             self.bus.emit(StateChanged(outcome.exit_status, outcome.error or ""))
             if signals.pending:
                 outcome.interrupted = True
-                self.bus.log("WARNING", "interrupted while finalizing: the analysis is skipped")
+                if outcome.exit_status == "completed":  # (an aborted run has no analysis)
+                    self.bus.log("WARNING", "interrupted while finalizing the completed record: "
+                                            "the analysis is skipped")
             elif outcome.exit_status == "completed" and self.analyze \
                     and self.profile.analysis["chain"]:
                 self._analyse_into(outcome)
@@ -294,9 +308,13 @@ class Runner:
             self.bus.log("INFO", f"{role}: {identity}")
         self._record_settings(writer)
 
-    def _record_settings(self, writer: RunFileWriter) -> None:
-        """Store each instrument's settings: the profile's, updated by what the driver reports."""
+    def _record_settings(self, writer: RunFileWriter, roles: tuple[str, ...] | None = None
+                         ) -> None:
+        """Store each instrument's settings (of ``roles``, or every one): the profile's,
+        updated by what the driver reports."""
         for role, instrument in self.instruments.items():
+            if roles is not None and role not in roles:
+                continue
             settings = {**self.profile.roles[role].settings, **instrument.settings()}
             writer.write_instrument(role, {}, settings)
 
@@ -331,6 +349,8 @@ class Runner:
 
         acquisition.arm()
         amplifier.enable_output(True)
+        # what switching the output on set: the amplifier's watchdog, armed (or not offered)
+        self._record_settings(writer, ("amplifier",))
         self.bus.emit(StateChanged("armed"))
         self._check_abort()
         if self._stop.is_set():

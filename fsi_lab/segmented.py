@@ -35,10 +35,11 @@ summaries: kilobytes per segment.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -49,7 +50,7 @@ from fsi_lab.events import EventBus, Progress
 from fsi_lab.registry import Registry
 from fsi_lab.segments import SEGMENT_SAMPLES, Segment, SegmentPlan, plan_segments
 from fsi_lab.sources import LazyChannelData, WindowSource, samples_of
-from fsi_lab.summary import json_safe
+from fsi_lab.summary import add_warnings, json_safe
 
 #: Length of the Welch segments of a segmented record's spectrum, s.
 WELCH_S = 8.0
@@ -398,9 +399,15 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                         params: Mapping[str, Mapping[str, Any]], registry: Registry,
                         plan: SegmentPlan, specimen: Any = None,
                         mass_per_length: float | None = None,
-                        bus: EventBus | None = None) -> dict[str, Any]:
+                        bus: EventBus | None = None,
+                        keep_earlier: Callable[[dict[str, Any]], bool] | None = None,
+                        warnings: tuple[str, ...] = (),
+                        overrides: tuple[str, ...] = ()) -> dict[str, Any]:
     """Analyse the record of run file ``path`` in the segments of ``plan`` and store the
-    results in it (module notes); returns the ``analyze --json`` object.
+    results in it (module notes); returns the ``analyze --json`` object. When
+    ``keep_earlier`` says so of the summary, the rewrite is dropped: the file is left as it
+    was, with the analysis it held. ``warnings`` (about the record as a whole) head every
+    channel's warnings; ``overrides`` are stored as ``/analysis`` attribute ``overrides``.
 
     Parameters
     ----------
@@ -429,7 +436,8 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
     statuses: dict[str, list[str]] = {}
     strides: dict[str, int] = {}
     summary: dict[str, Any] = {"run": str(path), "channels": {}}
-    with rewrite_analysis(path) as handle:
+    # (raised in the rewrite, _KeepEarlier drops it, and is suppressed here)
+    with contextlib.suppress(_KeepEarlier), rewrite_analysis(path) as handle:
         root = handle["analysis"]
         for index, segment in enumerate(plan.segments):
             own = {n: _segment_channel(c, segment) for n, c in cut.items()}
@@ -486,9 +494,17 @@ def analyse_in_segments(path: Path, channels: Mapping[str, ChannelData],
                 summary["channels"][name] = {"errors": [{
                     "plugin": None, "message": f"channel {name!r} is not in the run; channels "
                                                f"are {', '.join(cut) or 'none'}"}]}
-        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary)})
+        add_warnings(summary, warnings)
+        if keep_earlier is not None and keep_earlier(summary):
+            raise _KeepEarlier
+        write_attrs(root, {"analyzed_at": utc_now(), "summary": dict(summary),
+                           "overrides": list(overrides)})
     bus.emit(Progress("analysis", 1.0, "analysis done"))
     return summary
+
+
+class _KeepEarlier(Exception):
+    """The new analysis is not stored: the run file keeps the one it held."""
 
 
 def _component_numbers(component: Mapping[str, Any]) -> dict[str, Any]:

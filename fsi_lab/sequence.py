@@ -36,9 +36,13 @@ from fsi_lab.registry import Registry
 from fsi_lab.runfile import read_analysis_summary, read_run, utc_now
 from fsi_lab.seqfile import SEQUENCE_FILE, SequenceRecord, compact_results, holder, load_record
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
+from fsi_lab.summary import nothing_identified
 
 #: Exit code of ``fsi-lab sequence`` for each final status.
 EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "interrupted": 130, "running": 1}
+#: How a completed run's ``error`` begins when its analysis identified nothing
+#: (:func:`fsi_lab.summary.nothing_identified`).
+NOTHING_IDENTIFIED = "nothing was identified: "
 #: The settle wait is slept in slices this long, s (progress is reported after each).
 SETTLE_SLICE_S = 0.5
 
@@ -150,7 +154,29 @@ class SequenceRunner:
             return "failed", (f"{len(failed)} of {len(self.record.runs)} runs did not complete "
                               f"(run {', '.join(map(str, failed))}); fsi-lab sequence --resume "
                               f"{self.record.directory} runs them again")
+        self._unmet()
         return "completed", ""
+
+    def _unmet(self) -> None:
+        """Record what a sequence whose every run completed did not reach: no run identified
+        anything (``nothing_identified``: exit code 2, as ``fsi-lab run`` for one such run),
+        or its ``[plan.stop_when]`` never stopped it (``stop_not_reached``)."""
+        completed = self._completed()
+        for key in ("nothing_identified", "stop_not_reached"):
+            self.record.attrs.pop(key, None)
+        refused = [entry for entry in completed
+                   if entry.get("error", "").startswith(NOTHING_IDENTIFIED)]
+        if completed and len(refused) == len(completed):
+            self.record.attrs["nothing_identified"] = (
+                f"none of the {len(completed)} completed runs identified a mode (run "
+                f"{refused[0]['index']}: {refused[0]['error'][len(NOTHING_IDENTIFIED):]})")
+            self.bus.log("ERROR", f"[sequence] {self.record.attrs['nothing_identified']}")
+        stop = self.plan.stop_when
+        if stop is not None and not self.record.attrs.get("stopped_early"):
+            self.record.attrs["stop_not_reached"] = (
+                f"[plan.stop_when] was never reached ({stop.describe()}) in "
+                f"{len(completed)} completed run{'s' * (len(completed) != 1)}")
+            self.bus.log("WARNING", f"[sequence] {self.record.attrs['stop_not_reached']}")
 
     def _settle(self, planned: PlannedRun) -> None:
         """Wait ``settle_s`` before ``planned``; the bench is in the safe state meanwhile."""
@@ -195,6 +221,8 @@ class SequenceRunner:
                 and profile.analysis["chain"]:  # stopped, failed or skipped (a signal at its end)
             error = (f"{error or 'its analysis was skipped (interrupted as the run ended)'}; "
                      f"{self._resume_advice()}")
+        if outcome.exit_status == "completed" and outcome.summary and not error:
+            error = nothing_identified(outcome.summary, self.registry) or ""
         entry.update(status=outcome.exit_status, stop_time=utc_now(),
                      error=error, interrupted=outcome.interrupted,
                      run_file=outcome.path.name if outcome.path else "",
@@ -264,7 +292,8 @@ class SequenceRunner:
             entry["error"] = f"analysis not stored: {exc}; run fsi-lab analyze on the run file"
             self.bus.log("ERROR", f"[sequence] {label}: {entry['error']}")
             return
-        entry.update(results=compact_results(summary), analysed=True, error="")
+        entry.update(results=compact_results(summary), analysed=True,
+                     error=nothing_identified(summary, self.registry) or "")
 
     def _aggregate_safely(self) -> tuple[str, str] | None:
         """:meth:`_aggregate`; an aggregation that fails is logged (the runs go on, the record
@@ -651,6 +680,10 @@ def format_record(record: SequenceRecord) -> str:
         lines.append(f"{'why:':<13}{attrs['error']}")
     if attrs.get("stopped_early"):
         lines.append(f"{'stopped:':<13}{attrs['stopped_early']}")
+    if attrs.get("stop_not_reached"):
+        lines.append(f"{'not stopped:':<13}{attrs['stop_not_reached']}")
+    if attrs.get("nothing_identified"):
+        lines.append(f"{'identified:':<13}nothing: {attrs['nothing_identified']}")
     times = f"started {attrs['start_time']}"
     if attrs.get("resumed"):
         times += f", resumed {', '.join(attrs['resumed'])}"

@@ -18,6 +18,7 @@ import numbers
 from typing import Any
 
 from fsi_lab.contract import failed_provider, for_want_of
+from fsi_lab.errors import FsiLabError
 from fsi_lab.presentation import SummaryText
 
 #: Keys of a channel's summary the core shows itself.
@@ -166,3 +167,39 @@ def _component_lines(registry, channel: str, info: dict[str, Any],
     lines.extend(f"    {key}: {format_value(value)}"
                  for key, value in plain_values(component, claimed | set(COMPONENT_KEYS)))
     return lines
+
+
+def nothing_identified(summary: dict[str, Any], registry) -> str | None:
+    """Why nothing in an analysed record was identified, or None: on every channel the analysis
+    that provides its components (the decomposition into modes) was refused and none came out
+    (a record of noise, or of no free decay), so the exit code says so (2: a signal the
+    analysis cannot handle) although what could be computed was stored (unless the file held an
+    earlier analysis that identified something: :func:`fsi_lab.batch.analyse_file` keeps that
+    one). A channel missing from the run counts as refused."""
+    reasons = []
+    for name, info in (summary.get("channels") or {}).items():
+        if info.get("components"):
+            return None
+        # (an error of no analysis: the channel itself is missing from the run)
+        refused = [error for error in info.get("errors", [])
+                   if error.get("plugin") is None
+                   or _provides(registry, error.get("plugin"), "components")]
+        if not refused:
+            return None
+        reasons.append(f"channel {name}: {refused[0]['message']}")
+    return "nothing was identified: " + "; ".join(reasons) if reasons else None
+
+
+def _provides(registry, analysis: Any, kind: str) -> bool:
+    try:
+        return registry.get("analysis", analysis).provides == kind
+    except FsiLabError:  # an analysis no longer installed provides nothing
+        return False
+
+
+def add_warnings(summary: dict[str, Any], warnings: list[str] | tuple[str, ...]) -> None:
+    """Put ``warnings`` (about the whole record, e.g. a run that did not finish) first among
+    the ``warnings`` of every channel of ``summary``, so that ``--strict`` counts them."""
+    for info in (summary.get("channels") or {}).values():
+        if warnings and isinstance(info, dict):
+            info["warnings"] = [*warnings, *info.get("warnings", [])]

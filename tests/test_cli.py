@@ -351,3 +351,72 @@ def test_only_failures_for_want_of_a_failed_result_alone_are_named_once():
         "  failed hvd", "  failed modal-model", "  failed after-integrate",
         "  no result, for want of hvd's (hvd failed, above)"]
     assert lines[-1].endswith(": integrate, damping")
+
+
+def test_mass_per_length_is_refused_for_a_run_that_has_a_specimen(sim_profile, tmp_path,
+                                                                    imported_run):
+    from support import run_main
+
+    analysis = '[analysis]\nchain = ["spectrum"]\nchannels = ["tip_velocity"]\n'
+    code, out, err = run_main("run", str(sim_profile(analysis=analysis, duration=0.5)),
+                              "--out", str(tmp_path / "runs"))
+    assert code == 0, err
+    path = next((tmp_path / "runs").glob("*.h5"))
+    before = path.read_bytes()
+    for extra in ([], ["--jobs", "1"]):
+        code, out, err = run_main("analyze", str(path), "--mass-per-length", "0.2", *extra)
+        assert code == 2, err
+        assert f"{path}: --mass-per-length 0.2: this run has a specimen (its profile's " \
+            "[specimen]), which gives mu + M; --mass-per-length is for data without one" in err
+        assert path.read_bytes() == before  # nothing analysed, nothing written
+    # imported data given a beam by --set specimen.* too: one or the other
+    code, out, err = run_main("analyze", str(imported_run), "--mass-per-length", "0.2",
+                              "--set", "specimen.fluid=water")
+    assert code == 2 and "this run has a specimen (the specimen.* overrides given for it)" \
+        in err, err
+    # and without a specimen it is what gives mu + M
+    code, out, err = run_main("analyze", str(imported_run), "--mass-per-length", "0.2")
+    assert code in (0, 2) and "--mass-per-length" not in err, err
+
+
+def test_the_stored_analysis_records_the_overrides_it_was_computed_with(tmp_path):
+    from support import run_main, write_decay_run
+
+    path = write_decay_run(tmp_path / "decay.h5")
+    code, out, err = run_main("analyze", str(path), "--mass-per-length", "0.1", "--set",
+                              "analysis.hvd.components=1")
+    assert code == 0, err
+    with h5py.File(path, "r") as handle:
+        assert json.loads(handle["analysis"].attrs["overrides"]) == [
+            "analysis.hvd.components=1", "--mass-per-length=0.1"]
+    code, out, err = run_main("show", str(path))
+    assert code == 0 and "analysed with:    analysis.hvd.components=1 --mass-per-length=0.1 " \
+        "(beyond the run's own settings)" in out, out
+    code, out, err = run_main("show", str(path), "--json")
+    assert json.loads(out)["analysis_overrides"] == ["analysis.hvd.components=1",
+                                                     "--mass-per-length=0.1"]
+    # analysed again with the run's own settings: none, and show says nothing of them
+    code, out, err = run_main("analyze", str(path))
+    with h5py.File(path, "r") as handle:
+        assert json.loads(handle["analysis"].attrs["overrides"]) == []
+    code, out, err = run_main("show", str(path))
+    assert code == 0 and "analysed with:" not in out
+
+
+@pytest.mark.parametrize("out, problem", [
+    ("ok.csv", "ok.csv: is not a directory; expected the directory of the run file (--out)"),
+    ("ok.csv/runs", "ok.csv/runs: is not a directory ({tmp}/ok.csv is a file); expected the "
+                    "directory of the run file (--out)"),
+])
+def test_run_refuses_an_out_that_is_not_a_directory_before_anything_is_driven(
+        sim_profile, tmp_path, out, problem):
+    from support import run_main
+
+    existing = tmp_path / "ok.csv"
+    existing.write_text("a,b\n1,2\n")
+    code, text, err = run_main("run", str(sim_profile(duration=0.5)), "--out",
+                               str(tmp_path / out))
+    assert code == 2, err
+    assert err.strip() == f"fsi-lab: error: {tmp_path}/{problem.format(tmp=tmp_path)}", err
+    assert "safety check passed" not in err and "configuring" not in err
+    assert text == "" and existing.read_text() == "a,b\n1,2\n"

@@ -2,6 +2,7 @@
 corrupted byte): ``show`` and ``analyze`` refuse each with one message naming the file and the
 node or attribute (exit 2), never a traceback, and the file is left as it was."""
 
+import json
 import shutil
 import signal
 
@@ -196,3 +197,101 @@ def test_read_run_names_the_damaged_node(measured_run, tmp_path):
     with pytest.raises(InputFileError, match=r"/channels/base_acceleration attribute "
                                              r"'sample_rate': is 'fast'; expected a finite"):
         read_run(path)
+
+
+def _with_digitiser_range(edit):
+    """``edit``, on a run file that records its digitiser's input ranges as scpi-daq does
+    (``ranges_v``: 10 V on every input; the vibrometer's 8 V/(m/s) makes +-1.25 m/s)."""
+    def both(handle):
+        handle["instruments/acquisition/settings"].attrs["ranges_v"] = \
+            '{"1": 10.0, "2": 10.0, "3": 10.0}'
+        handle["channels/tip_velocity"].attrs["sensitivity"] = 8.0
+        edit(handle)
+    return both
+
+
+def _scrambled(start, count):
+    """Samples ``start`` to ``start + count`` of the tip velocity replaced by the finite
+    values of bytes flipped at random (hundreds of m/s and more)."""
+    def edit(handle):
+        data = handle["channels/tip_velocity"][()]
+        noise = np.random.default_rng(5).uniform(-500.0, 500.0, count)
+        data[start:start + count] = noise
+        handle["channels/tip_velocity"][...] = data
+    return edit
+
+
+def test_samples_far_beyond_the_recorded_range_are_named_as_damaged(measured_run, tmp_path):
+    path = _damaged(measured_run, tmp_path, _with_digitiser_range(_scrambled(300, 512)))
+    _refused(path, ["analyze"], f"{CHANNEL} holds 5", "samples beyond 2 times the +-1.25 m/s "
+             "its instruments could record (the digitiser's input 3 range of 10 V over the "
+             "sensitivity of 8", "the first at index 300", "damaged or implausible data")
+
+
+def test_a_few_isolated_glitches_beyond_the_range_are_left_to_the_analysis(measured_run,
+                                                                           tmp_path):
+    def glitches(handle):
+        data = handle["channels/tip_velocity"][()]
+        data[[200, 400, 600]] = 300.0
+        handle["channels/tip_velocity"][...] = data
+    path = _damaged(measured_run, tmp_path, _with_digitiser_range(glitches))
+    code, out, err = run_main("analyze", str(path))
+    assert code == 0, err
+
+
+def test_a_reanalysis_that_identifies_nothing_keeps_the_earlier_analysis(tmp_path):
+    from support import write_decay_run
+
+    from fsi_lab.runfile import read_analysis_summary
+
+    path = write_decay_run(tmp_path / "decay.h5")
+    code, out, err = run_main("analyze", str(path), "--mass-per-length", "0.1")
+    assert code == 0, err
+    good = read_analysis_summary(path)
+    assert good["channels"]["tip"]["components"]
+    with h5py.File(path, "r+") as handle:  # the record damaged: noise alone
+        data = handle["channels/tip"]
+        data[...] = 1e-3 * np.random.default_rng(1).standard_normal(data.shape)
+    before = path.read_bytes()
+    code, out, err = run_main("analyze", str(path), "--mass-per-length", "0.1")
+    assert code == 2, err
+    assert "nothing was identified" in err and "this analysis is not stored: the file keeps " \
+        "the analysis stored in it before" in err, err
+    assert path.read_bytes() == before
+    assert read_analysis_summary(path) == good
+    # the JSON says so too, and a batch does the same
+    code, out, err = run_main("analyze", str(path), "--mass-per-length", "0.1", "--json")
+    assert code == 2 and "this analysis is not stored" in json.loads(out)["not_stored"]
+    code, out, err = run_main("analyze", str(path), "--mass-per-length", "0.1", "--jobs", "1",
+                              "--json")
+    assert code == 2 and "this analysis is not stored" in json.loads(out)["files"][0]["error"]
+    assert path.read_bytes() == before
+
+
+@pytest.mark.parametrize("status, why", [
+    ("aborted", "the run was aborted (Ctrl+C, SIGTERM or Abort)"),
+    ("running", "the run never finished (its exit status is still 'running': the process "
+                "that ran it died, by kill -9, a crash or a power cut)"),
+])
+def test_analysing_a_run_that_did_not_complete_warns_that_its_record_is_cut_short(
+        measured_run, tmp_path, status, why):
+    def stopped(handle):  # as the run leaves its file: half the planned 0.5 s, and its status
+        handle.attrs["exit_status"] = status
+        for name in handle["channels"]:
+            handle[f"channels/{name}"].resize((500,))
+    path = _damaged(measured_run, tmp_path, stopped)
+    expected = f"{why}: its record holds 0.25 s of the 0.5 s planned, cut short"
+    code, out, err = run_main("analyze", str(path))
+    assert code == 0, err
+    assert f"warning: {expected}" in out, out
+    from fsi_lab.runfile import read_analysis_summary
+    assert read_analysis_summary(path)["channels"]["tip_velocity"]["warnings"][0] \
+        .startswith(expected)
+    code, out, err = run_main("analyze", str(path), "--strict")
+    assert code == 3 and f"[strict] channel tip_velocity: {expected}" in err, err
+
+
+def test_analysing_a_completed_run_gives_no_such_warning(measured_run, tmp_path):
+    path = _damaged(measured_run, tmp_path, lambda handle: None)
+    code, out, err = run_main("analyze", str(path), "--json")
+    assert code == 0 and "cut short" not in out, out

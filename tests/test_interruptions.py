@@ -236,3 +236,39 @@ def test_kill_9_loses_at_most_the_promised_span_whenever_it_comes(tmp_path, wher
         assert 0 <= lost_s <= FLUSH_SPAN_S + 1e-9, (where, result, lost_s)
     assert max((r["k"] * block_s * rate - r["kept"]) / rate for r in results) \
         == pytest.approx(FLUSH_SPAN_S)  # the worst case was among the points tried
+
+
+@pytest.mark.parametrize("during_acquisition", [True, False])
+def test_a_second_signal_while_finalizing_is_said_of_a_completed_record_only(
+        monkeypatch, tmp_path, during_acquisition):
+    """Ctrl+C during the acquisition aborts the run; a second one (a terminal's Ctrl+C reaches
+    every process of the group) that comes as the bench is made safe must not be reported as
+    an interruption while finalizing whose analysis is skipped: only a completed record has
+    one to skip."""
+    from fsi_lab.runner import Runner
+
+    held, calls = RunSignals.held, []
+
+    def interrupted_once(self):
+        calls.append(1)
+        if len(calls) == 1:  # as if Ctrl+C came in the instant before signals are held
+            raise KeyboardInterrupt
+        return held(self)
+
+    monkeypatch.setattr(RunSignals, "held", interrupted_once)
+    if during_acquisition:
+        def interrupted(self, block, sensitivities):
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(Runner, "_check_block", interrupted)  # at the first block
+    code, out, err = run_main("run", str(_profile(tmp_path)), "--out", str(tmp_path / "runs"),
+                              "--json")
+    data = json.loads(out)
+    assert code == 130, err
+    if during_acquisition:
+        assert data["exit_status"] == "aborted"
+        assert "interrupted while finalizing" not in err, err
+    else:
+        assert data["exit_status"] == "completed"
+        assert "[warning] interrupted while finalizing the completed record: the analysis is " \
+            "skipped" in err, err

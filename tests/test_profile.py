@@ -219,3 +219,27 @@ def test_every_numeric_parameter_of_the_core_instruments_and_excitations_has_bou
                  if p.type in ("float", "int", "floats") and p.choices is None
                  and (p.minimum is None or p.maximum is None)]
     assert len(schemas) >= 20 and unbounded == []
+
+
+def test_a_channel_in_g_is_refused_at_the_profile_check(sim_profile):
+    """A profile channel in g was accepted, and the run then completed with its modal model
+    refusing the reference ('expected the base acceleration in m/s^2'): runs store SI units,
+    so g is refused before anything runs, saying what to write instead."""
+    from support import run_main
+
+    path = sim_profile()
+    text = path.read_text()
+    old = 'unit = "m/s^2"\nsensitivity = 0.0102\n'
+    assert old in text
+    path.write_text(text.replace(old, 'unit = "g"\nsensitivity = 0.1\n'))
+    code, out, err = run_main("profile", "check", str(path))
+    assert code == 2, (out, err)
+    assert err.strip() == (
+        f"fsi-lab: error: {path}: channels.base_acceleration.unit: 'g' is not accepted for a "
+        "recorded channel (runs store SI units, and the analysis and the modal model read an "
+        "acceleration in m/s^2); expected 'm/s^2' with the sensitivity in V/(m/s^2): 0.1 V/g "
+        "is 0.0101972 V/(m/s^2)")
+    code, out, err = run_main("profile", "check", str(sim_profile()), "--set",
+                              "channels.base_acceleration.unit=g")
+    assert code == 2 and "channels.base_acceleration.unit: got 'g'; expected one of 'm', " \
+        "'m/s', 'm/s^2', 'V'" in err, err

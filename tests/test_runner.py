@@ -401,3 +401,18 @@ def test_ctrl_c_during_the_analysis_keeps_the_completed_run(sim_profile, registr
     assert record.attrs["exit_status"] == "completed"
     assert read_run(outcome.path).channels["tip_velocity"].data.size == 1000
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # handlers put back
+
+
+def test_the_run_file_records_the_watchdog_armed_with_the_output(tmp_path):
+    """The amplifier's settings are recorded again once its output is on: the run file says
+    whether the watchdog was armed (it said `not armed yet`, recorded before arming)."""
+    import h5py
+    from support import GOOD_PROFILE, run_main
+
+    code, out, err = run_main("run", str(GOOD_PROFILE), "--out", str(tmp_path), "--set",
+                              "run.duration=0.5", "--no-analysis")
+    assert code == 0, err
+    (path,) = tmp_path.glob("*.h5")
+    with h5py.File(path, "r") as handle:
+        settings = handle["instruments/amplifier/settings"].attrs
+        assert settings["watchdog"] == "armed" and settings["watchdog_s"] == 1.0

@@ -92,6 +92,8 @@ REFUSED = [
     ('[[step]]\nsweep = { a = { from = 0.1, to = 1, points = 50 }, b = { from = 1, to = 2, '
      'points = 50 } }\n', "plan.toml: step 1: ", "makes the plan 2,500 runs long"),
     ('[[step]]\nsettle = 1\n', "plan.toml: step 1: ", "step.settle: unknown key"),
+    ('[[step]]\nrepeat = 2\n', "plan.toml: step 1: ", "step.repeat: unknown key; allowed keys "
+                                                    "are name, repeats, set, settle_s, sweep"),
     ('', "plan.toml: ", "step: missing; expected one or more [[step]] tables"),
     ('[[step]]\n[extra]\n', "plan.toml: ", "extra: unknown key"),
 ]
@@ -115,6 +117,8 @@ def test_a_bad_run_refuses_the_whole_plan_before_anything_is_driven(tmp_path, ba
                              "'continue'"),
     ('settle_s = -1', "plan.settle_s: -1.0 is out of bounds; expected a number >= 0 s and <= "
                       "86400 s"),
+    ('stop_whn = 1', "plan.stop_whn: unknown key; allowed keys are name, on_failure, profile, "
+                     "set, settle_s, stop_when"),
 ])
 def test_a_bad_plan_table_is_refused(tmp_path, base, plan_extra, problem):
     code, data, _ = sequence(str(write_plan(tmp_path, "[[step]]\n", plan_extra=plan_extra)),
@@ -132,7 +136,7 @@ STOP = '[plan.stop_when]\nquantity = "c_f"\nrelative_half_width = 0.05\n'
      "plan.toml: plan.stop_when.relative_half_width: missing"),
     (STOP.replace("0.05", "0"), "plan.toml: plan.stop_when.relative_half_width: 0.0 is out of "
                                 "bounds"),
-    (STOP + 'channel = "base_acceleration"\n',
+    (STOP + 'channel = "base_acceleration"\nmin_runs = 1\n',
      "plan.toml: step 1, run 1 of 1: {base}: plan.stop_when.channel: 'base_acceleration' is "
      "not analysed (analysed: tip_velocity)"),
     ('stop_when = 3\n', "plan.toml: plan.stop_when: got 3; expected a table [plan.stop_when]"),
@@ -140,6 +144,8 @@ STOP = '[plan.stop_when]\nquantity = "c_f"\nrelative_half_width = 0.05\n'
     (STOP.replace("0.05", "0.01"), "plan.toml: plan.stop_when.relative_half_width: 0.01 can "
                                    "never be reached: an aggregate's 95 % interval of C_f is "
                                    "never narrower than +-2 %"),
+    (STOP + "min_runs = 20\n", "plan.toml: plan.stop_when.min_runs: 20 is more than the plan's "
+                               "1 run, so [plan.stop_when] can never act; expected at most 1"),
 ])
 def test_a_stop_condition_is_checked_before_anything_is_driven(tmp_path, base, stop, problem):
     out = tmp_path / "out"
@@ -316,3 +322,26 @@ def test_the_record_loads_back_as_written(tmp_path, base):
     assert code == 0
     record = load_record(out)
     assert record.runs == data["runs"] and record.attrs["plan"] == data["plan"]
+
+
+def test_a_sequence_in_which_no_run_identified_anything_says_so_and_exits_2(tmp_path,
+                                                                            sim_profile):
+    # hvd asked for more modes than the 0.5 s records show: each run identifies nothing,
+    # as `fsi-lab run` says of one such run with exit 2
+    sim_profile(duration=0.5, name="base.toml", analysis=(
+        '[analysis]\nchain = ["hvd"]\nchannels = ["tip_velocity"]\n'
+        "[analysis.hvd]\ncomponents = 6\n"))
+    plan = write_plan(tmp_path, "[[step]]\nrepeats = 2\n", plan_extra=STOP)
+    out = tmp_path / "out"
+    code, text, err = run_main("sequence", str(plan), "--out", str(out))
+    assert code == 2, err
+    assert f"fsi-lab: error: {out}: nothing was identified: none of the 2 completed runs " \
+        "identified a mode (run 1: channel tip_velocity: hvd on channel 'tip_velocity': " \
+        "identify: 6 component(s) asked for" in err
+    assert "not stopped: [plan.stop_when] was never reached (C_f's 95 % interval within " \
+        "+-5 % (the largest mode), after 2 runs) in 2 completed runs" in text
+    data = load_record(out).as_json()
+    assert data["status"] == "completed" and data["counts"]["completed"] == 2
+    assert data["nothing_identified"].startswith("none of the 2 completed runs")
+    assert all(run["error"].startswith("nothing was identified: channel tip_velocity: hvd")
+               and not any(run["results"].values()) for run in data["runs"])

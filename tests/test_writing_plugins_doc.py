@@ -30,3 +30,24 @@ def test_the_tutorials_declaration_is_the_scaffolds():
 
     assert lines(tutorial) == lines(declared)
     assert "fsi-lab plugin new analysis window-rms --dir ~/src" in DOC
+
+
+def test_the_tutorials_copy_of_its_run_file_works_with_earlier_runs_beside_it(tmp_path):
+    """The step after `fsi-lab run ... --out runs` copies the run file it wrote to wet.h5 also
+    when runs/ holds earlier run files (after `make demo` it holds the demo's)."""
+    import os
+    import subprocess
+
+    from support import write_decay_run
+
+    step = re.search(r"fsi-lab run profiles/wet-beam-sim.toml --out runs\n(.*?)\n```", DOC,
+                     re.S).group(1)
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    older = write_decay_run(runs / "20261128-121911_4067344c.h5", frequency=20.0)
+    newest = write_decay_run(runs / "20261129-101500_1a2b3c4d.h5", frequency=25.0)
+    os.utime(older, (1_700_000_000, 1_700_000_000))  # the demo's run, a day before
+    proc = subprocess.run(["bash", "-ec", step], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=30, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "wet.h5").read_bytes() == newest.read_bytes()
