@@ -253,7 +253,12 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
     """
     from fsi_lab.chain import channels_to_analyse, cut_quiet_tail
     from fsi_lab.contract import AnalysisContext
-    from fsi_lab.run_profile import analysis_profile, require_something_to_analyse, worker_registry
+    from fsi_lab.run_profile import (
+        analysis_profile,
+        require_no_specimen,
+        require_something_to_analyse,
+        worker_registry,
+    )
     from fsi_lab.runfile import read_run, require_analysable
 
     registry = registry if registry is not None else worker_registry()
@@ -264,6 +269,7 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
         raise InputFileError(f"{task.path}: its run ended {status}; only completed runs are "
                              "aggregated")
     profile = analysis_profile(run, registry, task.sets)
+    require_no_specimen(run, profile, task.mass_per_length)
     require_something_to_analyse(run, profile)
     if "hvd" not in profile.analysis["chain"]:
         raise InputFileError(

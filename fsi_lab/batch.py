@@ -20,6 +20,7 @@ from fsi_lab.errors import InputFileError
 from fsi_lab.run_profile import (  # noqa: F401 - where they were first found
     ANALYSIS_SECTIONS,
     analysis_profile,
+    require_no_specimen,
     require_something_to_analyse,
     worker_registry,
 )
@@ -29,21 +30,6 @@ def require_mass_per_length(value: float | None) -> None:
     """InputFileError unless ``value`` is None or a mass per length > 0 (kg/m)."""
     if value is not None and not (value > 0):
         raise InputFileError(f"--mass-per-length {value}: expected kg/m > 0")
-
-
-def require_no_specimen(run, profile, mass_per_length: float | None) -> None:
-    """InputFileError when ``--mass-per-length`` is given for a run that has a specimen (its
-    profile's ``[specimen]``, or ``specimen.*`` overrides of imported data): the specimen gives
-    mu + M, and two beams for one record would leave the stored numbers unexplained."""
-    if mass_per_length is None or profile.specimen is None:
-        return
-    where = ("its profile's [specimen]" if run.profile_text.strip()
-             else "the specimen.* overrides given for it")
-    raise InputFileError(
-        f"{run.path}: --mass-per-length {mass_per_length:g}: this run has a specimen "
-        f"({where}), which gives mu + M; --mass-per-length is for data without one; expected "
-        "no --mass-per-length, or the beam the run should be analysed as given with --set "
-        "specimen.KEY=VALUE")
 
 
 @dataclass(frozen=True)

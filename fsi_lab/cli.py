@@ -1038,7 +1038,8 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
                         "specimen, which each run file holds (--mass-per-length gives mu + M "
                         "to runs without one)")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",
-                   help="mu + M for runs without a specimen (kg/m)")
+                   help="mu + M for runs without a specimen (kg/m); refused for a run that "
+                        "has one")
     p.add_argument("--jobs", type=_jobs, metavar="N",
                    help="identify the runs in N local worker processes")
     p.add_argument("--scheduler", metavar="ADDRESS",

@@ -54,6 +54,21 @@ def analysis_profile(run, registry, sets: list[str] | tuple[str, ...] = ()):
         profile, specimen=dataclasses.replace(profile.specimen, defaulted=defaulted))
 
 
+def require_no_specimen(run, profile, mass_per_length: float | None) -> None:
+    """InputFileError when ``--mass-per-length`` is given for a run that has a specimen (its
+    profile's ``[specimen]``, or ``specimen.*`` overrides of imported data): the specimen gives
+    mu + M, and two beams for one record would leave the stored numbers unexplained."""
+    if mass_per_length is None or profile.specimen is None:
+        return
+    where = ("its profile's [specimen]" if run.profile_text.strip()
+             else "the specimen.* overrides given for it")
+    raise InputFileError(
+        f"{run.path}: --mass-per-length {mass_per_length:g}: this run has a specimen "
+        f"({where}), which gives mu + M; --mass-per-length is for data without one; expected "
+        "no --mass-per-length, or the beam the run should be analysed as given with --set "
+        "specimen.KEY=VALUE")
+
+
 def require_something_to_analyse(run, profile) -> None:
     """InputFileError unless the run has a channel the chain analyses (named or by quantity)."""
     from fsi_lab.chain import channels_to_analyse

@@ -369,6 +369,9 @@ def test_mass_per_length_is_refused_for_a_run_that_has_a_specimen(sim_profile, t
         assert f"{path}: --mass-per-length 0.2: this run has a specimen (its profile's " \
             "[specimen]), which gives mu + M; --mass-per-length is for data without one" in err
         assert path.read_bytes() == before  # nothing analysed, nothing written
+    # nor does an aggregate of it take another beam's mu + M
+    code, out, err = run_main("aggregate", str(path), "--mass-per-length", "0.2")
+    assert code == 2 and f"{path}: --mass-per-length 0.2: this run has a specimen" in out + err
     # imported data given a beam by --set specimen.* too: one or the other
     code, out, err = run_main("analyze", str(imported_run), "--mass-per-length", "0.2",
                               "--set", "specimen.fluid=water")
