@@ -232,6 +232,9 @@ BAND_QUIET_LEVEL = 0.01
 LATE_SHARE = 0.2
 #: At most this share of the shortest decay's extrema is left out by the start search.
 MAX_DROP_SHARE = 0.3
+#: A start search that leaves the law fitted below this share of the decays' largest
+#: amplitude is warned: the large amplitudes, which carry C_f, follow something else.
+START_KEPT_WARNING = 0.7
 #: Moves of the coefficients beyond this many standard errors widen their intervals.
 DRIFT_Z = 2.5
 #: Starts of a decay tried by :func:`_stable_start` (extrema left out of every decay).
@@ -264,6 +267,13 @@ RESIDUAL_RHO = 0.6
 #: Largest lag-1 correlation of the crossing-time residuals the frequency's variance is widened
 #: for (:func:`_frequency_step`; a 19-fold variance at most).
 CROSSING_RHO_CAP = 0.9
+#: Parts of each decay whose frequencies are compared (:func:`_frequency_wander`), and the
+#: crossings a part needs to be compared.
+FREQUENCY_PARTS = 3
+FREQUENCY_PART_CROSSINGS = 6
+#: Chance (under one frequency with the crossings' noise) of a spread between the parts as
+#: large as the one found, below which the frequency is taken to wander.
+FREQUENCY_WANDER_P = 1e-3
 #: Modes whose frequencies lie within this ratio of a neighbour's are fitted together to the
 #: record's samples (:func:`_joint`): their bands hold each other's first cycles. Band fits of
 #: a 17 Hz mode beside one 1.6 to 1.75 times higher were 5 % (C_i) and 8 % (C_f) off with no
@@ -393,8 +403,9 @@ class ModeIdentification:
         Largest filter correction applied to an extremum, relative to that extremum.
     start_drift
         ``dropped``: first extrema of each decay left out because the law did not hold there
-        yet (:func:`_stable_start`); ``untested``: 1 when most extrema lie in decays too short
-        for that test; ``a`` and ``beta``: how far the quadratic law's
+        yet (:func:`_stable_start`); ``kept_amplitude``: the largest extremum fitted over the
+        largest measured (1 when none were left out); ``untested``: 1 when most extrema lie
+        in decays too short for that test; ``a`` and ``beta``: how far the quadratic law's
         coefficients still move, in standard errors, when more are left out (its covariance
         is widened when more than chance allows); ``split_a``, ``split_beta``: how far they
         differ between the larger and the smaller half of the extrema, in standard errors
@@ -404,9 +415,12 @@ class ModeIdentification:
         padding (:func:`_noise_spread`); ``residual_rho``: the lag-1 correlation of the
         preferred law's whitened residuals (:func:`_residual_correlation`); ``band_noise``:
         the band's noise, measured before the excitation and after the decays, over the white
-        noise's share in it, where measured (:func:`_band_noise_ratio`). A mode fitted with
-        its close neighbours to the record's samples (:func:`_take_joint`) has instead
-        ``joint_modes``, ``joint_residual`` (the fit's residual over the white noise),
+        noise's share in it, where measured (:func:`_band_noise_ratio`);
+        ``frequency_wander``, ``frequency_low``, ``frequency_high``: when the early, middle
+        and late cycles' frequencies disagree, the factor the frequency's standard error was
+        widened by and the lowest and highest of them, Hz (:func:`_frequency_wander`). A
+        mode fitted with its close neighbours to the record's samples (:func:`_take_joint`)
+        has instead ``joint_modes``, ``joint_residual`` (the fit's residual over the white noise),
         ``joint_r2`` (the share of the record's variance over the fitted spans that the fit
         explains) and ``joint_widening_a``, ``joint_widening_beta``.
     warnings
@@ -1268,6 +1282,8 @@ class _Mode:
     noise_power: float = 0.0
     noise_samples: int = 0
     joint: dict[str, Any] | None = None
+    #: The frequency's wander over its decays, (widening, lowest, highest part's Hz), or None.
+    wander: tuple[float, float, float] | None = None
 
 
 def _noise_before(modes: list[_Mode], record: np.ndarray, fs: float, bands: ModeBands,
@@ -1740,9 +1756,11 @@ def _take_joint(mode: _Mode) -> None:
                 cov=np.asarray(fit["cov"]), dof=int(fit["dof"]), aicc=float(fit["aicc"]),
                 alpha=joint["alpha"])
     mode.w0, mode.alpha = joint["w0"], joint["alpha"]
-    mode.w0_se = math.sqrt(max(float(joint["cov"][-2, -2]), 0.0))
+    # (a wander of the band's crossings is the record's, whichever fit reads the frequency)
+    mode.w0_se = math.sqrt(max(float(joint["cov"][-2, -2]), 0.0)) * (
+        mode.wander[0] if mode.wander is not None else 1.0)
     mode.w0_dof = int(joint["dof"])
-    band_checks = ("a", "beta", "dropped", "untested")
+    band_checks = ("a", "beta", "dropped", "kept_amplitude", "untested")
     mode.drift = {k: v for k, v in mode.drift.items()
                   if k not in band_checks and not k.startswith("start_")}
     mode.drift.update({"joint_modes": float(joint["modes"]),
@@ -1934,7 +1952,7 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
     inner = np.ones(n, dtype=bool)          # a residual with a predecessor in its decay
     inner[np.cumsum([0] + [b.shape[0] for b in blocks[:-1]])] = False
 
-    def solve(names: list[int]) -> tuple[np.ndarray, np.ndarray, int]:
+    def solve(names: list[int]) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
         sub = jac[:, names]
         step, *_ = np.linalg.lstsq(sub, r, rcond=None)
         resid = r - sub @ step
@@ -1946,11 +1964,11 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
         rho = float(resid[1:][inner[1:]] @ resid[:-1][inner[1:]]) / max(float(resid @ resid),
                                                                          1e-300)
         rho = min(max(rho, 0.0), CROSSING_RHO_CAP)
-        return step, cov * (1.0 + rho) / (1.0 - rho), dof
+        return step, cov * (1.0 + rho) / (1.0 - rho), dof, resid
 
     offsets = list(range(2, 2 + len(pairs)))
     if use_alpha:
-        step, cov, dof = solve([0, 1, *offsets])
+        step, cov, dof, resid = solve([0, 1, *offsets])
         alpha_new = mode.alpha + float(step[1]) / top
         se_alpha = math.sqrt(max(cov[1, 1], 0.0)) / top
         # Kept only when clearly resolved and large enough to matter: the frequency it moves
@@ -1969,15 +1987,82 @@ def _frequency_step(mode: _Mode, quantity: str) -> None:
                 visible = (abs(seen) > 5.0 * seen_se and seen * shift > 0
                            and abs(seen) >= 0.5 * abs(shift))
         if abs(alpha_new) <= 5.0 * se_alpha or abs(shift) < STIFFNESS_SHIFT or not visible:
-            step, cov, dof = solve([0, *offsets])
+            step, cov, dof, resid = solve([0, *offsets])
             mode.alpha = 0.0
         else:
             mode.alpha = alpha_new
     else:
-        step, cov, dof = solve([0, *offsets])
+        step, cov, dof, resid = solve([0, *offsets])
     mode.w0 += float(step[0])
     mode.w0_se = math.sqrt(max(cov[0, 0], 0.0))
     mode.w0_dof = dof
+    sizes = [b.shape[0] for b in blocks]
+    mode.wander = _frequency_wander(jac, resid, sizes, mode.w0)
+    if mode.wander is not None:
+        mode.w0_se *= mode.wander[0]
+
+
+def _frequency_wander(jac: np.ndarray, resid: np.ndarray, sizes: list[int],
+                      w0: float) -> tuple[float, float, float] | None:
+    """Whether the frequency fitted to every crossing (:func:`_frequency_step`) holds over the
+    whole of each decay: the early, middle and late :data:`FREQUENCY_PARTS` of each decay's
+    crossings get a frequency of their own (from the fit's whitened ``resid``, with the
+    frequency's column of ``jac`` and its decay's offset, which the decays' blocks of
+    ``sizes`` rows hold in columns 0 and 2 + j). An F test of the parts' own frequencies
+    against one common to all (each part keeps its own offset either way), its residual
+    variance widened for what correlation the parts' own fits leave at lag 1, says whether
+    they differ beyond their noise (probability below :data:`FREQUENCY_WANDER_P`): a drifting
+    frequency, a close mode or a line pulling some cycles, an amplitude-dependent stiffness
+    too weak to fit. The frequency's interval, from the crossings' scatter about one
+    frequency, is then too narrow.
+
+    Returns the factor sqrt(F) the frequency's standard error is to be widened by (as a
+    Birge ratio), with the lowest and highest part's frequency (Hz; the natural frequency
+    ``w0``, rad/s, plus the part's departure), or None when the parts agree or fewer than two
+    can be compared."""
+    parts: list[tuple[np.ndarray, np.ndarray]] = []     # (frequency column, offset column)
+    targets: list[np.ndarray] = []
+    start = 0
+    for j, size in enumerate(sizes):
+        rows = np.arange(start, start + size)
+        start += size
+        for part in np.array_split(rows, FREQUENCY_PARTS):
+            if part.size >= FREQUENCY_PART_CROSSINGS:
+                parts.append((jac[part, 0], jac[part, 2 + j]))
+                targets.append(resid[part])
+    if len(parts) < 2:
+        return None
+    shifts, own = [], []
+    for (freq, offset), y in zip(parts, targets):
+        design = np.stack((freq, offset), axis=1)
+        step, *_ = np.linalg.lstsq(design, y, rcond=None)
+        shifts.append(float(step[0]))
+        own.append(y - design @ step)
+    rss_own = sum(float(e @ e) for e in own)
+    # one frequency for all parts, an offset of its own for each
+    n = sum(y.size for y in targets)
+    common = np.zeros((n, 1 + len(parts)))
+    row = 0
+    for k, (freq, offset) in enumerate(parts):
+        common[row:row + freq.size, 0] = freq
+        common[row:row + freq.size, 1 + k] = offset
+        row += freq.size
+    y_all = np.concatenate(targets)
+    step, *_ = np.linalg.lstsq(common, y_all, rcond=None)
+    left = y_all - common @ step
+    rss_common = float(left @ left)
+    dof = n - 2 * len(parts)
+    if dof < 1 or rss_own <= 0.0:
+        return None
+    lag = sum(float(e[1:] @ e[:-1]) for e in own) / rss_own
+    rho = min(max(lag, 0.0), CROSSING_RHO_CAP)
+    spread = (rss_common - rss_own) / (len(parts) - 1)
+    f_ratio = spread / (rss_own / dof) / ((1.0 + rho) / (1.0 - rho))
+    chance = sstats.f.sf(f_ratio, len(parts) - 1, dof) if math.isfinite(f_ratio) else 1.0
+    if chance >= FREQUENCY_WANDER_P:
+        return None
+    hz = (w0 + np.array(shifts)) / (2.0 * math.pi)
+    return math.sqrt(f_ratio), float(np.min(hz)), float(np.max(hz))
 
 
 def _backbone(mode: _Mode, quantity: str) -> Backbone:
@@ -2095,10 +2180,12 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
         tried = count
         if not z or max(abs(v) for v in z.values()) <= DRIFT_Z:
             break
+    top = max(float(np.max(np.abs(d["amplitude"]))) for d in mode.decays)
     if tried:
         mode.decays = _drop_first(mode.decays, tried)
         mode.fits = {}
         _fit_all(mode, follow, laws)
+    kept = max(float(np.max(np.abs(d["amplitude"]))) for d in mode.decays) / max(top, 1e-300)
     full, z = _drift(mode, mode.decays, follow)
     worst = max((abs(v) for v in z.values()), default=0.0)
     if worst > DRIFT_Z:
@@ -2106,7 +2193,8 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
             mode.fits["quadratic"], cov=mode.fits["quadratic"].cov * (worst / DRIFT_Z) ** 2)
     sizes = np.array([d["amplitude"].size for d in mode.decays])
     short = float(np.sum(sizes[sizes < 2 * MIN_CYCLES + 2])) / float(np.sum(sizes))
-    return {**z, "dropped": float(tried), "untested": float(not z or short > 0.5),
+    return {**z, "dropped": float(tried), "kept_amplitude": kept,
+            "untested": float(not z or short > 0.5),
             **_start_sensitivity(mode, follow, tried, shortest)}
 
 
@@ -2356,6 +2444,14 @@ def _warnings(m: ModeIdentification) -> list[str]:
     off = _off_peak(m)
     if off:
         out.append(off)
+    wander = m.start_drift.get("frequency_wander")
+    if wander is not None:
+        out.append(f"the frequency is not the same over each decay: the early, middle and late "
+                   f"cycles give {m.start_drift['frequency_low']:.5g} to "
+                   f"{m.start_drift['frequency_high']:.5g} Hz, further apart than their noise "
+                   "explains (a drifting frequency, a close mode or a line pulling some cycles, "
+                   "a stiffness that changes with amplitude); its interval is widened "
+                   f"{_fold(wander)}")
     cycles = m.extrema_count / 2.0
     if cycles < 5:
         out.append(f"only {cycles:.1f} cycles above the noise floor: too few for a reliable "
@@ -2366,6 +2462,15 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    "cycles of each decay are left out: the decay's start is not a free decay "
                    "with this law (a base still moving, a law that misfits the large cycles); "
                    f"their intervals are widened {_fold(drift / DRIFT_Z)}")
+    kept = m.start_drift.get("kept_amplitude", 1.0)
+    if kept < START_KEPT_WARNING:
+        cycles = m.start_drift.get("dropped", 0.0) / 2.0
+        out.append(f"the law holds only below {100 * kept:.0f} % of the decays' largest "
+                   f"amplitude: their first {cycles:.1f} cycles do not follow it (fitted with "
+                   "them, C_i and C_f move beyond their noise), so they were left out. The "
+                   "large amplitudes follow another law (damping that grows with another "
+                   "power of the velocity) or are still forced; C_i and C_f describe the "
+                   "smaller amplitudes only")
     if m.start_drift.get("untested"):
         short = 2 * MIN_CYCLES + 2
         count = sum(d.amplitude.size < short for d in m.decays)
@@ -2739,6 +2844,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             _take_joint(mode)
         if (ratio := _band_noise_ratio(mode, fs)) is not None:
             mode.drift["band_noise"] = ratio
+        if mode.wander is not None:
+            mode.drift.update(zip(("frequency_wander", "frequency_low", "frequency_high"),
+                                  mode.wander))
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])

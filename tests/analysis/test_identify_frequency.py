@@ -112,3 +112,28 @@ def test_the_noise_s_shift_of_the_first_crossings_is_not_read_as_a_frequency():
         errors.append(mode.damped_frequency_hz / 30.78 - 1.0)
     assert abs(np.mean(errors)) < 6e-4, errors
     assert max(abs(e) for e in errors) < TARGET, errors
+
+
+@pytest.mark.parametrize("drift", [0.0, 0.002])
+def test_a_frequency_that_drifts_over_the_decay_is_warned_and_its_interval_widened(drift):
+    """A linear decay whose frequency drifts (a temperature change, say) by 0.2 % over 4 s:
+    the crossings fit one frequency to it with an interval of 0.001 % that holds the frequency
+    of no part of the decay. The early, middle and late cycles disagree beyond their noise, so
+    the frequency is warned and its interval widened to hold the decay's own frequencies; the
+    same decay without the drift is not."""
+    fs, duration, f0, zeta = 2000.0, 4.0, 17.0, 0.005
+    t = np.arange(int(duration * fs)) / fs
+    frequency = f0 * (1.0 + drift * t / duration)
+    x = np.exp(-zeta * 2 * np.pi * f0 * t) * np.cos(2 * np.pi * np.cumsum(frequency) / fs)
+    x += 0.01 * np.random.default_rng(0).standard_normal(t.size)
+    mode = identify(x, fs).modes[0]
+    wander = [w for w in mode.warnings if "frequency is not the same over each decay" in w]
+    lo, hi = mode.frequency_ci
+    natural = f0 / np.sqrt(1.0 - zeta ** 2)     # the cosine's is the damped frequency
+    if drift == 0.0:
+        assert not wander, mode.warnings
+        assert lo <= natural <= hi and hi - lo < 1e-4 * f0
+    else:
+        assert len(wander) == 1 and "interval is widened" in wander[0], mode.warnings
+        third = f0 * (1.0 + drift / 3.0)        # the frequency a third into the decay
+        assert lo <= third <= hi, (lo, third, hi)
