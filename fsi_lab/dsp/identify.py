@@ -99,6 +99,7 @@ from fsi_lab.dsp.laws import (
     LawFit,
     Whitener,
     compare_laws,
+    decay_rate,
     fit_law,
     simulate_decay,
 )
@@ -235,6 +236,9 @@ MAX_DROP_SHARE = 0.3
 #: A start search that leaves the law fitted below this share of the decays' largest
 #: amplitude is warned: the large amplitudes, which carry C_f, follow something else.
 START_KEPT_WARNING = 0.7
+#: ... and when leaving the large amplitudes out changes the damping the law gives at the
+#: largest by more than this share (not a noise-free record's rounding).
+START_KEPT_CHANGE = 0.05
 #: Moves of the coefficients beyond this many standard errors widen their intervals.
 DRIFT_Z = 2.5
 #: Starts of a decay tried by :func:`_stable_start` (extrema left out of every decay).
@@ -404,7 +408,9 @@ class ModeIdentification:
     start_drift
         ``dropped``: first extrema of each decay left out because the law did not hold there
         yet (:func:`_stable_start`); ``kept_amplitude``: the largest extremum fitted over the
-        largest measured (1 when none were left out); ``untested``: 1 when most extrema lie
+        largest measured (1 when none were left out), and ``kept_change``: how much
+        leaving them out changed the damping rate the quadratic law gives at the largest
+        amplitude, relative; ``untested``: 1 when most extrema lie
         in decays too short for that test; ``a`` and ``beta``: how far the quadratic law's
         coefficients still move, in standard errors, when more are left out (its covariance
         is widened when more than chance allows); ``split_a``, ``split_beta``: how far they
@@ -1760,7 +1766,7 @@ def _take_joint(mode: _Mode) -> None:
     mode.w0_se = math.sqrt(max(float(joint["cov"][-2, -2]), 0.0)) * (
         mode.wander[0] if mode.wander is not None else 1.0)
     mode.w0_dof = int(joint["dof"])
-    band_checks = ("a", "beta", "dropped", "kept_amplitude", "untested")
+    band_checks = ("a", "beta", "dropped", "kept_amplitude", "kept_change", "untested")
     mode.drift = {k: v for k, v in mode.drift.items()
                   if k not in band_checks and not k.startswith("start_")}
     mode.drift.update({"joint_modes": float(joint["modes"]),
@@ -2167,6 +2173,7 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
     the start kept (``dropped``: extrema left out per decay)."""
     shortest = min(d["amplitude"].size for d in mode.decays)
     tried = 0
+    every: LawFit | None = None            # the law fitted to every extremum
     for count in START_COUNTS:
         if count > MAX_DROP_SHARE * shortest:
             break
@@ -2177,6 +2184,7 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
             full, z = _drift(mode, decays, follow)
         except AnalysisError:
             break
+        every = every or full
         tried = count
         if not z or max(abs(v) for v in z.values()) <= DRIFT_Z:
             break
@@ -2186,6 +2194,14 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
         mode.fits = {}
         _fit_all(mode, follow, laws)
     kept = max(float(np.max(np.abs(d["amplitude"]))) for d in mode.decays) / max(top, 1e-300)
+    # What leaving them out changed: the damping at the largest amplitude, by the law fitted
+    # with them and by the law fitted without (a noise-free record may leave out cycles for a
+    # drift of its rounding alone, which changes nothing)
+    change = 0.0
+    if tried and every is not None:
+        rates = [float(decay_rate("quadratic", fit.params, np.array([top]), mode.w0, follow)[0])
+                 for fit in (every, mode.fits["quadratic"])]
+        change = abs(rates[1] - rates[0]) / max(abs(rates[0]), 1e-300)
     full, z = _drift(mode, mode.decays, follow)
     worst = max((abs(v) for v in z.values()), default=0.0)
     if worst > DRIFT_Z:
@@ -2193,7 +2209,7 @@ def _stable_start(mode: _Mode, follow: str, laws: Sequence[str]) -> dict[str, fl
             mode.fits["quadratic"], cov=mode.fits["quadratic"].cov * (worst / DRIFT_Z) ** 2)
     sizes = np.array([d["amplitude"].size for d in mode.decays])
     short = float(np.sum(sizes[sizes < 2 * MIN_CYCLES + 2])) / float(np.sum(sizes))
-    return {**z, "dropped": float(tried), "kept_amplitude": kept,
+    return {**z, "dropped": float(tried), "kept_amplitude": kept, "kept_change": change,
             "untested": float(not z or short > 0.5),
             **_start_sensitivity(mode, follow, tried, shortest)}
 
@@ -2463,12 +2479,14 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    "with this law (a base still moving, a law that misfits the large cycles); "
                    f"their intervals are widened {_fold(drift / DRIFT_Z)}")
     kept = m.start_drift.get("kept_amplitude", 1.0)
-    if kept < START_KEPT_WARNING:
+    change = m.start_drift.get("kept_change", 0.0)
+    if kept < START_KEPT_WARNING and change > START_KEPT_CHANGE:
         cycles = m.start_drift.get("dropped", 0.0) / 2.0
         out.append(f"the law holds only below {100 * kept:.0f} % of the decays' largest "
                    f"amplitude: their first {cycles:.1f} cycles do not follow it (fitted with "
-                   "them, C_i and C_f move beyond their noise), so they were left out. The "
-                   "large amplitudes follow another law (damping that grows with another "
+                   "them, C_i and C_f move beyond their noise, and the damping it gives at "
+                   f"the largest amplitude by {100 * change:.0f} %), so they were left out. "
+                   "The large amplitudes follow another law (damping that grows with another "
                    "power of the velocity) or are still forced; C_i and C_f describe the "
                    "smaller amplitudes only")
     if m.start_drift.get("untested"):
