@@ -42,8 +42,8 @@ falls below the component's noise floor, HVD edges left out on both sides:
   weighted by E_m (as the HVD's mean frequency is: the noisy tail counts little), over the
   component's measured frequency F_m (not over f_m sample by sample: a phase glitch that takes
   f_m through zero for a few samples would weigh without bound; samples where f_m is 50 % or
-  more off F_m, phase glitches, are left out), and ``frequency_rms_error_pct`` its weighted
-  RMS (:func:`frequency_errors`);
+  more off F_m, or f_s off the model component's, phase glitches, are left out), and
+  ``frequency_rms_error_pct`` its weighted RMS (:func:`frequency_errors`);
 - ``backbone_error_pct`` = 100 mean((f_s(A) - f_m) / f_m) over the measured backbone points
   inside the decay span whose amplitude A lies within the model's (f_s(A) interpolated in
   ln A), weighted by A^2 (as ``equivalent-damping`` weights its fit: additive noise puts an
@@ -295,15 +295,17 @@ def component_curves(c: Any, smooth: int, method: str) -> tuple[Any, Any]:
 
 
 def frequency_errors(measured_hz: np.ndarray, model_hz: np.ndarray, envelope: np.ndarray,
-                     reference_hz: float) -> tuple[float, float]:
+                     reference_hz: float, model_reference_hz: float) -> tuple[float, float]:
     """The model's instantaneous frequency error over a compared decay, percent: the mean and
     the RMS of ``model_hz - measured_hz`` (Hz, sample by sample) weighted by the measured
     ``envelope``, over the component's measured frequency ``reference_hz``. Samples whose
-    measured frequency is off ``reference_hz`` by :data:`FREQUENCY_GLITCH` or more of it are
-    left out: no oscillation of one mode does that, a phase glitch of its decomposition does
-    (where another mode or the excitation's transient crosses it), and a few of them would
-    outweigh the rest. Returns ``(mean, rms)``; NaN when no sample is left."""
-    kept = np.abs(measured_hz - reference_hz) < FREQUENCY_GLITCH * reference_hz
+    measured frequency is off ``reference_hz``, or whose model frequency is off the model
+    component's ``model_reference_hz``, by :data:`FREQUENCY_GLITCH` or more are left out: no
+    oscillation of one mode does that, a phase glitch of its decomposition does (where
+    another mode or the excitation's transient crosses it, on either side), and a few of
+    them would outweigh the rest. Returns ``(mean, rms)``; NaN when no sample is left."""
+    kept = (np.abs(measured_hz - reference_hz) < FREQUENCY_GLITCH * reference_hz) & (
+        np.abs(model_hz - model_reference_hz) < FREQUENCY_GLITCH * model_reference_hz)
     if not kept.any() or float(np.sum(envelope[kept])) <= 0.0:
         return math.nan, math.nan
     weight = envelope[kept] / float(np.sum(envelope[kept]))
@@ -490,7 +492,7 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> ModalComparison:
         with np.errstate(divide="ignore", invalid="ignore"):
             lr = np.log(es / em)
         env_log = math.sqrt(float(np.mean(lr ** 2))) if np.all(np.isfinite(lr)) else math.inf
-        mean_f, rms_f = frequency_errors(fr_m[win], fr_s[win], em, f_m)
+        mean_f, rms_f = frequency_errors(fr_m[win], fr_s[win], em, f_m, float(freqs_s[j]))
         figures = {"c_i": c_i, "c_f": c_f, "mode": mode_of(f_m, natural), "model_index": j,
                    "natural_frequency_hz": float(natural[mode_of(f_m, natural) - 1]),
                    "measured_frequency_hz": f_m, "model_frequency_hz": float(freqs_s[j]),

@@ -74,8 +74,11 @@ def fsi_lab_summary_lines(summary, component):
         return SummaryText(keys=("modal_model",))
     source = (summary.get("modal_model") or {}).get("c_source")
     origin = f" from {source}" if isinstance(source, str) and source else ""
+    error = model.get("frequency_error_pct")
+    # (None when every compared sample's instantaneous frequency was a glitch)
+    frequency = f"{error:+.2f} %" if isinstance(error, (int, float)) else "not measured"
     return SummaryText(keys=("modal_model",), lines=(
         f"modal model (C_i = {model['c_i']:.4g} kg/(m s), C_f = {model['c_f']:.4g} kg/m^2"
         f"{origin}) vs "
         f"measurement: envelope RMS error {100 * model['envelope_rms_error']:.1f} %, "
-        f"frequency error {model['frequency_error_pct']:+.2f} %",))
+        f"frequency error {frequency}",))
