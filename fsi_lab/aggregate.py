@@ -218,7 +218,7 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
 
 
 #: A number in a warning (its values across runs are given as a range).
-_NUMBER = re.compile(r"(?<![\w.])\d+(?:\.\d+)?")
+_NUMBER = re.compile(r"(?<![\w.])[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
 
 
 def _gist(warning: str) -> str:

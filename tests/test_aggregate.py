@@ -450,3 +450,14 @@ def test_fsi_lab_aggregate_takes_directories_and_run_files_together(files, tmp_p
     code, _, err = run_main("aggregate", str(folder), str(tmp_path / "empty"),
                             "--mass-per-length", str(MASS))
     assert code == 2 and f"{tmp_path / 'empty'}: " in err
+
+
+def test_the_numbers_of_pooled_warnings_keep_their_signs_and_exponents():
+    """A pooled mode's warnings give each number's range across runs: a negative number keeps
+    its sign, and one in exponent notation is one number, not a mantissa and an exponent."""
+    from fsi_lab.aggregate import _warning_kinds
+
+    runs = [{"warnings": ["the start moves C_f by -1.2 % at a noise of 2e-05 m/s"]},
+            {"warnings": ["the start moves C_f by -7.35 % at a noise of 5.1e-06 m/s"]}]
+    assert _warning_kinds(runs) == [
+        ("the start moves C_f by -7.35 to -1.2 % at a noise of 5.1e-06 to 2e-05 m/s", 2)]
