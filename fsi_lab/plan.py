@@ -342,11 +342,6 @@ def parse_plan(text: str, path: Path) -> Plan:
         raise ProfileError(f"{path}: plan.profile: {exc}") from None
     _seed_runs(runs, profile_text, str(profile_path))
     total = len(runs)
-    if stop_when is not None and stop_when.min_runs > total:
-        raise ProfileError(f"{path}: plan.stop_when.min_runs: {stop_when.min_runs} is more than "
-                           f"the plan's {total} run{'s' * (total != 1)}, so [plan.stop_when] "
-                           f"can never act; expected at most {total} (or more runs in the "
-                           "plan)")
     return Plan(path=path, text=text, name=plan["name"], profile_path=profile_path,
                 profile_text=profile_text, on_failure=plan["on_failure"],
                 runs=tuple(PlannedRun(total=total, **run) for run in runs),
@@ -419,6 +414,18 @@ def _seed_runs(runs: list[dict[str, Any]], profile_text: str, where: str) -> Non
 def is_seed(override: str) -> bool:
     """Whether ``override`` (``KEY=VALUE``) sets ``bench.seed``."""
     return override.split("=", 1)[0].strip() == "bench.seed"
+
+
+def require_stop_can_act(plan: Plan) -> None:
+    """ProfileError when ``[plan.stop_when]`` asks for more runs than the plan has, so it
+    could never act. Checked when a sequence starts, not on resume: a sequence started with
+    such a plan before this check continues as it was recorded."""
+    total, stop_when = len(plan.runs), plan.stop_when
+    if stop_when is not None and stop_when.min_runs > total:
+        raise ProfileError(f"{plan.path}: plan.stop_when.min_runs: {stop_when.min_runs} is "
+                           f"more than the plan's {total} run{'s' * (total != 1)}, so "
+                           f"[plan.stop_when] can never act; expected at most {total} (or more "
+                           "runs in the plan)")
 
 
 def load_plan(path: str | Path) -> Plan:

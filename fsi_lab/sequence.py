@@ -31,7 +31,16 @@ from typing import Any
 from fsi_lab.bench_access import unsafe_roles
 from fsi_lab.errors import FsiLabError, InputFileError, ProfileError, RunAborted
 from fsi_lab.events import EventBus, Progress
-from fsi_lab.plan import STOP_SYMBOLS, STOP_UNITS, Plan, PlannedRun, check_plan, is_seed, load_plan
+from fsi_lab.plan import (
+    STOP_SYMBOLS,
+    STOP_UNITS,
+    Plan,
+    PlannedRun,
+    check_plan,
+    is_seed,
+    load_plan,
+    require_stop_can_act,
+)
 from fsi_lab.registry import Registry
 from fsi_lab.runfile import read_analysis_summary, read_run, utc_now
 from fsi_lab.seqfile import SEQUENCE_FILE, SequenceRecord, compact_results, holder, load_record
@@ -429,6 +438,7 @@ def prepare(plan_path: Path, registry: Registry) -> tuple[Plan, dict[int, dict[s
         A run is refused (:func:`~fsi_lab.plan.check_plan`), or the plan itself.
     """
     plan = load_plan(plan_path)
+    require_stop_can_act(plan)
     reports = check_plan(plan, registry)
     return plan, {index: summarise_safety(report) for index, report in reports.items()}
 

@@ -345,3 +345,16 @@ def test_a_sequence_in_which_no_run_identified_anything_says_so_and_exits_2(tmp_
     assert data["nothing_identified"].startswith("none of the 2 completed runs")
     assert all(run["error"].startswith("nothing was identified: channel tip_velocity: hvd")
                and not any(run["results"].values()) for run in data["runs"])
+
+
+def test_a_stop_that_can_never_act_is_refused_at_the_start_not_on_resume(tmp_path, base):
+    """min_runs beyond the plan's runs is refused when a sequence starts; the plan itself still
+    loads, so a sequence started before that check resumes with the plan it recorded."""
+    from fsi_lab.errors import ProfileError
+    from fsi_lab.plan import load_plan, require_stop_can_act
+
+    path = write_plan(tmp_path, "[[step]]\n", plan_extra=STOP + "min_runs = 20\n")
+    plan = load_plan(path)                      # what resume reads: accepted
+    assert plan.stop_when.min_runs == 20 and len(plan.runs) == 1
+    with pytest.raises(ProfileError, match="can never act"):
+        require_stop_can_act(plan)
