@@ -374,7 +374,10 @@ def recorded_full_scale(run: RunData, name: str) -> tuple[float, str] | None:
     settings = (run.instruments.get("acquisition") or {}).get("settings") or {}
     ranges = settings.get("ranges_v")
     try:
-        volts = float(ranges[str(int(attrs["input"]))])
+        number = int(attrs["input"])
+        # by input number once configured; a profile's list (inputs 1, 2, ...) before that
+        volts = float(ranges[str(number)] if isinstance(ranges, dict)
+                      else ranges[number - 1] if number >= 1 else math.nan)
         sensitivity = float(attrs["sensitivity"])
     except (KeyError, TypeError, ValueError, IndexError):
         return None

@@ -295,3 +295,22 @@ def test_analysing_a_completed_run_gives_no_such_warning(measured_run, tmp_path)
     path = _damaged(measured_run, tmp_path, lambda handle: None)
     code, out, err = run_main("analyze", str(path), "--json")
     assert code == 0 and "cut short" not in out, out
+
+
+def test_the_full_scale_is_read_from_a_range_list_as_from_the_configured_ranges():
+    """``ranges_v`` is recorded by input number once the digitiser is configured, and as the
+    profile's list (inputs 1, 2, ...) where a driver records its settings before: both give the
+    channel's full scale, so the damaged-data check is not skipped for the second."""
+    from types import SimpleNamespace
+
+    from fsi_lab.runfile import recorded_full_scale
+
+    attrs = {"tip": {"input": 2, "sensitivity": 8.0, "sensitivity_units": "V/(m/s)"}}
+    for ranges in ({"1": 10.0, "2": 10.0}, [10.0, 10.0, 5.0, 5.0]):
+        run = SimpleNamespace(channel_attrs=attrs,
+                              instruments={"acquisition": {"settings": {"ranges_v": ranges}}})
+        full, how = recorded_full_scale(run, "tip")
+        assert full == 1.25 and "input 2 range of 10 V" in how
+    run = SimpleNamespace(channel_attrs={"tip": {**attrs["tip"], "input": 0}},
+                          instruments={"acquisition": {"settings": {"ranges_v": [10.0]}}})
+    assert recorded_full_scale(run, "tip") is None
