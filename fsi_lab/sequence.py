@@ -124,7 +124,7 @@ class SequenceRunner:
             reason = str(exc) or INTERRUPTED
             for entry in self.record.runs:
                 if entry["status"] == "running":  # outside the run: its file says how it ended
-                    settle_unfinished(self.record, entry)
+                    settle_unfinished(self.record, entry, self.registry)
             status, error = "interrupted", f"interrupted between runs: {reason}"
         except BaseException as exc:
             error = f"{type(exc).__name__}: {exc}"
@@ -504,7 +504,7 @@ def resume(directory: Path, registry: Registry) -> tuple[Plan, SequenceRecord]:
             for run, overrides in zip(plan.runs, recorded)))
     for entry in record.runs:
         if entry["status"] == "running":
-            settle_unfinished(record, entry)
+            settle_unfinished(record, entry, registry)
     if all(entry["status"] in ("completed", "skipped") for entry in record.runs) \
             and not analyses_to_complete(plan, record, registry):
         return plan, record  # nothing to resume: the record stays as it is
@@ -573,10 +573,13 @@ def with_later_analyses(record: SequenceRecord) -> SequenceRecord:
     return record
 
 
-def settle_unfinished(record: SequenceRecord, entry: dict[str, Any]) -> None:
+def settle_unfinished(record: SequenceRecord, entry: dict[str, Any],
+                      registry: Registry | None = None) -> None:
     """A run recorded as running whose end was not recorded (the process was killed, or
     interrupted just before or after the run): its run file says how it ended, completed (the
-    record was not updated in time) or not; without one nothing was driven."""
+    record was not updated in time) or not; without one nothing was driven. A completed run
+    whose stored analysis identified nothing gets that refusal as its error, as a run the
+    sequence saw end does (judged with ``registry``, the plugins that analysed it)."""
     path = record.directory / entry["run_file"] if entry["run_file"] else None
     if path is None or not path.exists():
         entry.update(status="aborted", run_file="", stop_time=entry["stop_time"] or utc_now(),
@@ -591,10 +594,12 @@ def settle_unfinished(record: SequenceRecord, entry: dict[str, Any]) -> None:
     except InputFileError as exc:
         status, error = "running", f"its run file cannot be read: {exc}"
     if status == "completed":
+        refused = nothing_identified(summary, registry) if summary and registry else None
         entry.update(status="completed", results=compact_results(summary),
                      analysed=summary is not None,
-                     error="" if summary else "the sequence ended before the run's analysis "
-                     f"was stored; fsi-lab sequence --resume {record.directory} analyses it")
+                     error=(refused or "") if summary else "the sequence ended before the "
+                     f"run's analysis was stored; fsi-lab sequence --resume {record.directory} "
+                     "analyses it")
         return
     if status not in ("aborted", "failed"):
         status = "running"

@@ -217,3 +217,28 @@ def test_an_analysis_that_identified_nothing_is_not_redone_on_every_resume(tmp_p
     assert lacks_analysis(record, entry)                          # an older record
     assert not lacks_analysis(record, {**entry, "results": {"tip": []}})
     assert not lacks_analysis(record, {**entry, "run_file": "gone.h5", "analysed": False})
+
+
+def test_a_run_settled_from_its_file_keeps_its_refusal(tmp_path):
+    """A run whose process was killed after its analysis was stored, but before the record
+    said so, is settled from its run file on resume: when that analysis identified nothing,
+    the run's error says so, as for a run the sequence saw end, so that a sequence in which no
+    run identified anything still exits 2."""
+    from types import SimpleNamespace
+
+    from support import write_decay_run
+
+    from fsi_lab.sequence import NOTHING_IDENTIFIED, settle_unfinished
+
+    noise = write_decay_run(tmp_path / "noise.h5", start=0.0)        # no mode: noise alone
+    code, _, err = run_main("analyze", str(noise))
+    assert code == 2, err
+    decay = write_decay_run(tmp_path / "decay.h5")
+    code, _, err = run_main("analyze", str(decay), "--mass-per-length", "0.1")
+    assert code == 0, err
+    record = SimpleNamespace(directory=tmp_path)
+    for name, refused in (("noise.h5", True), ("decay.h5", False)):
+        entry = {"run_file": name, "status": "running", "error": "", "stop_time": ""}
+        settle_unfinished(record, entry, load_registry())
+        assert entry["status"] == "completed" and entry["analysed"] is True
+        assert entry["error"].startswith(NOTHING_IDENTIFIED) == refused, entry["error"]
