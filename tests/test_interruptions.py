@@ -145,16 +145,21 @@ def test_a_swallowed_sigterm_during_analyze_stops_it_before_it_writes(monkeypatc
     assert read_analysis_summary(path) == before  # the stored analysis is left as it was
 
 
-def test_a_signal_just_before_the_safe_state_does_not_skip_it(monkeypatch, tmp_path):
+def _interrupt_the_first_hold(monkeypatch) -> None:
+    """Ctrl+C in the instant before the run first holds signals (as the bench is made safe)."""
     held, calls = RunSignals.held, []
 
     def interrupted_once(self):
         calls.append(1)
-        if len(calls) == 1:  # as if Ctrl+C came in the instant before signals are held
+        if len(calls) == 1:
             raise KeyboardInterrupt
         return held(self)
 
     monkeypatch.setattr(RunSignals, "held", interrupted_once)
+
+
+def test_a_signal_just_before_the_safe_state_does_not_skip_it(monkeypatch, tmp_path):
+    _interrupt_the_first_hold(monkeypatch)
     code, out, err = run_main("run", str(_profile(tmp_path)), "--out", str(tmp_path / "runs"),
                               "--json")
     data = json.loads(out)
@@ -247,15 +252,7 @@ def test_a_second_signal_while_finalizing_is_said_of_a_completed_record_only(
     one to skip."""
     from fsi_lab.runner import Runner
 
-    held, calls = RunSignals.held, []
-
-    def interrupted_once(self):
-        calls.append(1)
-        if len(calls) == 1:  # as if Ctrl+C came in the instant before signals are held
-            raise KeyboardInterrupt
-        return held(self)
-
-    monkeypatch.setattr(RunSignals, "held", interrupted_once)
+    _interrupt_the_first_hold(monkeypatch)
     if during_acquisition:
         def interrupted(self, block, sensitivities):
             raise KeyboardInterrupt
