@@ -175,6 +175,7 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
     differing = [m for m in modes if abs(m.mass_per_length / mass - 1) > 1e-9
                  or abs(m.modal_scale / scale - 1) > 1e-9]
     c_i = c_f = None
+    power_warning: list[str] = []
     if differing:
         entry["fit_error"] = ("the runs have different beams (mu + M or mode shape differ: "
                               f"{', '.join(labels[p] for p, m in members if m in differing)}); "
@@ -206,12 +207,19 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
                                     "c_f": _finite(union.spread_chi2[1])},
                     "accuracy": {"c_i": _finite(union.accuracy_factor[0]),
                                  "c_f": _finite(union.accuracy_factor[1])}}})
+            if union.power is not None:
+                from fsi_lab.dsp.identify import fluid_power_warning
+
+                low, high = union.power.interval(LEVEL)
+                entry.update(fluid_power=union.power.power, fluid_power_ci95=[low, high])
+                power_warning = fluid_power_warning(union.power.power, low, high,
+                                                    union.power.change)
     entry["between_runs"] = {
         "c_i": _spread([r["c_i"] for r in per_run], [r["c_i_ci95"] for r in per_run]),
         "c_f": _spread([r["c_f"] for r in per_run], [r["c_f_ci95"] for r in per_run]),
         "frequency_hz": _spread([r["frequency_hz"] for r in per_run],
                                 [r["frequency_ci95_hz"] for r in per_run])}
-    entry["warnings"] = _pooled_warnings(per_run)
+    entry["warnings"] = power_warning + _pooled_warnings(per_run)
     curves, axis, lo_hi = _curves(members, c_i, c_f, frequency)
     entry.update(amplitude_range_m=lo_hi, per_run=per_run, axis=axis, curves=curves)
     return entry

@@ -39,7 +39,15 @@ import scipy.stats as sstats
 
 from fsi_lab.accuracy import LAW_ACCURACY
 from fsi_lab.dsp.identify import DecayExtrema
-from fsi_lab.dsp.laws import LawComparison, LawFit, Whitener, compare_laws, fit_law
+from fsi_lab.dsp.laws import (
+    LawComparison,
+    LawFit,
+    PowerTest,
+    Whitener,
+    compare_laws,
+    fit_law,
+    fluid_power,
+)
 from fsi_lab.errors import AnalysisError
 
 #: The laws fitted to the union: the quadratic one (C_i and C_f) and the viscous one, to say
@@ -124,6 +132,11 @@ class UnionFit:
         What was fitted.
     w0, alpha
         The oscillator of the fit (medians of the runs').
+    power
+        The power of the velocity the quadratic law's fluid term grows with, tested on the
+        union (:func:`fsi_lab.dsp.laws.fluid_power`; its standard error at the runs' noise
+        scale, ``noise_factor``); None when C_f's interval includes 0, for a weighted mean,
+        or when the test cannot be made.
     pooled
         ``"union"``, or ``"weighted mean"`` when a run's mode was fitted together with a close
         mode to its record's samples (:attr:`RunDecays.joint`): its extrema are smeared by the
@@ -147,6 +160,7 @@ class UnionFit:
     w0: float
     alpha: float
     pooled: str = "union"
+    power: PowerTest | None = None
 
     def value(self, name: str) -> float:
         """``a`` (1/s) or ``beta`` (1/U)."""
@@ -249,7 +263,19 @@ def fit_union(runs: Sequence[RunDecays]) -> UnionFit:
     exact = variance == 0.0  # (a noise-free union fitted exactly: its interval is the floor)
     cov[exact, exact] = floor[exact] ** 2
     accuracy_factor[exact & (floor > 0)] = math.inf
-    return UnionFit(fit=quad, cov=cov, comparison=comparison,
+    power = None
+    lower = quad.params[1] - float(sstats.t.ppf(0.975, max(quad.dof, 1))) * math.sqrt(
+        max(float(cov[1, 1]), 0.0))
+    if pooled == "union" and lower > 0.0:
+        try:
+            power = fluid_power(quad, whiteners)
+        except AnalysisError:
+            power = None
+        else:
+            # (not by the spread between runs: runs over different amplitude ranges disagree
+            # on a quadratic law because its power is wrong, which is what the test measures)
+            power = dataclasses.replace(power, se=power.se * noise_factor)
+    return UnionFit(fit=quad, cov=cov, comparison=comparison, power=power,
                     widenings=np.array([run.widening for run in runs]),
                     noise_factor=noise_factor, spread_factor=spread_factor, spread_chi2=chi2,
                     accuracy_factor=accuracy_factor,

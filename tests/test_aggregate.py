@@ -121,6 +121,54 @@ def test_a_pooled_mode_says_which_warnings_its_runs_carry(extracts):
         "floor (3 runs). Pooling")
 
 
+def _with_power(run, power, seed):
+    """``run`` with its mode's extrema replaced by those of a drag growing as |v|^power (as
+    large as a quadratic one with beta = 4 /m at 0.2 m/s, and a viscous a = 0.1 /s), from the same
+    first extremum at the same half cycles, with independent errors of 1 mm/s, and its own
+    quadratic law refitted to them."""
+    import dataclasses
+
+    from scipy.integrate import solve_ivp
+
+    from fsi_lab.dsp.laws import fit_law
+
+    mode = run.modes[0]
+    w0, a = mode.w0, 0.1
+    k = 4.0 * 0.2 ** (2.0 - power)
+    rng = np.random.default_rng(seed)
+    decays = []
+    for d in mode.decays:
+        path = solve_ivp(lambda _, y: (y[1], -2 * a * y[1] - k * abs(y[1]) ** (power - 1)
+                                       * y[1] - w0 * w0 * y[0]),
+                         (0.0, 20.0), (0.0, float(d.amplitude[0])), rtol=1e-10, atol=1e-13,
+                         events=lambda _, y: 2 * a * y[1] + k * abs(y[1]) ** (power - 1) * y[1]
+                         + w0 * w0 * y[0])      # the acceleration's zeros: the velocity's extrema
+        extrema = np.abs(path.y_events[0][:, 1])[:d.amplitude.size]
+        assert extrema.size == d.amplitude.size
+        amplitude = np.abs(extrema + 1e-3 * rng.standard_normal(extrema.size))
+        decays.append(dataclasses.replace(d, amplitude=amplitude,
+                                          values=np.sign(d.values) * amplitude))
+    own = fit_law("quadratic", [d.amplitude for d in decays], w0, alpha=mode.alpha)
+    return dataclasses.replace(run, modes=[dataclasses.replace(
+        mode, decays=decays, params=own.params, cov=own.cov, widening=1.0)])
+
+
+def test_the_union_tests_the_power_of_the_fluid_term(extracts):
+    """Three runs whose drag grows as |v|^1.5: the union's many decays find that power and
+    warn that C_f describes a drag that is not quadratic; the runs of the quadratic law find
+    2 within the interval and say nothing."""
+    runs = [extracts[f"level{k}"] for k in range(3)]
+    (quadratic,) = aggregate_extracts(runs)["modes"]
+    low, high = quadratic["fluid_power_ci95"]
+    assert low < 2.0 < high and quadratic["warnings"] == []
+    (other,) = aggregate_extracts([_with_power(run, 1.5, k)
+                                   for k, run in enumerate(runs)])["modes"]
+    low, high = other["fluid_power_ci95"]
+    assert low < 1.5 < high < 1.9, other["fluid_power_ci95"]
+    assert other["warnings"][0].startswith(
+        f"the fluid damping grows as the velocity to the power {other['fluid_power']:.2f}")
+
+
 def test_the_runs_curves_on_one_amplitude_axis(extracts):
     agg = aggregate_extracts([extracts[f"level{k}"] for k in range(3)])
     (mode,) = agg["modes"]

@@ -72,7 +72,9 @@ number. The steps:
    coefficients still move when more are (:func:`_stable_start`); how far they still move with
    later starts, beyond what the extrema left out explain, widens their intervals
    (:func:`_start_sensitivity`); the law fitted to the larger and the smaller half of the
-   cycles must agree (:func:`_one_law`). Each check that fails is a warning.
+   cycles must agree (:func:`_one_law`); the quadratic law's fluid term must grow with the
+   square of the velocity, not another power (:func:`_law_power`). Each check that fails is
+   a warning.
 """
 
 from __future__ import annotations
@@ -101,6 +103,7 @@ from fsi_lab.dsp.laws import (
     compare_laws,
     decay_rate,
     fit_law,
+    fluid_power,
     simulate_decay,
 )
 from fsi_lab.dsp.spectrum import amplitude_spectrum, averaged_spectrum, find_peaks_interpolated
@@ -239,6 +242,9 @@ START_KEPT_WARNING = 0.7
 #: ... and when leaving the large amplitudes out changes the damping the law gives at the
 #: largest by more than this share (not a noise-free record's rounding).
 START_KEPT_CHANGE = 0.05
+#: The power of the fluid term (step 8d) is warned of when 2 lies outside its 95 % interval
+#: and the damping ratio it gives differs from the quadratic law's by more than this.
+POWER_CHANGE = 0.05
 #: Moves of the coefficients beyond this many standard errors widen their intervals.
 DRIFT_Z = 2.5
 #: Starts of a decay tried by :func:`_stable_start` (extrema left out of every decay).
@@ -418,7 +424,11 @@ class ModeIdentification:
         (:func:`_one_law`); ``start_a``, ``start_beta``: the factors their standard errors
         were widened by for the start's sensitivity (:func:`_start_sensitivity`);
         ``noise_a``, ``noise_beta``: those for the noise's spread through the filters'
-        padding (:func:`_noise_spread`); ``residual_rho``: the lag-1 correlation of the
+        padding (:func:`_noise_spread`); ``fluid_power``, ``fluid_power_low``,
+        ``fluid_power_high``: the power of the velocity the fluid term grows with and its 95 %
+        interval (2 for the quadratic law), and ``fluid_power_change``: how much the damping
+        ratio of a law with that power differs from the quadratic law's over the fitted
+        extrema, relative (:func:`_law_power`); ``residual_rho``: the lag-1 correlation of the
         preferred law's whitened residuals (:func:`_residual_correlation`); ``band_noise``:
         the band's noise, measured before the excitation and after the decays, over the white
         noise's share in it, where measured (:func:`_band_noise_ratio`);
@@ -1410,11 +1420,17 @@ def _scatter_without_decay(mode: _Mode) -> float | None:
     return scatter if scatter > SCATTER_EXCESS else None
 
 
+def _whiteners(mode: _Mode) -> list[Whitener]:
+    """The :class:`.laws.Whitener` of each of the mode's decays (its band's noise correlation
+    at the decay's extrema)."""
+    return [Whitener(d["times"], np.sign(d["values"]), mode.correlation,
+                     d.get("scale", np.ones(d["amplitude"].size))) for d in mode.decays]
+
+
 def _fit_all(mode: _Mode, quantity: str, laws: Sequence[str]) -> None:
     """Fit every law to the mode's corrected extrema (starting from earlier fits)."""
     amps = [d["amplitude"] for d in mode.decays]
-    whiteners = [Whitener(d["times"], np.sign(d["values"]), mode.correlation,
-                          d.get("scale", np.ones(d["amplitude"].size))) for d in mode.decays]
+    whiteners = _whiteners(mode)
     fits = {}
     for law in laws:
         prior = mode.fits.get(law)
@@ -2272,8 +2288,7 @@ def _noise_spread(mode: _Mode, law: str = "quadratic") -> dict[str, float]:
             or min(v.shape[0] for v in devs) < 4:
         return {}
     count = min(v.shape[0] for v in devs)
-    whiteners = [Whitener(d["times"], np.sign(d["values"]), mode.correlation,
-                          d.get("scale", np.ones(d["amplitude"].size))) for d in mode.decays]
+    whiteners = _whiteners(mode)
     moves = np.array([base.influence @ np.concatenate(
         [w.apply(d["noise_dev"][r]) for w, d in zip(whiteners, mode.decays)])
         for r in range(count)])
@@ -2346,6 +2361,46 @@ def _one_law(mode: _Mode, follow: str) -> dict[str, float]:
     return out
 
 
+def _law_power(mode: _Mode) -> dict[str, float]:
+    """Step 8d: the power of the quadratic law's fluid term (:func:`.laws.fluid_power`): a
+    drag that grows with another power of the velocity than its square is fitted well by
+    the quadratic law too, with C_i and C_f that give the wrong damping ratio inside their own
+    amplitude span. Its standard error is widened as the noise's spread widened C_f's
+    (``noise_beta``). Returns ``fluid_power``, its 95 % interval (``fluid_power_low``,
+    ``fluid_power_high``) and ``fluid_power_change`` (the largest relative difference of the
+    damping ratio, over the fitted extrema, between the quadratic law and the law with that
+    power); empty when C_f is not resolved (its interval includes 0: no fluid term to test)
+    or the test cannot be made."""
+    quad = mode.fits["quadratic"]
+    if not quad.interval("beta", LEVEL)[0] > 0.0:
+        return {}
+    try:
+        test = fluid_power(quad, _whiteners(mode))
+    except AnalysisError:
+        return {}
+    test = dataclasses.replace(test, se=test.se * mode.drift.get("noise_beta", 1.0))
+    low, high = test.interval(LEVEL)
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return {}
+    return {"fluid_power": test.power, "fluid_power_low": low, "fluid_power_high": high,
+            "fluid_power_change": test.change}
+
+
+def fluid_power_warning(power: float, low: float, high: float, change: float) -> list[str]:
+    """The warning on a fluid term's power (step 8d) when the quadratic law's 2 lies outside
+    its 95 % interval ``low`` to ``high`` and a law with ``power`` changes the damping ratio
+    by more than :data:`POWER_CHANGE` (relative ``change``) over the fitted amplitudes; else
+    none."""
+    if low <= 2.0 <= high or not change > POWER_CHANGE:
+        return []
+    return [f"the fluid damping grows as the velocity to the power {power:.2f} (95 %: "
+            f"{low:.2f} to {high:.2f}), not as its square: over the fitted amplitudes, the "
+            f"damping ratio the quadratic law gives differs by up to {100 * change:.0f} % "
+            "from that of a law with this power. C_i and C_f are the quadratic law's best "
+            "fit to a drag it does not describe (a flow regime that changes with amplitude, "
+            "friction)"]
+
+
 def _residual_correlation(mode: _Mode, comparison: LawComparison) -> float:
     """Lag-1 correlation of the preferred law's residuals after the fit's whitening (NaN for
     fewer than 8 extrema). The extrema of a band signal err together as the band's noise does
@@ -2353,11 +2408,8 @@ def _residual_correlation(mode: _Mode, comparison: LawComparison) -> float:
     residuals of a law that describes the decay are white, and only what the law misses (a
     beat with a close mode, a drifting frequency, a missing term) leaves them correlated."""
     best = comparison.fits[comparison.preferred]
-    parts = []
-    for d, resid in zip(mode.decays, best.residuals):
-        whitener = Whitener(d["times"], np.sign(d["values"]), mode.correlation,
-                            d.get("scale", np.ones(d["amplitude"].size)))
-        parts.append(whitener.apply(np.asarray(resid, dtype=np.float64)))
+    parts = [whitener.apply(np.asarray(resid, dtype=np.float64))
+             for whitener, resid in zip(_whiteners(mode), best.residuals)]
     r = np.concatenate(parts) if parts else np.empty(0)
     if r.size < 8 or not np.all(np.isfinite(r)):
         return math.nan
@@ -2517,6 +2569,9 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    "this amplitude range (coupling with other modes, an amplitude-dependent "
                    "drag)" + (f"; their intervals are widened {_fold(widened)}"
                               if widened >= 1.005 else ""))
+    if "fluid_power" in m.start_drift:
+        out.extend(fluid_power_warning(*(m.start_drift[f"fluid_power{part}"]
+                                         for part in ("", "_low", "_high", "_change"))))
     # A mode fitted jointly to the record's samples (step 6a) uses no smeared extremum.
     if m.correction > CORRECTION_WARNING and "joint_modes" not in m.start_drift:
         out.append(f"the band filters smear this mode's first cycles by up to "
@@ -2857,6 +2912,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         if mode.joint is None:
             mode.drift.update(_one_law(mode, follow))
             mode.drift.update(_noise_spread(mode))
+            mode.drift.update(_law_power(mode))
             _other_law_spread(mode, follow, laws)
         else:               # (the band fit's range checks would only widen what it replaces)
             _take_joint(mode)

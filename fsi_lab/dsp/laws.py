@@ -35,7 +35,8 @@ criteria follow from the whitened residuals. The fit's Jacobian is exact, not a 
 difference: :func:`extremum_derivatives` carries the derivatives of the state along the same
 Runge-Kutta steps (the tangent of the discrete model, extremum interpolation and friction stops
 included), for about the cost of one integration. :func:`compare_laws` ranks fits of several
-laws by the corrected Akaike criterion.
+laws by the corrected Akaike criterion. :func:`fluid_power` tests, on a quadratic fit,
+whether its fluid term grows with the square of the velocity or with another power.
 """
 
 from __future__ import annotations
@@ -791,8 +792,11 @@ def _forward_banded(lower, y):
             y[i, j] /= d
 
 
-def _start_values(law: str, decays: Sequence[np.ndarray], w0: float) -> np.ndarray:
-    """Starting law parameters from the mean log decrement of the decays."""
+def _start_values(law: str, decays: Sequence[np.ndarray], w0: float,
+                  quantity: str = "velocity") -> np.ndarray:
+    """Starting law parameters from the mean log decrement of the decays: half the rate
+    viscous, half from the other term at the largest velocity amplitude (``w0`` times the
+    largest extremum for extrema of the displacement)."""
     rates = []
     for amp in decays:
         if amp.size >= 2:
@@ -800,7 +804,7 @@ def _start_values(law: str, decays: Sequence[np.ndarray], w0: float) -> np.ndarr
             slope = np.polyfit(k * math.pi / w0, np.log(np.maximum(amp, 1e-300)), 1)[0]
             rates.append(-slope)
     rate = max(float(np.median(rates)) if rates else 1e-3 * w0, 1e-4 * w0)
-    top = max(float(np.max(a)) for a in decays)
+    top = max(float(np.max(a)) for a in decays) * (w0 if quantity == "displacement" else 1.0)
     if law == "viscous":
         return np.array([rate])
     if law == "quadratic":
@@ -972,7 +976,7 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
         return cache["jac"]
 
     law_start = np.asarray(start, dtype=np.float64) if start is not None \
-        else _start_values(law, decays, w0)
+        else _start_values(law, decays, w0, quantity)
     log_starts = np.array([math.log(d[0]) for d in decays])
     x0 = np.concatenate((law_start, log_starts))
     # Start amplitudes stay within a factor e^3 of the first measured extremum; friction
@@ -1023,6 +1027,167 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
                   residuals=[d - m for d, m in zip(decays, fitted)], model=fitted,
                   w0=float(w0), alpha=float(alpha), quantity=quantity, names=LAWS[law],
                   influence=influence)
+
+
+@dataclass(frozen=True)
+class PowerTest:
+    """How the amplitude-dependent damping of a quadratic fit grows with the velocity: the
+    power ``p`` of a term ``beta |x'|^(p - 1) x'`` that would describe the extrema better than
+    the quadratic law's ``beta |x'| x'`` (``p = 2``), from :func:`fluid_power`.
+
+    Attributes
+    ----------
+    power
+        Estimated power (dimensionless; 2 for the quadratic law).
+    se
+        Its standard error.
+    dof
+        Degrees of freedom of its t interval (extrema minus parameters).
+    change
+        Largest relative difference, over the amplitudes of the fitted extrema, between the
+        decay rate (damping ratio) of the quadratic law and that of the law with
+        :attr:`power` fitted to the same extrema (dimensionless; 0.1 is 10 %).
+    """
+
+    power: float
+    se: float
+    dof: int
+    change: float
+
+    @property
+    def z(self) -> float:
+        """``(power - 2) / se``: how many standard errors the power lies from the quadratic
+        law's."""
+        return (self.power - 2.0) / self.se if self.se > 0.0 else 0.0
+
+    def interval(self, level: float = 0.95) -> tuple[float, float]:
+        """Confidence interval of :attr:`power` (t-distribution with :attr:`dof`)."""
+        q = float(sstats.t.ppf(0.5 + 0.5 * level, max(self.dof, 1)))
+        return self.power - q * self.se, self.power + q * self.se
+
+
+#: Points of the amplitude grid :func:`fluid_power` integrates the averaged envelope on.
+POWER_GRID = 2048
+
+
+def fluid_power(fit: LawFit, whiteners: Sequence[Whitener | None] | None = None) -> PowerTest:
+    """Test the power of the quadratic law's fluid term on the extrema it was fitted to.
+
+    The quadratic law's ``beta |x'| x'`` is the drag of a fluid at large amplitude; other
+    regimes damp with another power of the velocity (``|x'|^p``, ``p`` from about 1 to 3),
+    and a law with the wrong power still fits the extrema well, with C_i and C_f that give a
+    wrong damping ratio inside their own amplitude span. This is a score test of ``p = 2``:
+    the fit's whitened residuals are regressed on the derivatives of the extrema with
+    respect to the law's parameters, each decay's start and ``p``, which gives the
+    Gauss-Newton step to the law with a free power (its ``p``, its standard error) without a
+    second fit. The derivative in ``p`` comes from the first-order averaged envelope
+    ``dA/dt = -A r(A)`` (:func:`decay_rate`), whose decay rate ``r`` moves by
+    ``(r - a) ln(A / A_max)`` per unit of ``p``; being only the direction of the alternative,
+    its averaging error does not bias the test, whose residuals are the exact model's.
+
+    Parameters
+    ----------
+    fit
+        A fit of the ``"quadratic"`` law (:func:`fit_law`) with ``beta > 0``.
+    whiteners
+        Per decay, the :class:`Whitener` the fit used (None, or a list of None: independent
+        errors of equal size).
+
+    Returns
+    -------
+    PowerTest
+
+    Raises
+    ------
+    AnalysisError
+        ``fit`` is not of the quadratic law, its ``beta`` is not positive (no fluid term to
+        test), its decay rate is not positive over the extrema, its model decays stop before
+        their last extremum, or there are no more extrema than parameters.
+
+    Examples
+    --------
+    Extrema of a decay damped by ``|x'|^1.5`` (and a little viscous damping), fitted with
+    the quadratic law: the test finds the power.
+
+    >>> import math
+    >>> import numpy as np
+    >>> from scipy.integrate import solve_ivp
+    >>> from fsi_lab.dsp.laws import fit_law, fluid_power
+    >>> w0 = 2 * math.pi * 20.0
+    >>> def motion(t, y):
+    ...     return [y[1], -0.5 * y[1] - 2.0 * abs(y[1]) ** 0.5 * y[1] - w0 * w0 * y[0]]
+    >>> turn = lambda t, y: y[1]
+    >>> path = solve_ivp(motion, (0.0, 2.0), [0.01, 0.0], events=turn, rtol=1e-10, atol=1e-13)
+    >>> amplitude = np.abs(path.y_events[0][1:, 0])
+    >>> quadratic = fit_law("quadratic", [amplitude], w0, quantity="displacement")
+    >>> print(f"{fluid_power(quadratic).power:.1f}")
+    1.5
+    """
+    func = "fluid_power"
+    if fit.law != "quadratic":
+        raise fail(func, f"the fit is of the {fit.law} law; the test needs a quadratic one")
+    a, beta = float(fit.params[0]), float(fit.params[1])
+    if not (math.isfinite(beta) and beta > 0.0):
+        raise fail(func, f"beta = {beta!r}: the quadratic law has no fluid term (beta > 0) "
+                         "whose power could be tested")
+    k = len(fit.model)
+    if whiteners is None:
+        whiteners = [None] * k
+    top = max(float(np.max(m)) for m in fit.model)
+    bottom = min(float(np.min(m)) for m in fit.model)
+    if not (math.isfinite(top) and bottom > 0.0):
+        raise fail(func, "the model decays stop (or leave no extremum above 0): the law "
+                         "cannot be differentiated there")
+    grid = np.geomspace(0.5 * bottom, 2.0 * top, POWER_GRID)
+    rate = decay_rate("quadratic", fit.params, grid, fit.w0, fit.quantity)
+    if not np.all(rate > 0.0):
+        raise fail(func, "the fitted law's decay rate is not positive over the extrema: its "
+                         "envelope is not a decay")
+    fluid = rate - a                            # the fluid term's share of the rate, 1/s
+    integrand = fluid * np.log(grid / top) / (grid * rate * rate)
+    inner = np.concatenate(([0.0], np.cumsum(0.5 * (integrand[1:] + integrand[:-1])
+                                              * np.diff(grid))))
+    residuals, columns, spans = [], [], []
+    for j in range(k):
+        measured = fit.residuals[j] + fit.model[j]
+        amp, _, deriv = _tangent_run("quadratic", a, beta, 0.0, float(fit.starts[j]),
+                                     fit.quantity, fit.w0, fit.alpha, measured.size,
+                                     STEPS_PER_HALF_CYCLE)
+        if amp.size < measured.size:
+            raise fail(func, f"the model of decay {j} stops after {amp.size} of its "
+                             f"{measured.size} extrema")
+        # Averaged envelope: dA/dp = -A r(A) int_A^A0 (r - a) ln(A'/A_max) / (A' r^2) dA'.
+        shift = -amp * decay_rate("quadratic", fit.params, amp, fit.w0, fit.quantity) * (
+            np.interp(amp[0], grid, inner) - np.interp(amp, grid, inner))
+        both = np.column_stack((measured - amp, deriv[:, 0], deriv[:, 1], shift,
+                                deriv[:, 2])) / top
+        if whiteners[j] is not None:
+            both = whiteners[j].apply(both)
+        start = both[:, 4]                      # this decay's own start, projected out here
+        norm = float(start @ start)
+        rows = both[:, :4] - (np.outer(start, start @ both[:, :4]) / norm if norm > 0.0
+                              else 0.0)
+        residuals.append(rows[:, 0])
+        columns.append(rows[:, 1:])
+        spans.append(amp)
+    r, x = np.concatenate(residuals), np.vstack(columns)
+    dof = r.size - k - 3
+    if dof < 1:
+        raise fail(func, f"{r.size} extrema for {k + 3} parameters; the test needs more")
+    step, *_ = np.linalg.lstsq(x, r, rcond=None)
+    left = r - x @ step
+    # Extrema are not measured better than RESOLUTION of the largest (as in fit_law's AICc).
+    s2 = max(float(left @ left) / dof, RESOLUTION * RESOLUTION)
+    try:
+        var = float(np.linalg.inv(x.T @ x)[2, 2]) * s2
+    except np.linalg.LinAlgError:
+        var = math.inf
+    amp = np.concatenate(spans)
+    base = decay_rate("quadratic", fit.params, amp, fit.w0, fit.quantity)
+    moved = base - a
+    change = step[0] + step[1] * moved / beta + step[2] * moved * np.log(amp / top)
+    return PowerTest(power=2.0 + float(step[2]), se=math.sqrt(var) if var >= 0.0 else math.inf,
+                     dof=int(dof), change=float(np.max(np.abs(change) / base)))
 
 
 @dataclass(frozen=True)

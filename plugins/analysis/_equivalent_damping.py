@@ -118,6 +118,10 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
              "decay_starts_s": [float(d.times[0]) for d in mode.decays],
              "decay_ends_s": [float(d.times[-1]) for d in mode.decays],
              "preferred_law": mode.laws.preferred, "laws": laws}
+    if "fluid_power" in mode.start_drift:
+        entry["fluid_power"] = mode.start_drift["fluid_power"]
+        entry["fluid_power_ci95"] = [mode.start_drift["fluid_power_low"],
+                                     mode.start_drift["fluid_power_high"]]
     if mode.laws.preferred == "coulomb":
         coulomb = laws["coulomb"]
         entry["friction_force_per_length"] = coulomb["friction_force_per_length"]

@@ -98,9 +98,13 @@ def test_default_chain_on_a_two_mode_velocity_record():
     assert eq["c_f_ci95"][0] <= q["c2"] <= eq["c_f_ci95"][1]
     assert eq["amplitude_convention"].startswith("measured")
     assert eq["preferred_law"] == "quadratic"
+    # The fluid term's power is quadratic's, within its interval (which is not a point).
+    low, high = eq["fluid_power_ci95"]
+    assert low < eq["fluid_power"] < high and low <= 2.0 <= high and high - low > 0.01
     assert comps[1]["frequency_hz"] == pytest.approx(32.0, rel=0.01)
     # The weak 32 Hz mode is linear: quadratic damping is not resolved there, and says so.
     assert comps[1]["equivalent_damping"]["preferred_law"] == "viscous"
+    assert "fluid_power" not in comps[1]["equivalent_damping"]      # (no fluid term to test)
     assert any("linear + quadratic" in w for w in comps[1]["warnings"])
     # One component per mode (automatic), over the whole record, components x samples.
     hvd_group = groups["tip/hvd"]

@@ -1335,6 +1335,40 @@ def test_large_cycles_left_out_for_another_law_are_warned(law):
         assert not said and mode.start_drift["kept_amplitude"] == 1.0, mode.warnings
 
 
+@pytest.mark.parametrize("power", [1.5, 2.0])
+def test_a_fluid_term_with_another_power_than_two_is_warned(power):
+    """A 17 Hz decay damped by |v|^1.5 (worth 2 % of critical at release, plus 0.2 % viscous)
+    at 3 % noise: the quadratic law fits its extrema within their noise, and no other check
+    fires, but its damping ratio is off by over 10 % inside its own amplitude span. The
+    power's test finds 1.5 to within its interval and says so; the same decay with quadratic
+    damping of the same size has 2 inside its interval and says nothing."""
+    f, fs, x0, viscous, extra = 17.0, 2000.0, 1e-3, 0.002, 0.02
+    w = 2 * math.pi * f
+    v0 = w * x0
+    # harmonic balance: the equivalent viscous coefficient of k |v|^(p-1) v at amplitude V is
+    # k V^(p-1) 2 Gamma(p/2 + 1) / (sqrt(pi) Gamma(p/2 + 3/2))
+    factor = 2 * math.gamma(power / 2 + 1) / (math.sqrt(math.pi) * math.gamma(power / 2 + 1.5))
+    k = extra * 2 * w / (factor * v0 ** (power - 1))
+    t = np.arange(int(6 * fs)) / fs
+    sol = solve_ivp(lambda _, y: (y[1], -2 * viscous * w * y[1]
+                                  - k * abs(y[1]) ** (power - 1) * y[1] - w * w * y[0]),
+                    (0.0, t[-1]), (x0, 0.0), t_eval=t, method="DOP853", rtol=1e-10,
+                    atol=1e-14)
+    v = sol.y[1]
+    v = v + 0.03 * np.max(np.abs(v)) * np.random.default_rng(1).standard_normal(v.size)
+    mode = identify(v, fs).modes[0]
+    drift = mode.start_drift
+    said = [w for w in mode.warnings if w.startswith("the fluid damping grows as the velocity")]
+    assert drift["fluid_power_low"] < power < drift["fluid_power_high"], drift
+    if power == 1.5:
+        assert drift["fluid_power_high"] < 1.95 and drift["fluid_power_change"] > 0.1, drift
+        assert mode.warnings == said and len(said) == 1
+        assert f"to the power {drift['fluid_power']:.2f} (95 %: " in said[0]
+        assert f"up to {100 * drift['fluid_power_change']:.0f} %" in said[0]
+    else:
+        assert not mode.warnings
+
+
 def test_first_cycles_left_out_for_a_noise_free_record_s_rounding_are_not_warned():
     """Four noise-free linear decays: the start search may leave out first cycles whose
     coefficients move by many of their (tiny) standard errors, for rounding alone. Leaving
