@@ -2475,7 +2475,9 @@ def _warnings(m: ModeIdentification) -> list[str]:
     cmp = m.laws
     if "quadratic" in cmp.fits and cmp.preferred != "quadratic":
         other = {"viscous": "viscous (linear) damping alone",
-                 "coulomb": "viscous + Coulomb (dry friction) damping"}[cmp.preferred]
+                 "coulomb": "viscous + Coulomb (dry friction) damping",
+                 "quadratic_coulomb": "linear + quadratic damping with Coulomb (dry "
+                                      "friction) damping beside it"}[cmp.preferred]
         gap = cmp.delta["quadratic"] - cmp.delta[cmp.preferred]
         support = (f"AICc lower by {gap:.1f}" if gap > 0 else
                    f"AICc within {AICC_TIE:g} of the quadratic law's, {-gap:.1f} higher, with "

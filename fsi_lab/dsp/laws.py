@@ -16,6 +16,10 @@ The candidate damping laws (:data:`LAWS`) keep some of the three damping terms:
 ``"coulomb"``
     ``a`` and ``gamma`` (unit of x'' ): dry friction; with ``a = 0`` the envelope falls
     linearly and the motion stops.
+``"quadratic_coulomb"``
+    ``a``, ``beta`` and ``gamma``: the fluid's damping with dry friction beside it (a clamp
+    or a joint that rubs); fitted with either two-term law alone, the friction is read as
+    viscous damping, or the fluid term as friction.
 
 Why not fit the averaged envelope's closed form: the averaging is first order in the damping.
 In water the fluid damping reaches damping ratios of 10 to 25 % over the first cycles, where
@@ -58,6 +62,7 @@ LAWS: dict[str, tuple[str, ...]] = {
     "viscous": ("a",),
     "quadratic": ("a", "beta"),
     "coulomb": ("a", "gamma"),
+    "quadratic_coulomb": ("a", "beta", "gamma"),
 }
 #: Units of the law parameters, with U the unit of x (m for displacement).
 PARAM_UNITS = {"a": "1/s", "beta": "1/U", "gamma": "U/s^2"}
@@ -809,7 +814,10 @@ def _start_values(law: str, decays: Sequence[np.ndarray], w0: float,
         return np.array([rate])
     if law == "quadratic":
         return np.array([0.5 * rate, 0.5 * rate * 3.0 * math.pi / (4.0 * top)])
-    return np.array([0.5 * rate, 0.5 * rate * math.pi * top / 2.0])
+    if law == "coulomb":
+        return np.array([0.5 * rate, 0.5 * rate * math.pi * top / 2.0])
+    third = rate / 3.0                      # each term a third of the rate at the largest
+    return np.array([third, third * 3.0 * math.pi / (4.0 * top), third * math.pi * top / 2.0])
 
 
 def _reduced(blocks: Sequence[np.ndarray], p: int) -> tuple[np.ndarray, np.ndarray]:

@@ -122,10 +122,10 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
         entry["fluid_power"] = mode.start_drift["fluid_power"]
         entry["fluid_power_ci95"] = [mode.start_drift["fluid_power_low"],
                                      mode.start_drift["fluid_power_high"]]
-    if mode.laws.preferred == "coulomb":
-        coulomb = laws["coulomb"]
-        entry["friction_force_per_length"] = coulomb["friction_force_per_length"]
-        entry["friction_force_per_length_ci95"] = coulomb["friction_force_per_length_ci95"]
+    if "gamma" in mode.laws.fits[mode.laws.preferred].names:
+        friction = laws[mode.laws.preferred]
+        entry["friction_force_per_length"] = friction["friction_force_per_length"]
+        entry["friction_force_per_length_ci95"] = friction["friction_force_per_length_ci95"]
     return entry
 
 

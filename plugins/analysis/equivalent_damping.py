@@ -94,7 +94,8 @@ def fsi_lab_summary_lines(component):
 
 
 #: How the summary names each law whose coefficients it prints on a line of their own.
-_LAW_WORDS = {"viscous": "viscous law", "coulomb": "viscous + Coulomb law"}
+_LAW_WORDS = {"viscous": "viscous law", "coulomb": "viscous + Coulomb law",
+              "quadratic_coulomb": "linear + quadratic + Coulomb law"}
 
 
 def _preferred_law_line(eq: dict) -> tuple[str, ...]:
@@ -106,6 +107,8 @@ def _preferred_law_line(eq: dict) -> tuple[str, ...]:
         return ()
     text = (f"{_LAW_WORDS[eq['preferred_law']]} (preferred): C_i = {law['c_i']:.4g} kg/(m s) "
             f"{_interval(law.get('c_i_ci95'))}")
+    if law.get("c_f") is not None:
+        text += f", C_f = {law['c_f']:.4g} kg/m^2 {_interval(law.get('c_f_ci95'))}"
     if law.get("damping_ratio") is not None:
         bounds = law.get("damping_ratio_ci95")
         text += f", damping ratio {100.0 * law['damping_ratio']:.4g} %"

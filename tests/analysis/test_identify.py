@@ -368,6 +368,40 @@ def test_a_coulomb_decay_s_own_coefficients_carry_intervals_that_mean_95_percent
         assert math.sqrt(np.mean(scores ** 2)) < 1.4, (name, scores)
 
 
+def test_fluid_damping_with_dry_friction_beside_it_is_read_with_both(tmp_path):
+    """A wet beam whose clamp rubs: linear + quadratic damping (C_i 0.1, C_f 33) with a dry
+    friction force beside it, at 0.2 % noise. With two-term laws only, the friction was read
+    as viscous damping or the fluid term as friction, each with narrow intervals that missed
+    (a friction force 18 % low, a C_i twice the truth). The three-term law is preferred, and
+    its C_i, C_f and friction force, in the JSON and on the text's line, hold the truth."""
+    from support import run_main
+
+    case = release(noise=0.002, c_f=WET_C_F, c_i=0.1, friction=0.1)
+    path = tmp_path / "rubbing.csv"
+    path.write_text("tip [m/s]\n" + "\n".join(map(repr, trial(case, 1).tolist())) + "\n")
+    run = tmp_path / "rubbing.h5"
+    assert run_main("import", str(path), "--rate", str(case.fs), "-o", str(run))[0] == 0
+    mass = f"{WET_MASS!r}"
+    code, out, err = run_main("analyze", str(run), "--json", "--mass-per-length", mass)
+    assert code == 0, err
+    (component,) = json.loads(out)["channels"]["tip"]["components"]
+    eq = component["equivalent_damping"]
+    assert eq["preferred_law"] == "quadratic_coulomb"
+    law = eq["laws"]["quadratic_coulomb"]
+    for key, truth in (("c_i", 0.1), ("c_f", WET_C_F), ("friction_force_per_length",
+                                                         0.1 * WET_MASS)):
+        low, high = law[f"{key}_ci95"]
+        assert low <= truth <= high and high - low < 0.5 * truth, (key, law)
+    assert eq["friction_force_per_length_ci95"] == law["friction_force_per_length_ci95"]
+    assert any(w.startswith("the record supports linear + quadratic damping with Coulomb")
+               for w in component["warnings"])
+    code, text, err = run_main("analyze", str(run), "--mass-per-length", mass)
+    line = next(x for x in text.splitlines()
+                if "linear + quadratic + Coulomb law (preferred)" in x)
+    assert f"C_f = {law['c_f']:.4g} kg/m^2 (95 %: " in line
+    assert f"friction force = {law['friction_force_per_length']:.4g} N/m" in line
+
+
 def test_a_dry_friction_record_reports_the_friction_law_s_coefficients_with_intervals(tmp_path):
     """`fsi-lab analyze` of a record imported from CSV that dry friction damps: the JSON's
     ``laws`` hold the preferred law's C_i and friction force with 95 % intervals, these cover

@@ -60,6 +60,8 @@ def finite_differences(law, params, start, quantity, alpha, one_sided=()):
     ("coulomb", [0.3, 0.4], 0.1, 0.0),                  # stops after about 13 extrema
     ("coulomb", [0.0, 0.4], 0.1, 0.0),                  # friction alone (linear envelope)
     ("coulomb", [1.0, 0.3], 0.5, 0.0),
+    ("quadratic_coulomb", [0.3, 1.0, 0.2], 0.1, 0.0),   # the three terms together
+    ("quadratic_coulomb", [0.0, 20.0, 0.4], 0.5, 0.0),  # no viscous term, stops
 ])
 def test_the_extrema_derivatives_equal_finite_differences(law, params, start, alpha, quantity):
     if quantity == "displacement":
