@@ -28,7 +28,8 @@ PLUGIN = AnalysisPlugin(
         Param("method", "str", "", "law", choices=METHODS,
               help="law (default): the linear + quadratic damping law fitted to every extremum "
                    "of every free decay by hvd's bands decomposition, from the first cycle on, "
-                   "compared with viscous and viscous + Coulomb damping (preferred_law); "
+                   "compared with viscous, viscous + Coulomb and linear + quadratic + Coulomb "
+                   "damping (preferred_law); "
                    "regression: the paper's first-order fit of C_q = 2 zeta (mu+M) 2 pi f "
                    "against displacement amplitude (uses the chain's damping curves); "
                    "envelope: the averaged envelope law's closed form fitted to the peaks."),
