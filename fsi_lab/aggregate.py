@@ -207,10 +207,11 @@ def group_summary(members: list[tuple[int, ModeExtract]], labels: list[str]
                                     "c_f": _finite(union.spread_chi2[1])},
                     "accuracy": {"c_i": _finite(union.accuracy_factor[0]),
                                  "c_f": _finite(union.accuracy_factor[1])}}})
-            if union.power is not None:
+            low, high = union.power.interval(LEVEL) if union.power is not None \
+                else (math.nan, math.nan)
+            if math.isfinite(low) and math.isfinite(high):
                 from fsi_lab.dsp.identify import fluid_power_warning
 
-                low, high = union.power.interval(LEVEL)
                 entry.update(fluid_power=union.power.power, fluid_power_ci95=[low, high])
                 power_warning = fluid_power_warning(union.power.power, low, high,
                                                     union.power.change)

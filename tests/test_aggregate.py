@@ -123,9 +123,10 @@ def test_a_pooled_mode_says_which_warnings_its_runs_carry(extracts):
 
 def _with_power(run, power, seed):
     """``run`` with its mode's extrema replaced by those of a drag growing as |v|^power (as
-    large as a quadratic one with beta = 4 /m at 0.2 m/s, and a viscous a = 0.1 /s), from the same
-    first extremum at the same half cycles, with independent errors of 1 mm/s, and its own
-    quadratic law refitted to them."""
+    large as a quadratic one with beta = 4 /m at 0.2 m/s, and a viscous a = 0.1 /s), released
+    at the speed of its first extremum, as many extrema, with independent errors of 1 mm/s
+    (the decays' times and signs, which the whitening uses, are kept), and its own quadratic
+    law refitted to them."""
     import dataclasses
 
     from scipy.integrate import solve_ivp
@@ -148,7 +149,7 @@ def _with_power(run, power, seed):
         amplitude = np.abs(extrema + 1e-3 * rng.standard_normal(extrema.size))
         decays.append(dataclasses.replace(d, amplitude=amplitude,
                                           values=np.sign(d.values) * amplitude))
-    own = fit_law("quadratic", [d.amplitude for d in decays], w0, alpha=mode.alpha)
+    own = fit_law("quadratic", [d.amplitude for d in decays], w0)
     return dataclasses.replace(run, modes=[dataclasses.replace(
         mode, decays=decays, params=own.params, cov=own.cov, widening=1.0)])
 

@@ -59,7 +59,8 @@ class Case:
     noise
         Noise RMS as a fraction of the record's largest value.
     law
-        The damping law the record follows (``"quadratic"``, ``"viscous"``, ``"coulomb"``).
+        The damping law the record follows (``"quadratic"``, ``"viscous"``, ``"coulomb"``,
+        ``"quadratic_coulomb"``).
     expect
         ``"number"``: C_i and C_f within the targets (or warned); ``"refusal"``: the record
         holds no usable free decay, and the right answer is a clear refusal.
@@ -87,11 +88,11 @@ class Case:
     @property
     def second_truth(self) -> float:
         """The truth of the law's second coefficient, the matrix's C_f column: C_f (kg/m^2)
-        of the quadratic law, the friction force per length (N/m) of the Coulomb law; 0 for
+        of the quadratic laws, the friction force per length (N/m) of the Coulomb law; 0 for
         the viscous law, which has none."""
         if self.law == "coulomb":
             return self.mass * self.truth.friction
-        return self.truth.c_f if self.law == "quadratic" else 0.0
+        return self.truth.c_f if self.law in ("quadratic", "quadratic_coulomb") else 0.0
 
 
 def _force(mode: Mode, impulses, t: float) -> float:
@@ -232,6 +233,10 @@ def other_cases() -> list[Case]:
         Case("viscous + Coulomb (C_f column: friction force)",
              (Mode(WET_F, c_i=0.3, friction=0.4, x0=1e-3),),
              duration=3.0, law="coulomb"),
+        # The wet beam with a clamp that rubs: the fluid's damping and dry friction together.
+        Case("quadratic + Coulomb, 2 mm (three-term law)",
+             (Mode(WET_F, c_f=WET_C_F, friction=0.1, x0=2e-3),),
+             duration=3.0, law="quadratic_coulomb"),
         # Other modes than the wet beam's second: a high one sampled at 10 samples per cycle,
         # and a low one whose linear damping alone is 7.7 % of critical.
         Case("quadratic, noise 1 %, 200 Hz mode at 2000 Hz, 2 s, x0 0.1 mm",

@@ -49,12 +49,13 @@ def fsi_lab_estimate(case: Case, x: np.ndarray) -> Estimate:
         return Estimate(refused=f"no mode near {truth:g} Hz")
     m = case.mass
     # A dry-friction record is read as a user reads it: the law fsi-lab prefers gives C_i and
-    # the friction force (a friction force the preferred law has not is no number, counted as
-    # not covered). The quadratic law nests the viscous one: a viscous record's C_i is its.
-    # The mode's warnings are on the quadratic law's C_i and C_f; the preferred law's numbers
-    # carry none of their own, so read by them a trial is unwarned (its silent misses count).
+    # the friction force, or with the three-term law C_i and C_f (a coefficient the preferred
+    # law has not is no number, counted as not covered). The quadratic law nests the viscous
+    # one: a viscous record's C_i is its. The mode's warnings are on the quadratic law's C_i
+    # and C_f; the preferred law's numbers carry none of their own, so read by them a trial
+    # is unwarned (its silent misses count).
     fit, warned = mode.quadratic, bool(mode.warnings)
-    if case.law == "coulomb" and mode.laws.preferred != "quadratic":
+    if case.law in ("coulomb", "quadratic_coulomb") and mode.laws.preferred != "quadratic":
         fit, warned = mode.laws.fits[mode.laws.preferred], False
     second = "gamma" if case.law == "coulomb" else "beta"
     (a_lo, a_hi) = fit.interval("a")

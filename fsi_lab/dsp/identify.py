@@ -2304,9 +2304,10 @@ def _noise_spread(mode: _Mode, law: str = "quadratic") -> dict[str, float]:
 
 def _other_law_spread(mode: _Mode, follow: str, laws: Sequence[str]) -> None:
     """Steps 8a and 8c for the preferred law when it is not the quadratic one: its
-    coefficients (a viscous C_i, a dry friction force) are then the ones the record supports,
-    and their intervals need what the quadratic law's get. The factors enter ``drift`` as
-    ``preferred_start_<name>`` and ``preferred_noise_<name>`` (``a``, ``gamma``)."""
+    coefficients (a viscous C_i, a dry friction force, with the three-term law a C_f) are
+    then the ones the record supports, and their intervals need what the quadratic law's
+    get. The factors enter ``drift`` as ``preferred_start_<name>`` and
+    ``preferred_noise_<name>`` (``a``, ``beta``, ``gamma``: the preferred law's)."""
     preferred = compare_laws([mode.fits[law] for law in laws]).preferred
     if preferred == "quadratic":
         return
@@ -2473,11 +2474,16 @@ def _warnings(m: ModeIdentification) -> list[str]:
     """Sentences on how far to trust the mode's numbers."""
     out = []
     cmp = m.laws
-    if "quadratic" in cmp.fits and cmp.preferred != "quadratic":
+    if "quadratic" in cmp.fits and cmp.preferred == "quadratic_coulomb":
+        gap = cmp.delta["quadratic"] - cmp.delta[cmp.preferred]
+        out.append(f"the record calls for dry (Coulomb) friction beside linear + quadratic "
+                   f"damping (AICc lower by {gap:.1f}): C_i and C_f of the linear + quadratic "
+                   "law leave the friction out and take its damping as theirs; read the "
+                   "three-term law's C_i, C_f and friction force (its line below, "
+                   "laws.quadratic_coulomb in the JSON)")
+    elif "quadratic" in cmp.fits and cmp.preferred != "quadratic":
         other = {"viscous": "viscous (linear) damping alone",
-                 "coulomb": "viscous + Coulomb (dry friction) damping",
-                 "quadratic_coulomb": "linear + quadratic damping with Coulomb (dry "
-                                      "friction) damping beside it"}[cmp.preferred]
+                 "coulomb": "viscous + Coulomb (dry friction) damping"}[cmp.preferred]
         gap = cmp.delta["quadratic"] - cmp.delta[cmp.preferred]
         support = (f"AICc lower by {gap:.1f}" if gap > 0 else
                    f"AICc within {AICC_TIE:g} of the quadratic law's, {-gap:.1f} higher, with "
@@ -2571,7 +2577,9 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    "this amplitude range (coupling with other modes, an amplitude-dependent "
                    "drag)" + (f"; their intervals are widened {_fold(widened)}"
                               if widened >= 1.005 else ""))
-    if "fluid_power" in m.start_drift:
+    # (dry friction the record supports bends the quadratic law's rate as another power of
+    # the velocity would: the friction law's warning above says what the record calls for)
+    if "fluid_power" in m.start_drift and "gamma" not in cmp.fits[cmp.preferred].names:
         out.extend(fluid_power_warning(*(m.start_drift[f"fluid_power{part}"]
                                          for part in ("", "_low", "_high", "_change"))))
     # A mode fitted jointly to the record's samples (step 6a) uses no smeared extremum.

@@ -1146,7 +1146,9 @@ def fluid_power(fit: LawFit, whiteners: Sequence[Whitener | None] | None = None)
     if not (math.isfinite(top) and bottom > 0.0):
         raise fail(func, "the model decays stop (or leave no extremum above 0): the law "
                          "cannot be differentiated there")
-    grid = np.geomspace(0.5 * bottom, 2.0 * top, POWER_GRID)
+    # (the extrema never leave [bottom, top]: a rate that is positive at both ends is
+    # positive between them, and may well turn negative outside, where a < 0)
+    grid = np.geomspace(bottom, top, POWER_GRID)
     rate = decay_rate("quadratic", fit.params, grid, fit.w0, fit.quantity)
     if not np.all(rate > 0.0):
         raise fail(func, "the fitted law's decay rate is not positive over the extrema: its "
