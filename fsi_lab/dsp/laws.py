@@ -80,6 +80,14 @@ RESOLUTION = 1e-6
 DENSE_JACOBIAN = 1 << 21
 #: Within this much AICc of the best, the law with the fewest parameters is preferred.
 AICC_TIE = 2.0
+#: A law with dry friction is preferred only where the friction gives at least this share of
+#: its decay rate at the smallest extremum fitted: a friction force that makes a small part of
+#: the damping even there (a misfit at the noise floor, a filter's edge) is no law of its own
+#: (nor is one whose other terms are negative beyond their noise: friction offset by negative
+#: damping describes the noise of a lightly damped decay, not a rubbing structure).
+FRICTION_SHARE = 0.2
+#: ... where "beyond their noise" is this many standard errors.
+NEGATIVE_Z = 2.0
 #: A model extremum larger than this multiple of the start amplitude ends the sequence (a law
 #: with negative damping grows; the fit then moves away from it).
 MAX_GROWTH = 1e3
@@ -1211,10 +1219,12 @@ class LawComparison:
     preferred
         The law the record supports: the one with the lowest AICc, or the law with the fewest
         parameters among those within :data:`AICC_TIE` of it (a term the record does not
-        call for is not preferred).
+        call for is not preferred); a law with dry friction only where the friction is a
+        material part of its damping (:func:`friction_share`) and no other term negative.
     delta
-        AICc of each law minus the lowest (0 for the preferred; above about 4, a law is
-        clearly less supported by the record).
+        AICc of each law minus the lowest (0 for the preferred, unless a law with an
+        immaterial friction fits a little better; above about 4, a law is clearly less
+        supported by the record).
     """
 
     fits: dict[str, LawFit]
@@ -1222,15 +1232,35 @@ class LawComparison:
     delta: dict[str, float]
 
 
+def friction_share(fit: LawFit) -> float:
+    """The share of a fitted law's decay rate that its dry friction gives at the smallest
+    extremum of its model (dimensionless; 0 for a law without friction or with none)."""
+    gamma = fit.value("gamma")
+    extrema = [m[m > 0.0] for m in fit.model]
+    if not gamma > 0.0 or not any(m.size for m in extrema):
+        return 0.0
+    smallest = np.array([min(float(np.min(m)) for m in extrema if m.size)])
+    rate = float(decay_rate(fit.law, fit.params, smallest, fit.w0, fit.quantity)[0])
+    friction = float(decay_rate("coulomb", [0.0, gamma], smallest, fit.w0, fit.quantity)[0])
+    return friction / rate if rate > 0.0 else 0.0
+
+
 def compare_laws(fits: Sequence[LawFit]) -> LawComparison:
-    """Rank fits of different laws to the same extrema by the corrected Akaike criterion."""
+    """Rank fits of different laws to the same extrema by the corrected Akaike criterion; a
+    law with dry friction may be preferred only where its friction gives at least
+    :data:`FRICTION_SHARE` of its decay rate at the smallest extremum and none of its terms
+    is negative by more than :data:`NEGATIVE_Z` standard errors."""
     if not fits:
         raise fail("compare_laws", "no fit given")
-    best = min(fits, key=lambda f: f.aicc)
-    close = [f for f in fits if f.aicc <= best.aicc + AICC_TIE]
+    lowest = min(f.aicc for f in fits)
+    eligible = [f for f in fits if "gamma" not in f.names or (
+        friction_share(f) >= FRICTION_SHARE
+        and not np.any(f.params < -NEGATIVE_Z * f.se))] or list(fits)
+    best = min(eligible, key=lambda f: f.aicc)
+    close = [f for f in eligible if f.aicc <= best.aicc + AICC_TIE]
     simplest = min(close, key=lambda f: (len(f.params), f.aicc))
     return LawComparison(fits={f.law: f for f in fits}, preferred=simplest.law,
-                         delta={f.law: f.aicc - best.aicc for f in fits})
+                         delta={f.law: f.aicc - lowest for f in fits})
 
 
 # ----------------------------------------------------------------------------- signals

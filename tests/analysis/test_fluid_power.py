@@ -119,3 +119,27 @@ def test_a_power_above_two_with_little_viscous_damping_is_tested():
     quadratic = fit_law("quadratic", [extrema], W0, quantity="displacement")
     assert quadratic.params[0] < 0.0
     assert fluid_power(quadratic).power == pytest.approx(3.0, abs=0.05)
+
+
+def test_a_friction_law_is_preferred_only_where_its_friction_matters():
+    """A decay of the three-term law whose friction gives most of the damping at its smallest
+    extrema: that law is preferred. The same fits with the friction a twentieth of it, or with
+    a viscous term negative beyond its noise, fit no better by AICc than the record lets the
+    quadratic law fit (a misfit at the noise floor, the noise of a lightly damped decay): the
+    quadratic law is preferred, the delta still counted from the lowest AICc."""
+    from fsi_lab.dsp.laws import FRICTION_SHARE, compare_laws, friction_share
+
+    clean, _ = extremum_sequence("quadratic_coulomb", [0.3, 40.0, 0.02], W0, 0.05, 60)
+    noisy = clean + np.random.default_rng(5).normal(0.0, 1e-4, clean.size)
+    fits = [fit_law(law, [noisy], W0) for law in ("quadratic", "quadratic_coulomb")]
+    found = compare_laws(fits)
+    assert found.preferred == "quadratic_coulomb" and friction_share(fits[1]) > 0.5
+    quad, three = fits
+    faint = dataclasses.replace(three, params=three.params * np.array([1.0, 1.0, 0.05]),
+                                aicc=quad.aicc - 3.0)
+    assert friction_share(faint) < FRICTION_SHARE
+    found = compare_laws([quad, faint])
+    assert found.preferred == "quadratic" and found.delta["quadratic"] == pytest.approx(3.0)
+    opposed = dataclasses.replace(three, params=np.array([-3.0 * three.se[0], *three.params[1:]]),
+                                  aicc=quad.aicc - 3.0)
+    assert compare_laws([quad, opposed]).preferred == "quadratic"
