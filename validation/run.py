@@ -51,12 +51,12 @@ def fsi_lab_estimate(case: Case, x: np.ndarray) -> Estimate:
     # A dry-friction record is read as a user reads it: the law fsi-lab prefers gives C_i and
     # the friction force, or with the three-term law C_i and C_f (a coefficient the preferred
     # law has not is no number, counted as not covered). The quadratic law nests the viscous
-    # one: a viscous record's C_i is its. The mode's warnings are on the quadratic law's C_i
-    # and C_f; the preferred law's numbers carry none of their own, so read by them a trial
-    # is unwarned (its silent misses count).
+    # one: a viscous record's C_i is its. Read by the preferred law, a trial is warned only
+    # by the warnings on that law's own numbers (the others are on the quadratic law's).
     fit, warned = mode.quadratic, bool(mode.warnings)
     if case.law in ("coulomb", "quadratic_coulomb") and mode.laws.preferred != "quadratic":
-        fit, warned = mode.laws.fits[mode.laws.preferred], False
+        fit = mode.laws.fits[mode.laws.preferred]
+        warned = any(w.startswith("the preferred law's ") for w in mode.warnings)
     second = "gamma" if case.law == "coulomb" else "beta"
     (a_lo, a_hi) = fit.interval("a")
     c_f, (b_lo, b_hi) = math.nan, (math.nan, math.nan)

@@ -2470,6 +2470,31 @@ def _times(ratio: float) -> str:
     return f"{ratio:.1f} times"
 
 
+#: How the warnings name each law coefficient.
+COEFFICIENT_LABELS = {"a": "C_i", "beta": "C_f", "gamma": "friction force"}
+
+
+def _precision_warnings(fit: LawFit, prefix: str) -> list[str]:
+    """Sentences on each of ``fit``'s coefficients that is negative, not resolved (its 95 %
+    interval holds 0) or poorly determined (its interval wider than +-:data:`POOR_PRECISION`
+    of the value), each begun with ``prefix``."""
+    out = []
+    for name in fit.names:
+        label = prefix + COEFFICIENT_LABELS[name]
+        value = fit.value(name)
+        lo, hi = fit.interval(name, LEVEL)
+        if hi < 0:
+            out.append(f"{label} is negative ({COEFFICIENT_LABELS[name]} < 0 is no physical "
+                       "damping: the law misfits or the decay is too short)")
+        elif lo <= 0.0:
+            out.append(f"{label} is not resolved: its 95 % interval includes 0 (the record "
+                       "holds too little of that damping to measure it)")
+        elif hi - lo > 2.0 * POOR_PRECISION * value:
+            out.append(f"{label} is poorly determined: its 95 % interval is "
+                       f"+-{50.0 * (hi - lo) / value:.0f} % of the value")
+    return out
+
+
 def _warnings(m: ModeIdentification) -> list[str]:
     """Sentences on how far to trust the mode's numbers."""
     out = []
@@ -2492,18 +2517,9 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    f"damping ({support}): C_i and C_f assume a law the record does not call for")
     quad = cmp.fits.get("quadratic")
     if quad is not None:
-        for name, label in (("a", "C_i"), ("beta", "C_f")):
-            value = quad.value(name)
-            lo, hi = quad.interval(name, LEVEL)
-            if hi < 0:
-                out.append(f"{label} is negative ({label} < 0 is no physical damping: the law "
-                           "misfits or the decay is too short)")
-            elif lo <= 0.0:
-                out.append(f"{label} is not resolved: its 95 % interval includes 0 (the "
-                           "record holds too little of that damping to measure it)")
-            elif hi - lo > 2.0 * POOR_PRECISION * value:
-                out.append(f"{label} is poorly determined: its 95 % interval is "
-                           f"+-{50.0 * (hi - lo) / value:.0f} % of the value")
+        out.extend(_precision_warnings(quad, ""))
+    if cmp.preferred != "quadratic":       # (its numbers are the ones the record supports)
+        out.extend(_precision_warnings(cmp.fits[cmp.preferred], "the preferred law's "))
     coloured = m.start_drift.get("band_noise", 0.0)
     if coloured > TAIL_EXCESS:
         out.append(f"the noise in this mode's band is {_times(coloured)} the record's white "

@@ -404,6 +404,26 @@ def test_fluid_damping_with_dry_friction_beside_it_is_read_with_both(tmp_path):
     assert f"friction force = {law['friction_force_per_length']:.4g} N/m" in line
 
 
+def test_the_preferred_law_s_own_numbers_say_how_far_to_trust_them():
+    """The validation's three-term row (C_f 33 with a friction force, 1 % noise): its preferred
+    law's C_i came within +-20 to +-80 % and was off by up to 40 %, with no warning on it (the
+    warnings were on the quadratic law's numbers). Each of the preferred law's coefficients
+    now says when it is poorly determined, with the width its interval gives."""
+    from validation.cases import other_cases
+
+    case = next(c for c in other_cases() if "three-term" in c.name)
+    mode = identify(trial(case, 37), case.fs).modes[0]
+    assert mode.laws.preferred == "quadratic_coulomb"
+    fit = mode.laws.fits["quadratic_coulomb"]
+    low, high = fit.interval("a")
+    said = [w for w in mode.warnings if w.startswith("the preferred law's C_i is poorly")]
+    assert said == [f"the preferred law's C_i is poorly determined: its 95 % interval is "
+                    f"+-{50.0 * (high - low) / fit.value('a'):.0f} % of the value"]
+    low, high = fit.interval("gamma")
+    assert high - low < 0.3 * fit.value("gamma")         # (its friction force is precise)
+    assert not any(w.startswith("the preferred law's friction") for w in mode.warnings)
+
+
 def test_a_dry_friction_record_reports_the_friction_law_s_coefficients_with_intervals(tmp_path):
     """`fsi-lab analyze` of a record imported from CSV that dry friction damps: the JSON's
     ``laws`` hold the preferred law's C_i and friction force with 95 % intervals, these cover
