@@ -1228,9 +1228,9 @@ class LawComparison:
         material part of its damping (:func:`friction_share`), clearly supported
         (:data:`FRICTION_GAIN`) and no other term negative.
     delta
-        AICc of each law minus the lowest (0 for the preferred, unless a law with an
-        immaterial friction fits a little better; above about 4, a law is clearly less
-        supported by the record).
+        AICc of each law minus the lowest (0 for the preferred, unless a law with friction
+        that may not be preferred fits better; above about 4, a law is clearly less supported
+        by the record).
     """
 
     fits: dict[str, LawFit]
