@@ -1170,7 +1170,7 @@ def fluid_power(fit: LawFit, whiteners: Sequence[Whitener | None] | None = None)
     integrand = fluid * np.log(grid / top) / (grid * rate * rate)
     inner = np.concatenate(([0.0], np.cumsum(0.5 * (integrand[1:] + integrand[:-1])
                                               * np.diff(grid))))
-    residuals, columns, spans = [], [], []
+    residuals, columns, spans, rates = [], [], [], []
     for j in range(k):
         measured = fit.residuals[j] + fit.model[j]
         amp, _, deriv = _tangent_run("quadratic", a, beta, 0.0, float(fit.starts[j]),
@@ -1179,9 +1179,9 @@ def fluid_power(fit: LawFit, whiteners: Sequence[Whitener | None] | None = None)
         if amp.size < measured.size:
             raise fail(func, f"the model of decay {j} stops after {amp.size} of its "
                              f"{measured.size} extrema")
+        at_extrema = decay_rate("quadratic", fit.params, amp, fit.w0, fit.quantity)
         # Averaged envelope: dA/dp = -A r(A) int_A^A0 (r - a) ln(A'/A_max) / (A' r^2) dA'.
-        shift = -amp * decay_rate("quadratic", fit.params, amp, fit.w0, fit.quantity) * (
-            np.interp(amp[0], grid, inner) - np.interp(amp, grid, inner))
+        shift = -amp * at_extrema * (np.interp(amp[0], grid, inner) - np.interp(amp, grid, inner))
         both = np.column_stack((measured - amp, deriv[:, 0], deriv[:, 1], shift,
                                 deriv[:, 2])) / top
         if whiteners[j] is not None:
@@ -1193,6 +1193,7 @@ def fluid_power(fit: LawFit, whiteners: Sequence[Whitener | None] | None = None)
         residuals.append(rows[:, 0])
         columns.append(rows[:, 1:])
         spans.append(amp)
+        rates.append(at_extrema)
     r, x = np.concatenate(residuals), np.vstack(columns)
     dof = r.size - k - 3
     if dof < 1:
@@ -1205,8 +1206,7 @@ def fluid_power(fit: LawFit, whiteners: Sequence[Whitener | None] | None = None)
         var = float(np.linalg.inv(x.T @ x)[2, 2]) * s2
     except np.linalg.LinAlgError:
         var = math.inf
-    amp = np.concatenate(spans)
-    base = decay_rate("quadratic", fit.params, amp, fit.w0, fit.quantity)
+    amp, base = np.concatenate(spans), np.concatenate(rates)
     moved = base - a
     change = step[0] + step[1] * moved / beta + step[2] * moved * np.log(amp / top)
     return PowerTest(power=2.0 + float(step[2]), se=math.sqrt(var) if var >= 0.0 else math.inf,

@@ -368,6 +368,22 @@ def test_a_coulomb_decay_s_own_coefficients_carry_intervals_that_mean_95_percent
         assert math.sqrt(np.mean(scores ** 2)) < 1.4, (name, scores)
 
 
+def _imported_and_analysed(case, seed, tmp_path, name):
+    """``fsi-lab import`` of a trial of ``case`` as CSV, then ``fsi-lab analyze --json`` with
+    the wet beam's mass per length: the run file, the mass argument and the JSON's component."""
+    from support import run_main
+
+    path = tmp_path / f"{name}.csv"
+    path.write_text("tip [m/s]\n" + "\n".join(map(repr, trial(case, seed).tolist())) + "\n")
+    run = tmp_path / f"{name}.h5"
+    assert run_main("import", str(path), "--rate", str(case.fs), "-o", str(run))[0] == 0
+    mass = f"{WET_MASS!r}"
+    code, out, err = run_main("analyze", str(run), "--json", "--mass-per-length", mass)
+    assert code == 0, err
+    (component,) = json.loads(out)["channels"]["tip"]["components"]
+    return run, mass, component
+
+
 def test_fluid_damping_with_dry_friction_beside_it_is_read_with_both(tmp_path):
     """A wet beam whose clamp rubs: linear + quadratic damping (C_i 0.1, C_f 33) with a dry
     friction force beside it, at 0.2 % noise. With two-term laws only, the friction was read
@@ -377,14 +393,7 @@ def test_fluid_damping_with_dry_friction_beside_it_is_read_with_both(tmp_path):
     from support import run_main
 
     case = release(noise=0.002, c_f=WET_C_F, c_i=0.1, friction=0.1)
-    path = tmp_path / "rubbing.csv"
-    path.write_text("tip [m/s]\n" + "\n".join(map(repr, trial(case, 1).tolist())) + "\n")
-    run = tmp_path / "rubbing.h5"
-    assert run_main("import", str(path), "--rate", str(case.fs), "-o", str(run))[0] == 0
-    mass = f"{WET_MASS!r}"
-    code, out, err = run_main("analyze", str(run), "--json", "--mass-per-length", mass)
-    assert code == 0, err
-    (component,) = json.loads(out)["channels"]["tip"]["components"]
+    run, mass, component = _imported_and_analysed(case, 1, tmp_path, "rubbing")
     eq = component["equivalent_damping"]
     assert eq["preferred_law"] == "quadratic_coulomb"
     law = eq["laws"]["quadratic_coulomb"]
@@ -432,14 +441,7 @@ def test_a_dry_friction_record_reports_the_friction_law_s_coefficients_with_inte
     from support import run_main
 
     case = release(noise=0.005, c_f=0.0, c_i=0.3, friction=0.4)
-    path = tmp_path / "friction.csv"
-    path.write_text("tip [m/s]\n" + "\n".join(map(repr, trial(case, 2).tolist())) + "\n")
-    run = tmp_path / "friction.h5"
-    assert run_main("import", str(path), "--rate", str(case.fs), "-o", str(run))[0] == 0
-    mass = f"{WET_MASS!r}"
-    code, out, err = run_main("analyze", str(run), "--json", "--mass-per-length", mass)
-    assert code == 0, err
-    (component,) = json.loads(out)["channels"]["tip"]["components"]
+    run, mass, component = _imported_and_analysed(case, 2, tmp_path, "friction")
     eq = component["equivalent_damping"]
     assert eq["preferred_law"] == "coulomb"
     coulomb = eq["laws"]["coulomb"]
