@@ -387,6 +387,15 @@ def _interval(bounds) -> str:
     return f"95 %: {bounds[0]:.4g} to {bounds[1]:.4g}"
 
 
+def _power(entry: dict[str, Any]) -> str:
+    """``, fluid term as |v|^p (95 %: lo to hi)``: the power of the velocity the union's fluid
+    term grows with, or nothing when it was not tested."""
+    if entry.get("fluid_power") is None:
+        return ""
+    low, high = entry["fluid_power_ci95"]
+    return f", fluid term as |v|^{entry['fluid_power']:.2f} (95 %: {low:.2f} to {high:.2f})"
+
+
 def _widening(entry: dict[str, Any]) -> str:
     """``; runs weighted by their own widening (x1.4 to x2.9), intervals x1.9 ...``."""
     widened = entry.get("widened") or {}
@@ -458,7 +467,7 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
             lines.append(f"{indent}  C_i = {entry['c_i']:.4g} kg/(m s) "
                          f"({_interval(entry['c_i_ci95'])}), C_f = {entry['c_f']:.4g} kg/m^2 "
                          f"({_interval(entry['c_f_ci95'])}), preferred law: "
-                         f"{entry['preferred_law']}{_widening(entry)}")
+                         f"{entry['preferred_law']}{_power(entry)}{_widening(entry)}")
             if entry.get("pooled_by") == "weighted mean":
                 lines.append(f"{indent}  (the runs' own C_i and C_f averaged with their "
                              "inverse covariances: their modes were fitted together with a "

@@ -168,6 +168,10 @@ def test_the_union_tests_the_power_of_the_fluid_term(extracts):
     assert low < 1.5 < high < 1.9, other["fluid_power_ci95"]
     assert other["warnings"][0].startswith(
         f"the fluid damping grows as the velocity to the power {other['fluid_power']:.2f}")
+    text = format_aggregate(aggregate_extracts([_with_power(run, 1.5, k)
+                                                for k, run in enumerate(runs)]))
+    assert (f"preferred law: {other['preferred_law']}, fluid term as "
+            f"|v|^{other['fluid_power']:.2f} (95 %: {low:.2f} to {high:.2f})") in text
 
 
 def test_the_runs_curves_on_one_amplitude_axis(extracts):

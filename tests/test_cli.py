@@ -120,6 +120,23 @@ def test_summary_text_flags_coefficients_whose_interval_contains_zero():
     assert "not resolved" not in format_summary(summary([1.0, 5.0]))
 
 
+def test_summary_text_gives_the_fluid_term_s_power_beside_the_law():
+    """The power of the velocity the fluid term grows with, and its interval, follow the
+    preferred law on the component's line; a mode without the test has no such words."""
+    from fsi_lab.cli import format_summary
+
+    def summary(**power):
+        return {"channels": {"tip_velocity": {"components": [{
+            "index": 0, "frequency_hz": 17.0,
+            "equivalent_damping": {"c_i": 0.65, "c_f": 33.0, "r2": 1.0,
+                                   "c_i_ci95": [0.6, 0.7], "c_f_ci95": [32.0, 34.0],
+                                   "preferred_law": "quadratic", **power}}]}}}
+
+    text = format_summary(summary(fluid_power=1.9637, fluid_power_ci95=[1.4366, 2.4908]))
+    assert "preferred law: quadratic, fluid term as |v|^1.96 (95 %: 1.44 to 2.49)" in text
+    assert "fluid term" not in format_summary(summary())
+
+
 def test_summary_text_gives_the_preferred_viscous_law_s_damping_ratio_in_percent():
     from fsi_lab.cli import format_summary
 

@@ -74,8 +74,9 @@ def _interval(bounds) -> str:
 
 @hookimpl
 def fsi_lab_summary_lines(component):
-    """C_i, C_f, R^2 and the preferred law on the component's line; a coefficient whose
-    interval contains 0 is said not to be resolved."""
+    """C_i, C_f, R^2, the preferred law and the power of the velocity the fluid term grows
+    with (2 for the quadratic law) on the component's line; a coefficient whose interval
+    contains 0 is said not to be resolved."""
     if component is None:
         return None
     eq = component.get("equivalent_damping")
@@ -86,6 +87,12 @@ def fsi_lab_summary_lines(component):
             f"R^2 = {eq['r2']:.3f}")
     if eq.get("preferred_law"):
         text += f", preferred law: {eq['preferred_law']}"
+    if eq.get("fluid_power") is not None:
+        # how far the record bears out the quadratic law's square of the velocity
+        text += f", fluid term as |v|^{eq['fluid_power']:.2f}"
+        bounds = eq.get("fluid_power_ci95")
+        if _interval(bounds):
+            text += f" (95 %: {bounds[0]:.2f} to {bounds[1]:.2f})"
     for name in ("c_i", "c_f"):
         bounds = eq.get(f"{name}_ci95")
         if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
