@@ -106,6 +106,31 @@ def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
     return columns
 
 
+#: Lines below a refused header row searched for the export's own header (its first lines
+#: about the export itself: the instrument, the date, the rate).
+HEADER_SEARCH = 50
+
+
+def _later_header(path: Path, lines: list[str], refused: int) -> str:
+    """``; line N ('...') is one: begin lines R to N-1 with '#'`` when a line within
+    :data:`HEADER_SEARCH` below the refused header row ``refused`` (a line number from 1)
+    reads as a header row, else nothing."""
+    for number in range(refused + 1, min(len(lines), refused + HEADER_SEARCH) + 1):
+        text = lines[number - 1]
+        if _BLANK.fullmatch(text) or text.lstrip().startswith("#"):
+            continue
+        try:
+            cells = next(csv.reader([text], delimiter=_separator(text), strict=True))
+            if len(cells) > 1 and not cells[-1].strip():
+                cells = cells[:-1]
+            _parse_header(path, cells, number)
+        except (csv.Error, InputFileError):
+            continue
+        above = f"line {refused}" if number == refused + 1 else f"lines {refused} to {number - 1}"
+        return f"; line {number} ({text.strip()!r}) is one: begin {above} with '#'"
+    return ""
+
+
 def _separator(header: str) -> str:
     """The column separator of a file whose header line is ``header``: a semicolon or a tab
     when the line holds one (files written with a decimal comma), else a comma; a header of
@@ -197,21 +222,26 @@ def read_csv(path: str | Path) -> Table:
         text = lines[number - 1]
         return not _BLANK.fullmatch(text) and not text.lstrip().startswith("#")
 
-    first = next((n for n in range(numbers[0] + 1, len(lines) + 1) if holds_row(n)), None)
-    last = next((n for n in range(len(lines), numbers[0], -1) if holds_row(n)), 0)
-    if first is not None:
-        blank = next((n for n in range(first + 1, last) if _BLANK.fullmatch(lines[n - 1])),
-                     None)
-        if blank is not None:
-            text = lines[blank - 1]
-            _missing_sample(path, blank, separator in text or bool(text.strip()))
     reader = csv.reader(itertools.chain([header], rows), delimiter=separator, strict=True)
     try:
         cells = next(reader)
         # An export's rows often end with the separator: an empty last cell on every line.
         if len(cells) > 1 and not cells[-1].strip():
             cells = cells[:-1]
-        columns = _parse_header(path, cells, numbers[0])
+        try:
+            columns = _parse_header(path, cells, numbers[0])
+        except InputFileError as exc:
+            raise InputFileError(f"{exc}{_later_header(path, lines, numbers[0])}") from None
+        # (after the header: the lines above the first row of an export that holds a few
+        # lines about itself are refused as a header, not as samples missing)
+        first = next((n for n in range(numbers[0] + 1, len(lines) + 1) if holds_row(n)), None)
+        last = next((n for n in range(len(lines), numbers[0], -1) if holds_row(n)), 0)
+        if first is not None:
+            blank = next((n for n in range(first + 1, last) if _BLANK.fullmatch(lines[n - 1])),
+                         None)
+            if blank is not None:
+                text = lines[blank - 1]
+                _missing_sample(path, blank, separator in text or bool(text.strip()))
         time = next((i for i, c in enumerate(columns) if c.is_time), None)
         data = np.empty((len(lines), len(columns)))
         printing = _Printing(len(lines))

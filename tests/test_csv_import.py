@@ -228,7 +228,14 @@ def test_a_utf16_export_with_its_byte_order_mark_is_read(tmp_path):
     ("Sample rate: 5000\nx [m]\n1\n2\n", "line 1, header column 1 is 'Sample rate: 5000'; "
      "expected 'name [unit]'"),
     ("Sample rate: 5000\nx [m]\n1\n2\n", "The first line that is not a '#' comment is the "
-     "header row: begin any lines above it with '#'"),
+     "header row: begin any lines above it with '#'; line 2 ('x [m]') is one: begin line 1 "
+     "with '#'"),
+    # an analyser's export: lines about itself, a blank one, then its header (refused as a
+    # header, not as a sample missing at the blank line, and the header it holds is named)
+    ("Polytec export\nDate;29.11.2026\n\nTime [s];v [m/s]\n0;1\n0,1;2\n",
+     "line 1, header column 1 is 'Polytec export'; expected 'name [unit]'"),
+    ("Polytec export\nDate;29.11.2026\n\nTime [s];v [m/s]\n0;1\n0,1;2\n",
+     "; line 4 ('Time [s];v [m/s]') is one: begin lines 1 to 3 with '#'"),
     ("x [m]\n\"1\n2\"\n3\n", "line 2: a quoted value spans several lines"),
     ("x [m],y [m]\n0.1,\"2\n", "line 2: unexpected end of data"),
     ("# a preamble\n# and nothing else\n", "only comments; expected a header row"),
