@@ -514,7 +514,14 @@ def cmd_import(args) -> int:
         if not sep:
             raise InputFileError(f"--delay {item}: expected NAME=SECONDS, e.g. "
                                  "tip_velocity=0.0011")
-    out = import_csv(args.csv, args.output, args.rate, args.reference, delays)
+    sensitivities = {}
+    for item in args.sensitivity:
+        name, sep, text = item.partition("=")
+        if not (sep and name.strip() and text.strip()):
+            raise InputFileError(f"--sensitivity {item}: expected NAME=SENSITIVITY, e.g. "
+                                 "tip_velocity=200mV/(mm/s)")
+        sensitivities[name.strip()] = text.strip()
+    out = import_csv(args.csv, args.output, args.rate, args.reference, delays, sensitivities)
     if args.json:
         _emit_json({"run": str(out)})
     else:
@@ -1057,6 +1064,10 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     p.add_argument("--delay", action="append", default=[], metavar="NAME=SECONDS",
                    help="signal delay of a column's sensor, e.g. tip_velocity=0.0011 (a "
                         "vibrometer's; `fsi-lab show` prints a run's as t0)")
+    p.add_argument("--sensitivity", action="append", default=[], metavar="NAME=SENSITIVITY",
+                   help="calibrate a column written in volts (V or mV): its sensor's "
+                        "sensitivity in volts per unit, e.g. tip_velocity=200mV/(mm/s) (a "
+                        "vibrometer's decoder at 5 mm/s per V) or base=100mV/g")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="RUN.h5")
     common(p)
     p.set_defaults(func=cmd_import)

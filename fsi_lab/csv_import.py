@@ -8,8 +8,8 @@ columns with semicolons (or tabs): their ``1,5`` reads as 1.5. Lines starting wi
 or among the rows are comments; blank lines only above the first row or after the last (one
 among the rows is a missing sample, refused). What a run file gets from its profile and
 instruments and a CSV cannot say is given on import: the base acceleration column
-(``reference``) and the sensors' signal delays, so that the analysis of exported data gives the
-run's results.
+(``reference``), the sensors' signal delays, and the sensitivity of a sensor whose column is in
+volts, so that the analysis of exported data gives the run's results.
 """
 
 from __future__ import annotations
@@ -30,7 +30,14 @@ from fsi_lab.inputfiles import read_text
 from fsi_lab.profile import CHANNEL_NAME
 from fsi_lab.runcheck import CHANNEL_RATES_HZ, MAX_T0_S
 from fsi_lab.runfile import RunFileWriter, new_run_path, software_version, utc_now
-from fsi_lab.units import QUANTITY_OF_UNIT, TIME_UNITS, parse_unit, to_si
+from fsi_lab.units import (
+    QUANTITY_OF_UNIT,
+    SENSITIVITY_FORM,
+    TIME_UNITS,
+    parse_sensitivity,
+    parse_unit,
+    to_si,
+)
 
 _HEADER = re.compile(r"^\s*(?P<name>[^\[\]()]+?)\s*(?:\[(?P<unit>[^\[\]]*)\]"
                      r"|\((?P<paren>[^()]*)\))\s*$")
@@ -390,10 +397,36 @@ def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: n
 MAX_DELAY_S = 1.0
 
 
+def _calibrations(path: Path, columns: list[Column], sensitivities: Mapping[str, str]
+                  ) -> dict[str, tuple[float, str]]:
+    """Each ``--sensitivity`` read (:func:`~fsi_lab.units.parse_sensitivity`): volts per SI
+    unit and that unit, by column name; each must name a column written in volts."""
+    units = {c.name: c.unit for c in columns if not c.is_time}
+    out = {}
+    for name, text in sensitivities.items():
+        if name not in units:
+            raise InputFileError(f"--sensitivity {name}={text}: {name!r} is not a data column "
+                                 f"of {path}; expected one of {', '.join(units)}")
+        if QUANTITY_OF_UNIT[next(c.base for c in columns if c.name == name)] != "voltage":
+            raise InputFileError(f"--sensitivity {name}={text}: the column is written in "
+                                 f"{units[name]}, already calibrated; expected a column in V "
+                                 "or mV")
+        parsed = parse_sensitivity(text)
+        if parsed is None:
+            raise InputFileError(f"--sensitivity {name}={text}: not understood; expected "
+                                 f"{SENSITIVITY_FORM}")
+        out[name] = parsed
+    return out
+
+
 def _check_analysis_inputs(path: Path, columns: list[Column], reference: str | None,
-                           delays: Mapping[str, float]) -> None:
-    """The reference must be an acceleration column and each delay name a data column."""
-    quantities = {c.name: QUANTITY_OF_UNIT[c.base] for c in columns if not c.is_time}
+                           delays: Mapping[str, float],
+                           calibrations: Mapping[str, tuple[float, str]]) -> None:
+    """The reference must be an acceleration column (once calibrated) and each delay name a
+    data column."""
+    quantities = {c.name: QUANTITY_OF_UNIT[calibrations[c.name][1] if c.name in calibrations
+                                           else c.base]
+                  for c in columns if not c.is_time}
     listing = ", ".join(quantities)
     if reference is not None and quantities.get(reference) != "acceleration":
         found = (f"a {quantities[reference]} column" if reference in quantities
@@ -410,7 +443,8 @@ def _check_analysis_inputs(path: Path, columns: list[Column], reference: str | N
 
 
 def import_csv(path: str | Path, out: str | Path, rate: float | None,
-               reference: str | None = None, delays: Mapping[str, float] | None = None) -> Path:
+               reference: str | None = None, delays: Mapping[str, float] | None = None,
+               sensitivities: Mapping[str, str] | None = None) -> Path:
     """Write the CSV file ``path`` as the run file ``out``; returns ``out``.
 
     Parameters
@@ -431,12 +465,18 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     delays
         Signal delay of a column's sensor, s, by column name (a vibrometer's); the column's
         time origin ``t0`` is moved back by it, as a run does with the vibrometer's delay.
+    sensitivities
+        The sensitivity of the sensor behind a column written in volts, by column name, as
+        :func:`~fsi_lab.units.parse_sensitivity` reads it (``"200mV/(mm/s)"``): the column is
+        stored in the sensor's SI unit (volts over the sensitivity), with the sensitivity in
+        its ``sensitivity`` and ``sensitivity_units`` attributes, as a run stores a channel.
     """
     path, out = Path(path), Path(out)
     delays = dict(delays or {})
     table = read_csv(path)
     columns, data, lines = table.columns, table.data, table.lines
-    _check_analysis_inputs(path, columns, reference, delays)
+    calibrations = _calibrations(path, columns, dict(sensitivities or {}))
+    _check_analysis_inputs(path, columns, reference, delays, calibrations)
     times = [i for i, column in enumerate(columns) if column.is_time]
     if len(times) > 1:
         raise InputFileError(f"{path}: header columns {times[0] + 1} and {times[1] + 1} are both "
@@ -462,6 +502,9 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
         if col in times:
             continue
         si_unit, factor = to_si(column.base)
+        if column.name in calibrations:             # volts over volts per SI unit
+            factor /= calibrations[column.name][0]
+            si_unit = calibrations[column.name][1]
         with np.errstate(over="ignore"):
             values[column.name] = data[:, col] * (column.factor * factor)
         if not np.all(np.isfinite(values[column.name])):
@@ -482,9 +525,12 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
             name = column.name
             if name not in values:
                 continue
+            sensitivity, unit = calibrations.get(name, (1.0, to_si(column.base)[0]))
             writer.create_channel(name, {
-                "units": to_si(column.base)[0], "quantity": QUANTITY_OF_UNIT[column.base],
-                "sample_rate": rate, "t0": t0 - delays.get(name, 0.0), "sensitivity": 1.0,
+                "units": unit, "quantity": QUANTITY_OF_UNIT[unit],
+                "sample_rate": rate, "t0": t0 - delays.get(name, 0.0),
+                "sensitivity": sensitivity,
+                **({"sensitivity_units": f"V/({unit})"} if name in calibrations else {}),
                 "source_instrument": f"imported from {path.name}",
                 "original_units": column.unit, "sensor_delay_s": delays.get(name, 0.0),
                 **({"original_name": column.written} if column.written != name else {}),

@@ -72,13 +72,16 @@ def require_no_specimen(run, profile, mass_per_length: float | None) -> None:
 def require_something_to_analyse(run, profile) -> None:
     """InputFileError unless the run has a channel the chain analyses (named or by quantity)."""
     from fsi_lab.chain import channels_to_analyse
+    from fsi_lab.units import voltage_hint
 
     if not channels_to_analyse(run.channels, profile.analysis.get("channels", [])):
         listed = ", ".join(f"{n} ({c.quantity}, {c.unit})" for n, c in run.channels.items())
         raise InputFileError(
             f"{run.path}: nothing to analyse: no velocity or displacement channel (channels: "
             f"{listed or 'none'}); an acceleration or voltage channel is analysed when named, "
-            "e.g. --set analysis.channels=NAME")
+            "e.g. --set analysis.channels=NAME"
+            + voltage_hint("voltage" if any(c.quantity == "voltage"
+                                            for c in run.channels.values()) else ""))
 
 
 

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import math
+import re
+
 STANDARD_GRAVITY = 9.80665  # m/s^2 per g
 
 #: Unit -> quantity. The unit of a CSV column or channel decides what the column holds.
@@ -77,3 +80,61 @@ def to_si(unit: str) -> tuple[str, float]:
     if unit == "g":
         return "m/s^2", STANDARD_GRAVITY
     return unit, 1.0
+
+
+#: A sensitivity as a data sheet writes it: a number, volts (V, mV, uV) and the unit per
+#: which, after a slash (``200 mV/(mm/s)``, ``100mV/g``).
+_SENSITIVITY = re.compile(r"^\s*(?P<number>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*"
+                          r"(?P<volts>[^\s/]*V)\s*/\s*(?P<unit>.+?)\s*$")
+def voltage_hint(quantity: str) -> str:
+    """For a message on a channel of ``quantity``: how a column imported in volts becomes
+    the motion it measures (``"; ..."``), or nothing for another quantity."""
+    if quantity != "voltage":
+        return ""
+    return ("; a column imported in volts becomes the motion it measures with its sensor's "
+            "sensitivity: fsi-lab import ... --sensitivity NAME=200mV/(mm/s)")
+
+#: How a sensitivity is written, for the messages.
+SENSITIVITY_FORM = ("a number, volts (V or mV) and the unit per which, e.g. 200mV/(mm/s) (a "
+                    "vibrometer's decoder at 5 mm/s per V) or 100mV/g (an accelerometer)")
+
+
+def parse_sensitivity(written: str) -> tuple[float, str] | None:
+    """A sensor's sensitivity in volts per SI unit, and that unit.
+
+    Parameters
+    ----------
+    written
+        As a data sheet gives it: a positive number, volts (``V``, ``mV``, ``uV``), a slash
+        and a unit :func:`parse_unit` reads other than volts, in parentheses or not.
+
+    Returns
+    -------
+    tuple of (float, str) or None
+        Volts per SI unit (V/(m/s) for a vibrometer), and the SI unit (``m``, ``m/s`` or
+        ``m/s^2``); None for a sensitivity not understood or not positive.
+
+    Examples
+    --------
+    >>> parse_sensitivity("200 mV/(mm/s)")
+    (200.0, 'm/s')
+    >>> volts, unit = parse_sensitivity("100mV/g")
+    >>> print(f"{volts:.5f} V/({unit})")
+    0.01020 V/(m/s^2)
+    >>> parse_sensitivity("5 mm/s/V") is None
+    True
+    """
+    match = _SENSITIVITY.match(written)
+    if match is None:
+        return None
+    volts, unit = parse_unit(match["volts"]), match["unit"]
+    if unit.startswith("(") and unit.endswith(")"):
+        unit = unit[1:-1]
+    per = parse_unit(unit)
+    if volts is None or volts[0] != "V" or per is None or per[0] == "V":
+        return None
+    si_unit, to_si_factor = to_si(per[0])
+    value = float(match["number"]) * volts[1] / (per[1] * to_si_factor)
+    if not (math.isfinite(value) and value > 0.0):
+        return None
+    return value, si_unit

@@ -394,3 +394,81 @@ def test_a_time_column_s_unit_is_read_in_any_case(tmp_path, unit, step):
     run = _imported(path)
     assert run.channels["tip"].sample_rate == pytest.approx(1000.0)
     np.testing.assert_array_equal(run.channels["tip"].data, np.array(SAMPLES, dtype=float))
+
+
+def test_a_column_in_volts_is_calibrated_with_its_sensor_s_sensitivity(tmp_path):
+    """A vibrometer's decoder output in mV and an accelerometer's in V, each with its
+    sensitivity as a data sheet gives it: stored as velocity and acceleration in SI, with the
+    sensitivity in volts per SI unit, as a run stores a channel; the calibrated base is
+    accepted as the reference (in volts it is not an acceleration)."""
+    t = np.arange(400) / 1000.0
+    millivolts = 50.0 * np.sin(2 * np.pi * 17 * t)
+    volts = 0.3 * np.cos(2 * np.pi * 17 * t)
+    path = _write(tmp_path / "volts.csv", ["tip velocity [mV]", "base [V]"],
+                  zip(millivolts, volts))
+    out = tmp_path / "volts.h5"
+    proc = cli("import", str(path), "--rate", "1000", "-o", str(out), "--reference", "base",
+               "--sensitivity", "tip_velocity=200mV/(mm/s)", "--sensitivity", "base=100 mV/g")
+    assert proc.returncode == 0, proc.stderr
+    run = read_run(out)
+    tip, base = run.channels["tip_velocity"], run.channels["base"]
+    assert (tip.quantity, tip.unit, base.quantity, base.unit) == (
+        "velocity", "m/s", "acceleration", "m/s^2")
+    # 50 mV at 200 mV per mm/s is 0.25 mm/s; 0.3 V at 100 mV per g is 3 g
+    np.testing.assert_allclose(tip.data, millivolts / 200.0 * 1e-3, rtol=1e-12)
+    np.testing.assert_allclose(base.data, volts / 0.1 * STANDARD_GRAVITY, rtol=1e-12)
+    attrs = run.channel_attrs
+    assert attrs["tip_velocity"]["sensitivity"] == pytest.approx(200.0, rel=1e-12)
+    assert attrs["tip_velocity"]["sensitivity_units"] == "V/(m/s)"
+    assert attrs["base"]["sensitivity"] == pytest.approx(0.1 / STANDARD_GRAVITY, rel=1e-12)
+    assert attrs["base"]["sensitivity_units"] == "V/(m/s^2)"
+    assert attrs["tip_velocity"]["original_units"] == "mV"
+    assert run.attrs["reference"] == "base"
+
+
+@pytest.mark.parametrize("given, fragment", [
+    ("speed=200mV/(mm/s)", "--sensitivity speed=200mV/(mm/s): 'speed' is not a data column"),
+    ("base=200mV/(mm/s)", "--sensitivity base=200mV/(mm/s): the column is written in g, "
+     "already calibrated; expected a column in V or mV"),
+    ("tip=5 mm/s/V", "--sensitivity tip=5 mm/s/V: not understood; expected a number, volts "
+     "(V or mV) and the unit per which, e.g. 200mV/(mm/s)"),
+    ("tip=0 mV/g", "--sensitivity tip=0 mV/g: not understood"),
+    ("tip=100mV/V", "--sensitivity tip=100mV/V: not understood"),
+    ("tip", "--sensitivity tip: expected NAME=SENSITIVITY, e.g. tip_velocity=200mV/(mm/s)"),
+])
+def test_a_sensitivity_that_cannot_calibrate_its_column_is_refused(tmp_path, given, fragment):
+    path = _write(tmp_path / "rec.csv", ["tip [mV]", "base [g]"], [(1, 2), (2, 3), (3, 4)])
+    out = tmp_path / "rec.h5"
+    proc = cli("import", str(path), "--rate", "100", "-o", str(out), "--sensitivity", given)
+    assert proc.returncode == 2
+    assert fragment in proc.stderr
+    assert not out.exists()
+
+
+def test_a_record_in_volts_alone_is_refused_saying_how_to_calibrate_it(tmp_path):
+    """Nothing in a record of volts is a motion: the refusal names the import option that
+    makes one."""
+    t = np.arange(2000) / 1000.0
+    path = _write(tmp_path / "volts.csv", ["tip [V]"],
+                  [(v,) for v in np.exp(-t) * np.sin(2 * np.pi * 17 * t)])
+    run = tmp_path / "volts.h5"
+    assert cli("import", str(path), "--rate", "1000", "-o", str(run)).returncode == 0
+    proc = cli("analyze", str(run))
+    assert proc.returncode == 2
+    assert "nothing to analyse" in proc.stderr
+    assert "--sensitivity NAME=200mV/(mm/s)" in proc.stderr
+    # named, it gives its spectrum; C_i and C_f are refused with the same advice
+    proc = cli("analyze", str(run), "--set", "analysis.channels=tip",
+               "--mass-per-length", "0.1346")
+    refused = [line for line in proc.stdout.splitlines() if "failed equivalent-damping" in line]
+    assert refused and "--sensitivity NAME=200mV/(mm/s)" in refused[0], proc.stdout
+
+
+def test_the_units_examples_run_as_written():
+    """parse_unit's and parse_sensitivity's Examples sections (the import's unit reading)."""
+    import doctest
+
+    import fsi_lab.units
+
+    result = doctest.testmod(fsi_lab.units, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted >= 6 and result.failed == 0, result

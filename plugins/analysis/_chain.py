@@ -55,6 +55,7 @@ from fsi_lab.plugins.analysis.results import (  # noqa: F401 - the plugins impor
     jsonable,
     stack_rows,
 )
+from fsi_lab.units import voltage_hint
 
 #: Dynamic range of HVD components: cycles below this fraction of the largest envelope of the
 #: record are decomposition residue (about 1e-4) rather than signal.
@@ -278,7 +279,7 @@ def displacement_components(context: AnalysisContext, plugin: str) -> list[Compo
         raise AnalysisError(
             f"{where(plugin, context)}: the channel measures {quantity!r} ({context.channel.unit})"
             "; displacement amplitudes need a calibrated displacement, velocity or acceleration "
-            "channel")
+            "channel" + voltage_hint(quantity))
     order = 1 if quantity == "velocity" else 2
     out = []
     for c in components(context, order):

@@ -33,6 +33,7 @@ from fsi_lab.plugins.analysis.results import (
     DampingCoefficients,
     DampingCurves,
 )
+from fsi_lab.units import voltage_hint
 
 
 def specimen_mass_per_length(specimen: Any) -> float:
@@ -195,7 +196,7 @@ def _run_law(context: AnalysisContext, params: dict[str, Any], mass: float, mass
         raise AnalysisError(
             f"{where(plugin, context)}: the channel measures {context.channel.quantity!r} "
             f"({context.channel.unit}); C_i and C_f need a calibrated displacement, velocity "
-            "or acceleration channel")
+            "or acceleration channel" + voltage_hint(context.channel.quantity))
     conventions: dict[int, str] = {}
 
     def work(c):

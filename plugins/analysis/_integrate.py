@@ -18,6 +18,7 @@ from fsi_lab.plugins.analysis._chain import (
     where,
 )
 from fsi_lab.plugins.analysis.results import Components, Integrated
+from fsi_lab.units import voltage_hint
 
 _ORDER = {("velocity", "displacement"): 1, ("acceleration", "velocity"): 1,
           ("acceleration", "displacement"): 2}
@@ -35,7 +36,7 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> Integrated:
         raise AnalysisError(
             f"{where('integrate', context)}: cannot integrate a {ch.quantity!r} channel "
             f"({ch.unit}) to {target}; expected a velocity or acceleration channel (or "
-            f"target = the channel's own quantity)")
+            f"target = the channel's own quantity)" + voltage_hint(ch.quantity))
     comps = components(context, order)
     found = context.result(Components)
     bands = found.decomposition.integrated(order) if order and found is not None \
