@@ -315,6 +315,21 @@ def _same_record_notes(labels: list[str], same_as: dict[int, int]) -> list[str]:
     return notes
 
 
+def _unapplied_notes(extracts: Sequence[RunExtract]) -> list[str]:
+    """A note per set of overrides that runs' stored analyses were computed with and this
+    aggregation is not (:attr:`~fsi_lab.aggregate_extract.RunExtract.unapplied`), naming
+    the runs: their numbers here are not those ``fsi-lab show`` prints for them."""
+    runs: dict[tuple[str, ...], list[str]] = {}
+    for extract in extracts:
+        if extract.unapplied:
+            runs.setdefault(tuple(extract.unapplied), []).append(extract.label)
+    return [f"{', '.join(labels)}: {'its' if len(labels) == 1 else 'their'} stored analysis "
+            f"(what fsi-lab show prints) was computed with {' '.join(items)} beyond the run's "
+            "own settings, and this aggregate identifies the modes without it: give the same "
+            "to aggregate (--set KEY=VALUE, --mass-per-length) to pool that analysis"
+            for items, labels in runs.items()]
+
+
 def aggregate_extracts(extracts: Sequence[RunExtract]) -> dict[str, Any]:
     """The aggregation of the runs (module notes) as one JSON-ready dict.
 
@@ -344,7 +359,7 @@ def aggregate_extracts(extracts: Sequence[RunExtract]) -> dict[str, Any]:
     return {"runs": runs, "runs_with_modes": sum(1 for e in extracts if e.modes),
             "distinct_records": sum(1 for k, e in enumerate(extracts)
                                     if e.modes and k not in same_as),
-            "notes": _same_record_notes(labels, same_as),
+            "notes": _same_record_notes(labels, same_as) + _unapplied_notes(extracts),
             "exit_code": code,
             "modes": modes,
             "amplitude_range_m": [min(r[0] for r in ranges), max(r[1] for r in ranges)]
@@ -404,7 +419,8 @@ def _widening(entry: dict[str, Any]) -> str:
     if runs:
         span = f"x{min(runs):.2g}" + (f" to x{max(runs):.2g}" if f"{min(runs):.2g}"
                                       != f"{max(runs):.2g}" else "")
-        parts.append(f"{len(runs)} run{'s' * (len(runs) != 1)} weighted down by their own "
+        parts.append(f"{len(runs)} run{'s' * (len(runs) != 1)} weighted down by "
+                     f"{'its' if len(runs) == 1 else 'their'} own "
                      f"widening ({span}), intervals x{widened.get('noise', 1.0):.2g}")
     spread = widened.get("spread") or {}
     shown = [f"{name} x{value:.2g}" for name, value in

@@ -145,6 +145,10 @@ class RunExtract:
     #: a hash of the samples of the channels analysed (:func:`record_fingerprint`): records
     #: equal sample for sample have the same one ("": not known)
     fingerprint: str = ""
+    #: what the run's stored analysis (``fsi-lab analyze``, as ``fsi-lab show`` prints it) was
+    #: computed with beyond the run's own settings and this extraction is not (its ``--set``
+    #: texts, ``--mass-per-length=VALUE``): the extract then differs from that analysis
+    unapplied: list[str] = field(default_factory=list)
 
 
 def record_fingerprint(channels: dict[str, Any]) -> str:
@@ -304,7 +308,27 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
             out.errors.append(f"channel {name}: {exc}")
             out.exit_code = 1
     out.fingerprint = record_fingerprint({name: channels[name] for name in identified})
+    out.unapplied = _unapplied(task)
     return out
+
+
+def _unapplied(task: ExtractTask) -> list[str]:
+    """The overrides of ``task.path``'s stored analysis that ``task`` does not give (spaces
+    around ``=`` aside); none when the file holds no readable analysis."""
+    from fsi_lab.batch import AnalyseTask, analysed_with
+    from fsi_lab.runfile import read_analysis_overrides
+
+    def plain(item: str) -> str:
+        key, sep, value = item.partition("=")
+        return f"{key.strip()}{sep}{value.strip()}"
+
+    try:
+        stored = read_analysis_overrides(task.path)
+    except InputFileError:          # (a damaged /analysis: nothing to compare with)
+        return []
+    given = {plain(item) for item in analysed_with(AnalyseTask(task.path, task.sets,
+                                                               task.mass_per_length))}
+    return [item for item in stored if plain(item) not in given]
 
 
 def extract_identified(task: ExtractTask, identified: dict[str, tuple[Any, Any]], profile,

@@ -302,6 +302,25 @@ def test_a_run_s_own_numbers_in_the_aggregate_are_those_of_its_analysis(tmp_path
             assert run[key] == pytest.approx(own[frequency][key], rel=1e-9), (frequency, key)
 
 
+def test_a_run_analysed_with_overrides_the_aggregate_lacks_is_noted(tmp_path):
+    """`fsi-lab analyze RUN --mass-per-length M` stores numbers the aggregate, given another
+    mass, does not reproduce: a note names the run and what its stored analysis used; given
+    the same, no note."""
+    run = write_decay_run(tmp_path / "analysed.h5", seed=3)
+    code, _, err = run_main("analyze", str(run), "--mass-per-length", "0.2")
+    assert code == 0, err
+    code, out, err = run_main("aggregate", str(run), "--mass-per-length", str(MASS), "--json")
+    assert code == 0, err
+    notes = json.loads(out)["notes"]
+    assert notes == [f"{run.name}: its stored analysis (what fsi-lab show prints) was computed "
+                     "with --mass-per-length=0.2 beyond the run's own settings, and this "
+                     "aggregate identifies the modes without it: give the same to aggregate "
+                     "(--set KEY=VALUE, --mass-per-length) to pool that analysis"], notes
+    code, out, err = run_main("aggregate", str(run), "--mass-per-length", "0.2", "--json")
+    assert code == 0, err
+    assert json.loads(out)["notes"] == []
+
+
 def test_runs_without_a_mass_per_length_are_refused_naming_them(files):
     code, out, err = run_main("aggregate", str(files["level0"]), "--json")
     assert code == 2
