@@ -315,8 +315,7 @@ def extract_run(task: ExtractTask, registry=None) -> RunExtract:
 def _unapplied(task: ExtractTask) -> list[str]:
     """The overrides of ``task.path``'s stored analysis that ``task`` does not give (spaces
     around ``=`` aside); none when the file holds no readable analysis."""
-    from fsi_lab.batch import AnalyseTask, analysed_with
-    from fsi_lab.runfile import read_analysis_overrides
+    from fsi_lab.runfile import analysis_overrides, read_analysis_overrides
 
     def plain(item: str) -> str:
         key, sep, value = item.partition("=")
@@ -326,8 +325,7 @@ def _unapplied(task: ExtractTask) -> list[str]:
         stored = read_analysis_overrides(task.path)
     except InputFileError:          # (a damaged /analysis: nothing to compare with)
         return []
-    given = {plain(item) for item in analysed_with(AnalyseTask(task.path, task.sets,
-                                                               task.mass_per_length))}
+    given = {plain(item) for item in analysis_overrides(task.sets, task.mass_per_length)}
     return [item for item in stored if plain(item) not in given]
 
 

@@ -66,8 +66,9 @@ def analysed_with(task: AnalyseTask) -> tuple[str, ...]:
     """What the analysis of ``task`` is computed with beyond the run's own settings, as
     stored in ``/analysis`` attribute ``overrides``: its ``--set`` texts, and
     ``--mass-per-length=VALUE``."""
-    return tuple(task.sets) + ((f"--mass-per-length={task.mass_per_length:g}",)
-                               if task.mass_per_length is not None else ())
+    from fsi_lab.runfile import analysis_overrides
+
+    return analysis_overrides(task.sets, task.mass_per_length)
 
 
 def cut_short(run) -> str | None:

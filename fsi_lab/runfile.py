@@ -661,6 +661,15 @@ def _fsync(path: Path, flags: int) -> None:
         os.close(fd)
 
 
+def analysis_overrides(sets: tuple[str, ...] | list[str],
+                       mass_per_length: float | None) -> tuple[str, ...]:
+    """What an analysis is computed with beyond the run's own settings, as ``/analysis``
+    attribute ``overrides`` stores it: the ``--set`` texts, and ``--mass-per-length=VALUE``
+    (kg/m)."""
+    return tuple(sets) + ((f"--mass-per-length={mass_per_length:g}",)
+                          if mass_per_length is not None else ())
+
+
 def read_analysis_overrides(path: str | Path) -> list[str]:
     """The ``--set`` overrides (and ``--mass-per-length``) the stored analysis was computed
     with beyond the run's own (``/analysis`` attribute ``overrides``); empty when none were
