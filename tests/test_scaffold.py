@@ -79,6 +79,22 @@ def test_a_scaffold_passes_its_tests_unchanged(venv, kind, tests):
     assert f"{tests} passed" in proc.stdout
 
 
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("name", ["x", "abcdefghij-abcdefghij-abcdefghij-abcdefg"])
+def test_a_scaffold_is_lint_clean_alone_and_inside_a_checkout(kind, name, tmp_path):
+    """The files pass fsi-lab's rule set under the distribution's own ruff settings (fsi-lab
+    a library it uses) with the shortest and the longest name accepted; written inside an
+    fsi-lab checkout (the README's tour, no --dir), the checkout's `ruff check .` (make
+    test's first step) passes too."""
+    root = Path(__file__).resolve().parent.parent
+    shutil.copy(root / "pyproject.toml", tmp_path / "pyproject.toml")
+    proc = cli("plugin", "new", kind, name, "--dir", str(tmp_path))
+    assert proc.returncode == 0, proc.stderr
+    for where in (tmp_path / f"fsi-lab-{name}", tmp_path):
+        lint = run([sys.executable, "-m", "ruff", "check", "--no-cache", "."], cwd=where)
+        assert lint.returncode == 0, (where, lint.stdout + lint.stderr)
+
+
 def test_the_scaffolded_analysis_is_listed_analysed_and_drawn(venv, tmp_path):
     python, _ = venv
     listed = run([python, "-m", "fsi_lab.cli", "plugins", "--json"])

@@ -30,6 +30,17 @@ packages = ["$package"]
 
 [tool.pytest.ini_options]
 testpaths = ["tests"]
+
+# fsi-lab's own rule set; fsi-lab is a library this plugin uses, the plugin's package its own.
+[tool.ruff]
+line-length = 100
+
+[tool.ruff.lint]
+select = ["E", "W", "F", "I", "N", "BLE"]
+
+[tool.ruff.lint.isort]
+known-first-party = ["$package"]
+known-third-party = ["fsi_lab"]
 '''
 
 README = '''\
@@ -86,8 +97,9 @@ ANALYSIS_CHANGE = '''\
 - docs/writing-plugins.md of fsi-lab is the full tutorial.'''
 
 ANALYSIS_PLUGIN = '''\
-"""The ``$name`` analysis: the RMS of the channel in windows of ``window`` s, and of the whole
-record.
+"""The ``$name`` analysis.
+
+The RMS of the channel in windows of ``window`` s, and of the whole record.
 
 This module declares the plugin; the work is in :mod:`._compute`, imported when the chain first
 runs it (fsi-lab imports this module whenever it lists the plugins or checks a profile, so it
@@ -118,7 +130,6 @@ ANALYSIS_COMPUTE = '''\
 """The work of the ``$name`` analysis."""
 
 import numpy as np
-
 from fsi_lab.contract import AnalysisResult
 from fsi_lab.errors import AnalysisError
 
@@ -137,7 +148,8 @@ def run(context, params):
     -------
     AnalysisResult
         Datasets ``time`` (s, the middle of each window) and ``rms`` (the channel's unit),
-        attributes ``overall_rms`` and ``windows``, and the summary's ``$under`` section.
+        attributes ``overall_rms`` and ``windows``, and the summary's section named
+        ``$under``.
 
     Raises
     ------
@@ -146,7 +158,7 @@ def run(context, params):
     """
     channel = context.channel
     x = np.asarray(channel.data, dtype=float)  # the record itself: read it, never write it
-    size = int(round(params["window"] * channel.sample_rate))
+    size = round(params["window"] * channel.sample_rate)
     where = f"$name: channel {channel.name}"
     if size < 1:
         raise AnalysisError(f"{where}: a window of {params['window']:g} s is shorter than a "
@@ -168,16 +180,20 @@ def run(context, params):
         units={"time": "s", "rms": channel.unit},
         axes={"rms": "time"},
         attrs={"overall_rms": overall, "windows": count},
-        summary={"$under": {"overall_rms": overall, "largest_window_rms": float(rms.max())}})
+        summary={"$under": {"overall_rms": overall,
+                            "largest_window_rms": float(rms.max())}})
 '''
 
 ANALYSIS_TEST = '''\
-"""The ``$name`` analysis: fsi-lab's conformance kit, and its numbers against ground truth."""
+"""Tests of the ``$name`` analysis.
+
+fsi-lab's conformance kit, and its numbers against ground truth.
+"""
 
 import numpy as np
-
 from fsi_lab.contract import AnalysisContext, ChannelData
 from fsi_lab.testing import AnalysisContract
+
 from $package._compute import run
 
 
@@ -213,10 +229,12 @@ EXCITATION_CHANGE = '''\
 - docs/writing-plugins.md of fsi-lab is the full tutorial.'''
 
 EXCITATION_PLUGIN = '''\
-"""The ``$name`` excitation: a burst of ``cycles`` periods of a sine after ``delay`` s."""
+"""The ``$name`` excitation.
+
+A burst of ``cycles`` periods of a sine after ``delay`` s.
+"""
 
 import numpy as np
-
 from fsi_lab.contract import ExcitationPlugin
 from fsi_lab.errors import ParameterError
 from fsi_lab.hookspecs import hookimpl
@@ -227,9 +245,10 @@ def generate(params, sample_rate):
     """Source voltage (V) of the burst at ``sample_rate`` Hz, from t = 0."""
     frequency = params["frequency"]
     if frequency >= sample_rate / 2:
-        raise ParameterError(f"$name: frequency {frequency:g} Hz is not below half the source "
-                             f"sample rate {sample_rate:g} Hz")
-    t = np.arange(int(round(params["duration"] * sample_rate))) / sample_rate
+        raise ParameterError(
+            f"$name: frequency {frequency:g} Hz is not below "
+            f"half the source sample rate {sample_rate:g} Hz")
+    t = np.arange(round(params["duration"] * sample_rate)) / sample_rate
     since = t - params["delay"]
     on = (since >= 0) & (since < params["cycles"] / frequency)
     return np.where(on, params["amplitude"] * np.sin(2 * np.pi * frequency * since), 0.0)
@@ -261,12 +280,15 @@ def fsi_lab_excitations():
 '''
 
 EXCITATION_TEST = '''\
-"""The ``$name`` excitation: fsi-lab's conformance kit, and its waveform against ground truth."""
+"""Tests of the ``$name`` excitation.
+
+fsi-lab's conformance kit, and its waveform against ground truth.
+"""
 
 import numpy as np
-
 from fsi_lab.params import validate
 from fsi_lab.testing import ExcitationContract
+
 from $package.plugin import PLUGIN
 
 
@@ -278,8 +300,8 @@ class TestContract(ExcitationContract):
 
 
 def test_the_burst_holds_its_cycles_after_its_delay():
-    params = validate(PLUGIN.params, {"amplitude": 2.0, "frequency": 50.0, "cycles": 3,
-                                      "delay": 0.1, "duration": 0.5}, "$name")
+    given = {"amplitude": 2.0, "frequency": 50.0, "cycles": 3, "delay": 0.1, "duration": 0.5}
+    params = validate(PLUGIN.params, given, "$name")
     wave = PLUGIN.generate(params, 10000.0)
     t = np.arange(wave.size) / 10000.0
     assert wave.size == 5000 and np.all(wave[t < 0.1] == 0.0) and np.all(wave[t >= 0.16] == 0.0)
@@ -307,7 +329,9 @@ INSTRUMENT_CHANGE = '''\
 - docs/writing-plugins.md of fsi-lab is the full tutorial.'''
 
 INSTRUMENT_PLUGIN = '''\
-"""The ``$name`` amplifier driver, written with fsi-lab's instrument kit.
+"""The ``$name`` amplifier driver.
+
+Written with fsi-lab's instrument kit.
 
 It drives an amplifier that speaks SCPI over VISA (``*IDN?``, ``OUTP 0|1``, ``OUTP?``,
 ``GAIN <V/V>``, ``GAIN?``, ``STAT:INTL?``), as fsi-lab's simulated shaker amplifier does.
@@ -386,15 +410,18 @@ def fsi_lab_instruments():
 '''
 
 INSTRUMENT_TEST = '''\
-"""The ``$name`` driver: fsi-lab's conformance kit, against fsi-lab's simulated amplifier on a
-127.0.0.1 socket (through pyvisa-py, as in the lab)."""
+"""Tests of the ``$name`` driver.
+
+fsi-lab's conformance kit, against fsi-lab's simulated amplifier on a 127.0.0.1 socket
+(through pyvisa-py, as in the lab).
+"""
 
 import pytest
-
 from fsi_lab.contract import BenchContext
 from fsi_lab.instruments.sim.bench import BenchOptions, SimBench
 from fsi_lab.params import validate
 from fsi_lab.testing import InstrumentContract
+
 from $package.plugin import PLUGIN
 
 
