@@ -521,7 +521,8 @@ def cmd_import(args) -> int:
             raise InputFileError(f"--sensitivity {item}: expected NAME=SENSITIVITY, e.g. "
                                  "tip_velocity=200mV/(mm/s)")
         sensitivities[name.strip()] = text.strip()
-    out = import_csv(args.csv, args.output, args.rate, args.reference, delays, sensitivities)
+    out = import_csv(args.csv, args.output, args.rate, args.reference, delays, sensitivities,
+                     args.decimal_mark)
     if args.json:
         _emit_json({"run": str(out)})
     else:
@@ -1068,6 +1069,9 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
                    help="calibrate a column written in volts (V or mV): its sensor's "
                         "sensitivity in volts per unit, e.g. tip_velocity=200mV/(mm/s) (a "
                         "vibrometer's decoder at 5 mm/s per V) or base=100mV/g")
+    p.add_argument("--decimal-mark", choices=(".", ","),
+                   help="the decimal mark of a file separated by semicolons or tabs whose "
+                        "values could be grouped in thousands (25.300: 25.3 or 25300?)")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="RUN.h5")
     common(p)
     p.set_defaults(func=cmd_import)

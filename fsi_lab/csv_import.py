@@ -42,11 +42,21 @@ from fsi_lab.units import (
 _HEADER = re.compile(r"^\s*(?P<name>[^\[\]()]+?)\s*(?:\[(?P<unit>[^\[\]]*)\]"
                      r"|\((?P<paren>[^()]*)\))\s*$")
 TIME_TOLERANCE = 1e-3  # relative spread of the time steps accepted as uniform sampling
+#: Half the spacing of single-precision numbers relative to their value (2^-24).
+FLOAT32_EPS = 2.0 ** -24
+#: The way out of a time column refused, for its messages.
+_WITHOUT_TIME = ("; if the samples were taken at a steady rate, delete the time column and give "
+                 "the rate with --rate HZ")
 EXPECTED = ("a UTF-8 CSV file with a header row of 'name [unit]' cells and rows of numbers, "
             "separated by commas (or by semicolons or tabs, with a decimal comma or point)")
 #: The units accepted, in words, for the messages.
 ACCEPTED_UNITS = ("m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n on m, m/s, m/s^2 and V "
                   "(mm/s, um, mV), or s or ms for the time column")
+#: A value grouped in thousands (25.300, -1,234): one mark, three digits after it, and 1 to 3
+#: before it not starting with 0 (a decimal value below 1, 0.125, is never grouped).
+_GROUPED = re.compile(r"[-+]?[1-9]\d{0,2}[.,]\d{3}")
+#: The mark that is not the decimal mark given.
+_OTHER_MARK = {".": ",", ",": "."}
 #: Column separators recognised in the header row, most telling first.
 SEPARATORS = (";", "\t", ",")
 #: A blank line: empty, spaces or tabs, or separators alone (a sheet's empty row).
@@ -138,6 +148,72 @@ def _later_header(path: Path, lines: list[str], refused: int) -> str:
     return ""
 
 
+def _cells(text: str, separator: str) -> list[str]:
+    """The cells of one line (a trailing separator's empty cell left out); none for a line
+    the CSV reader refuses."""
+    try:
+        cells = next(csv.reader([text], delimiter=separator, strict=True))
+    except csv.Error:
+        return []
+    return cells[:-1] if len(cells) > 1 and not cells[-1].strip() else cells
+
+
+#: Error values spreadsheets write in a cell (English, German, French), upper case.
+SHEET_ERRORS = ("#N/A", "#NV", "#NA", "#DIV/0!", "#VALUE!", "#WERT!", "#VALEUR!", "#REF!",
+                "#BEZUG!", "#NAME?", "#NOM?", "#NUM!", "#ZAHL!", "#NOMBRE!", "#NULL!", "#NUL!",
+                "#LEER!", "#SPILL!", "#ÜBERLAUF!", "#CALC!", "#GETTING_DATA")
+
+
+def _error_row(text: str, separator: str, columns: int) -> bool:
+    """Whether a line starting with ``#`` among the rows is a row of samples whose first cell
+    holds a spreadsheet's error value: that value (:data:`SHEET_ERRORS`), or, with more than
+    one column, as many cells as the header's with numbers after the first."""
+    cells = _cells(text.strip(), separator)
+    if cells and cells[0].strip().upper() in SHEET_ERRORS:
+        return True
+    return columns > 1 and len(cells) == columns and _numbers_only(
+        separator.join(cells[1:]), separator)
+
+
+def _numbers_only(text: str, separator: str) -> bool:
+    """Whether every cell of the line ``text`` is a number (a decimal comma allowed beside
+    semicolons or tabs)."""
+    cells = _cells(text, separator)
+    try:
+        for cell in cells:
+            float(cell.strip().replace(",", ".") if separator != "," else cell)
+    except ValueError:
+        return False
+    return bool(cells)
+
+
+def _commented_header(path: Path, lines: list[str], first: int) -> int | None:
+    """The line (from 1) of a header row written as a comment just above the first row
+    ``first``: the nearest line above that is not blank, when it starts with ``#`` and reads
+    as a header row without it; else None."""
+    for number in range(first - 1, 0, -1):
+        text = lines[number - 1]
+        if _BLANK.fullmatch(text):
+            continue
+        body = text.lstrip()
+        if not body.startswith("#"):
+            return None
+        body = body[1:]
+        try:
+            _parse_header(path, _cells(body, _separator(body)), number)
+        except InputFileError:
+            return None
+        return number
+    return None
+
+
+def _example_header(count: int, separator: str) -> str:
+    """A header row for ``count`` columns separated by ``separator``, for the messages."""
+    names = ["time [s]", "tip velocity [m/s]", "base acceleration [m/s^2]"]
+    names += [f"channel {k} [V]" for k in range(4, count + 1)]
+    return separator.join(names[:count] if count > 1 else ["tip velocity [m/s]"])
+
+
 def _separator(header: str) -> str:
     """The column separator of a file whose header line is ``header``: a semicolon or a tab
     when the line holds one (files written with a decimal comma), else a comma; a header of
@@ -194,19 +270,24 @@ class _Printing:
         return np.fmax(fixed, significant)
 
 
-def read_csv(path: str | Path) -> Table:
+def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
     """The columns and values of a CSV file (:class:`Table`).
 
     The separator is found on the header row (:func:`_separator`); with semicolons or tabs, a
     comma in a value is its decimal mark, and a file that holds both a decimal comma and a
-    point (a thousands separator?) is refused rather than read a thousand times off.
+    point (a thousands separator?) is refused rather than read a thousand times off, as is one
+    whose every value with a mark reads as a number grouped in thousands (``25.300``, never
+    ``0.125`` or ``2.5``) unless ``decimal_mark`` (``"."`` or ``","``) says which the file
+    uses.
     """
     path = Path(path)
     text = read_text(path, EXPECTED, utf16=True)
     if "\x00" in text:
         raise InputFileError(f"{path}: holds NUL characters (UTF-16 text without its byte-order "
                              f"mark?); expected {EXPECTED}")
-    lines = text.splitlines()
+    # (a CSV written on Windows by a writer that adds its own \r to each \r\n ends every
+    # line with \r\r\n: one line end, not a blank line after each row)
+    lines = text.replace("\r\r\n", "\n").splitlines()
     numbers: list[int] = []          # the file's line number of each line the reader took
 
     def table():
@@ -222,6 +303,19 @@ def read_csv(path: str | Path) -> Table:
         raise InputFileError(f"{path}: {found}; expected a header row 'name [unit],...' and "
                              "data")
     separator = _separator(header)
+    if _numbers_only(header, separator):
+        # numpy's savetxt writes its header row as a comment ("# time [s],v [m/s]")
+        above = _commented_header(path, lines, numbers[0])
+        if above is None:
+            cells = len(_cells(header, separator))
+            raise InputFileError(
+                f"{path}: line {numbers[0]} holds numbers, not a header row: the file has "
+                f"none; expected a first row naming its {_plural(cells, 'column')} "
+                f"'name [unit]', e.g. '{_example_header(cells, separator)}'")
+        numbers.insert(0, above)
+        rows = itertools.chain([header], rows)
+        header = lines[above - 1].lstrip()[1:]
+        separator = _separator(header)
     # Blank lines are accepted above the first row and after the last; between, one is a
     # missing sample: skipped, it would move every later sample by a sample period. (Line
     # numbers from 1; the file's lines are scanned in place, nothing per line is kept.)
@@ -249,12 +343,23 @@ def read_csv(path: str | Path) -> Table:
             if blank is not None:
                 text = lines[blank - 1]
                 _missing_sample(path, blank, separator in text or bool(text.strip()))
+            for number in range(first + 1, last):
+                text = lines[number - 1]
+                if "#" in text and text.lstrip().startswith("#") \
+                        and _error_row(text, separator, len(columns)):
+                    raise InputFileError(
+                        f"{path}: line {number} begins with {text.split(separator)[0].strip()!r}"
+                        " (a spreadsheet's error value in a row of samples, not a comment): a "
+                        "sample is missing there (skipped, every later sample would move one "
+                        "sample period early); expected a number in every cell, and '#' only "
+                        "before a comment")
         time = next((i for i, c in enumerate(columns) if c.is_time), None)
         data = np.empty((len(lines), len(columns)))
         printing = _Printing(len(lines))
         row_lines = np.empty(len(lines), dtype=np.int64)
         count, read = 0, 1                       # rows kept; rows read, the header first
         marks: dict[str, tuple[int, str]] = {}   # the first value with each decimal mark
+        grouped = True          # every value with a mark so far reads as thousands (25.300)
         for row in reader:
             read += 1
             line = numbers[-1]
@@ -279,6 +384,13 @@ def read_csv(path: str | Path) -> Table:
                     for mark in ",.":
                         if mark in value_text and mark not in marks:
                             marks[mark] = (line, cell)
+                    if decimal_mark is not None and _OTHER_MARK[decimal_mark] in value_text:
+                        raise InputFileError(
+                            f"{path}: line {line}, column {col + 1} ({columns[col].written}): "
+                            f"{cell!r} holds {_OTHER_MARK[decimal_mark]!r}, and the decimal "
+                            f"mark given is {decimal_mark!r}; expected no thousands separators")
+                    if grouped and ("," in value_text or "." in value_text):
+                        grouped = bool(_GROUPED.fullmatch(value_text))
                     value_text = value_text.replace(",", ".")
                 data[count, col] = _number(path, line, col, columns[col], cell, value_text,
                                            separator == ",")
@@ -296,6 +408,15 @@ def read_csv(path: str | Path) -> Table:
             f"{point!r} (a point: a thousands separator?); expected one decimal mark in the "
             "whole file and no thousands separators"
         )
+    if grouped and marks and decimal_mark is None:
+        mark, (line, cell) = next(iter(marks.items()))
+        raise InputFileError(
+            f"{path}: every value with a {mark!r} has one {mark!r} and three digits after it, "
+            f"and none lies between -1 and 1 (line {line}: {cell!r}): a thousands separator "
+            f"({cell.strip()} read as {cell.strip().replace(mark, '')}) cannot be told from a "
+            "decimal mark; expected "
+            f"--decimal-mark '{mark}' if it is the decimal mark, or the file exported without "
+            "thousands separators")
     if count < 2:
         raise InputFileError(f"{path}: fewer than two data rows")
     rounding = printing.rounding(count) if time is not None else np.zeros(count)
@@ -354,14 +475,19 @@ def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: n
     step = span / steps.size
     if not np.all(steps > 0):
         raise InputFileError(f"{path}: the time column does not increase (line "
-                             f"{lines[int(np.argmin(steps > 0)) + 1]})")
+                             f"{lines[int(np.argmin(steps > 0)) + 1]}: printed with too few "
+                             f"digits for its step?){_WITHOUT_TIME}")
     # A column printed to a few digits moves each step by up to a unit of the last one
     # (2560 Hz to 6 decimals: steps of 0.000390 and 0.000391 s).
     # Never half a step or more: a column printed to a step's resolution (whole ms at 1 kHz)
     # would otherwise pass a missing sample.
+    # A column kept in single precision (LabVIEW's SGL, float32 arrays) errs by its unit in
+    # the last place, 6e-8 of the time, at each end of a step.
+    single = FLOAT32_EPS * np.maximum(np.abs(time[:-1]), np.abs(time[1:]))
     with np.errstate(over="ignore", invalid="ignore"):
-        allowed = np.minimum(np.maximum(TIME_TOLERANCE * step,
-                                        (rounding[:-1] + rounding[1:]) * (1 + 1e-9)), 0.49 * step)
+        allowed = np.minimum(np.maximum.reduce([np.full(steps.size, TIME_TOLERANCE * step),
+                                                (rounding[:-1] + rounding[1:]) * (1 + 1e-9),
+                                                2.0 * single]), 0.49 * step)
         excess = np.abs(steps - step) - allowed
     if not float(np.max(excess)) <= 0.0:
         worst = int(np.nanargmax(np.where(np.isnan(excess), np.inf, excess)))
@@ -369,7 +495,7 @@ def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: n
             f"{path}: the time column is not uniformly sampled (step {steps[worst]:.6g} s at "
             f"line {lines[worst + 1]} against a mean of {step:.6g} s); expected uniform "
             f"sampling, within {TIME_TOLERANCE:.1%} of a step or the rounding of the digits "
-            "printed"
+            f"printed{_WITHOUT_TIME}"
         )
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         rate = (time.size - 1) / span
@@ -444,7 +570,8 @@ def _check_analysis_inputs(path: Path, columns: list[Column], reference: str | N
 
 def import_csv(path: str | Path, out: str | Path, rate: float | None,
                reference: str | None = None, delays: Mapping[str, float] | None = None,
-               sensitivities: Mapping[str, str] | None = None) -> Path:
+               sensitivities: Mapping[str, str] | None = None,
+               decimal_mark: str | None = None) -> Path:
     """Write the CSV file ``path`` as the run file ``out``; returns ``out``.
 
     Parameters
@@ -470,10 +597,13 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
         :func:`~fsi_lab.units.parse_sensitivity` reads it (``"200mV/(mm/s)"``): the column is
         stored in the sensor's SI unit (volts over the sensitivity), with the sensitivity in
         its ``sensitivity`` and ``sensitivity_units`` attributes, as a run stores a channel.
+    decimal_mark
+        ``"."`` or ``","``: the decimal mark of a file separated by semicolons or tabs whose
+        values could be grouped in thousands (:func:`read_csv`); None: as found.
     """
     path, out = Path(path), Path(out)
     delays = dict(delays or {})
-    table = read_csv(path)
+    table = read_csv(path, decimal_mark)
     columns, data, lines = table.columns, table.data, table.lines
     calibrations = _calibrations(path, columns, dict(sensitivities or {}))
     _check_analysis_inputs(path, columns, reference, delays, calibrations)
@@ -492,7 +622,8 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
         t0 = float(time[0])
         if abs(t0) > MAX_T0_S:
             raise InputFileError(f"{path}: line {lines[0]}: the time column starts at {t0:g} s; "
-                                 f"expected a start within {MAX_T0_S:g} s of 0")
+                                 f"expected a start within {MAX_T0_S:g} s of 0 (a time "
+                                 f"of day or since 1904?){_WITHOUT_TIME}")
     elif rate is None:
         raise InputFileError(f"{path}: no 'time [s]' column; give the sample rate with --rate HZ")
     else:

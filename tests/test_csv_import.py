@@ -472,3 +472,71 @@ def test_the_units_examples_run_as_written():
 
     result = doctest.testmod(fsi_lab.units, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted >= 6 and result.failed == 0, result
+
+
+@pytest.mark.parametrize("text, fragment", [
+    # grouped in thousands with the only mark in the file: never read 1000 times off
+    ("Abstand [um];Basis [m/s^2]\n25.300;0\n25.301;0\n-25.299;0\n",
+     "every value with a '.' has one '.' and three digits after it, and none lies between -1 "
+     "and 1 (line 2: '25.300'): a thousands separator (25.300 read as 25300) cannot be told "
+     "from a decimal mark; expected --decimal-mark '.' if it is the decimal mark"),
+    ("v [um/s]\n21,357\n567\n-1,234\n", "every value with a ',' has one ','"),
+    # a spreadsheet's error value in a row's first cell is no comment
+    ("v [mm/s];b [m/s^2]\n1,0;0,1\n#NV;0,2\n3,0;0,3\n",
+     "line 3 begins with '#NV' (a spreadsheet's error value in a row of samples, not a "
+     "comment): a sample is missing there"),
+    ("v [mm/s]\n1\n#DIV/0!\n3\n", "line 3 begins with '#DIV/0!'"),
+    ("v [mm/s],b [g]\n1,2\n#1,2\n3,4\n", "line 3 begins with '#1'"),
+    # no header row: say so, with one for the columns found
+    ("0,1.5,2\n0.001,1.6,2\n", "line 1 holds numbers, not a header row: the file has none; "
+     "expected a first row naming its 3 columns 'name [unit]', e.g. 'time [s],tip velocity "
+     "[m/s],base acceleration [m/s^2]'"),
+    # time columns refused name the way out
+    ("time [s],v [m/s]\n0.000,1\n0.000,2\n0.001,3\n", "the time column does not increase "
+     "(line 3: printed with too few digits for its step?); if the samples were taken at a "
+     "steady rate, delete the time column and give the rate with --rate HZ"),
+])
+def test_an_export_that_would_be_read_wrong_is_refused_saying_what_to_change(tmp_path, text,
+                                                                             fragment):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    proc = cli("import", str(path), "-o", str(tmp_path / "bad.h5"), "--rate", "1000")
+    assert proc.returncode == 2
+    assert fragment in proc.stderr
+    assert not (tmp_path / "bad.h5").exists()
+
+
+@pytest.mark.parametrize("text, args, values", [
+    # --decimal-mark settles the grouped-looking file: a decimal point
+    ("Abstand [mm];Basis [m/s^2]\n25.300;0\n25.301;0\n", ["--decimal-mark", "."],
+     [0.0253, 0.025301]),
+    # a value below 1 shows the mark is decimal: read as found
+    ("x [mm];y [m]\n25.300;0\n0.125;0\n", [], [0.0253, 0.000125]),
+    # numpy's savetxt writes the header row as a comment
+    ("# x [mm],y [m]\n1.5,0\n2.5,0\n", [], [0.0015, 0.0025]),
+    # a CSV writer that doubles the carriage return (Windows, a file opened without newline='')
+    ("x [mm],y [m]\r\r\n1.5,0\r\r\n2.5,0\r\r\n", [], [0.0015, 0.0025]),
+    # comments among the rows stay comments
+    ("x [mm];y [m]\n1,5;0\n# the shaker stopped here\n2,5;0\n", [], [0.0015, 0.0025]),
+])
+def test_exports_read_as_meant(tmp_path, text, args, values):
+    path = tmp_path / "good.csv"
+    path.write_text(text, newline="")
+    out = tmp_path / "good.h5"
+    proc = cli("import", str(path), "-o", str(out), "--rate", "1000", *args)
+    assert proc.returncode == 0, proc.stderr
+    np.testing.assert_allclose(read_run(out).channels["x" if "x [" in text else "Abstand"].data,
+                               values, rtol=1e-12)
+
+
+def test_a_time_column_kept_in_single_precision_is_read(tmp_path):
+    """LabVIEW's SGL and float32 arrays print times that miss the clock by their last place
+    (2.4e-7 s at 4 s): a column of 20 000 such times at 5 kHz is uniform sampling."""
+    t = (np.arange(20000) / 5000.0).astype(np.float32)
+    path = tmp_path / "single.csv"
+    path.write_text("time [s],v [m/s]\n" + "".join(f"{float(v):.9g},1\n" for v in t))
+    proc = cli("import", str(path), "-o", str(tmp_path / "single.h5"))
+    assert proc.returncode == 0, proc.stderr
+    # (the rate from the column's ends, to single precision)
+    assert read_run(tmp_path / "single.h5").channels["v"].sample_rate == pytest.approx(
+        5000.0, rel=1e-7)

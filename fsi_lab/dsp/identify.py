@@ -840,7 +840,12 @@ def _unforced(windows: list[tuple[int, int, int]], reference: np.ndarray, fs: fl
                            f"pulse, below {NOISE_ENVELOPE:g} times that noise): the record "
                            "holds no free decay (a random or continuous excitation), and C_i "
                            "and C_f need free decays; end the excitation well before the "
-                           "record ends")
+                           "record ends"
+                           + ("; or, if the base was still and its channel holds only its "
+                              "sensor's noise (a hammer or pluck test: its largest envelope, "
+                              f"{top / max(noise, 1e-300):.1f} times that noise, is what noise "
+                              "alone reaches), analyse without it: --set analysis.reference="
+                              if top < PULSE_MARGIN * noise else ""))
 
 
 def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:

@@ -36,6 +36,7 @@ from validation.cases import (
     Mode,
     clean_record,
     impulse_train,
+    sdof_grid,
     trial,
 )
 from validation.run import evaluate, fsi_lab_estimate
@@ -1049,6 +1050,21 @@ def test_decays_too_short_for_the_start_test_are_warned():
 
 
 # ----------------------------------------------------------------------------- the wet bench
+def test_a_reference_of_noise_alone_is_refused_naming_the_way_out():
+    """A hammer test's base accelerometer holds its own noise alone (its largest envelope 4 to
+    5 times that noise, as random forcing's is of its own level): the refusal says to analyse
+    without the reference, which then gives the decay's numbers."""
+    case = sdof_grid()[0]
+    x = trial(case, 0)
+    still = 1e-3 * np.random.default_rng(5).standard_normal(x.size)
+    with pytest.raises(AnalysisError, match=r"keeps moving after every excitation.*if the base "
+                                            r"was still and its channel holds only its sensor's "
+                                            r"noise .*analyse without it: --set "
+                                            r"analysis.reference="):
+        identify(x, case.fs, reference=still)
+    assert identify(x, case.fs).modes[0].quadratic.value("beta") > 0
+
+
 def test_random_excitation_through_the_whole_record_is_refused_and_its_end_is_waited_for():
     """The simulated wet bench driven by the random plugin: noise through the whole record
     (4 s) leaves no free decay, and with the base acceleration as the reference the record is
