@@ -137,6 +137,28 @@ def test_summary_text_gives_the_fluid_term_s_power_beside_the_law():
     assert "fluid term" not in format_summary(summary())
 
 
+def test_summary_text_says_a_c_f_without_a_beam_model_is_per_the_amplitude_measured():
+    """Without a beam model (--mass-per-length) C_f belongs to the displacement at the sensor,
+    half the modal C_f at a cantilever's tip: the line under the component says how to get the
+    modal one; with the modal conversion, no such line."""
+    from fsi_lab.cli import format_summary
+
+    def summary(convention):
+        return {"channels": {"tip_velocity": {"components": [{
+            "index": 0, "frequency_hz": 17.0,
+            "equivalent_damping": {"c_i": 0.65, "c_f": 16.3, "r2": 1.0,
+                                   "c_i_ci95": [0.6, 0.7], "c_f_ci95": [16.0, 16.6],
+                                   "amplitude_convention": convention}}]}}}
+
+    measured = format_summary(summary("measured (displacement amplitude at the measuring "
+                                      "point)"))
+    assert ("C_f is per the amplitude measured at the sensor (no beam model); the modal C_f "
+            "is W_n(x_meas) times it") in measured
+    assert "modal_scale=W" in measured
+    assert "amplitude measured" not in format_summary(summary("modal: q_2 = w(x_meas) / "
+                                                              "W_2(x_meas), W_2(x_meas) = 2"))
+
+
 def test_summary_text_gives_the_preferred_viscous_law_s_damping_ratio_in_percent():
     from fsi_lab.cli import format_summary
 

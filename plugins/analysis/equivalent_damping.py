@@ -98,7 +98,19 @@ def fsi_lab_summary_lines(component):
         if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
             text += f"; {name[0].upper()}{name[1:]} is not resolved (its interval contains 0)"
     return SummaryText(keys=("equivalent_damping",), inline=text,
-                       lines=_preferred_law_line(eq))
+                       lines=_preferred_law_line(eq) + _measured_line(eq))
+
+
+def _measured_line(eq: dict) -> tuple[str, ...]:
+    """Where C_f belongs to the displacement measured, not to a mode's coordinate (no beam
+    model: ``--mass-per-length``), how it becomes the modal C_f the paper and the modal
+    model use (C_i is the same in both)."""
+    if not str(eq.get("amplitude_convention", "")).startswith("measured"):
+        return ()
+    return ("C_f is per the amplitude measured at the sensor (no beam model); the modal C_f "
+            "is W_n(x_meas) times it, the mode shape at the sensor (2 at a cantilever's tip): "
+            "give the beam (--set specimen.*) or --set "
+            "analysis.equivalent-damping.modal_scale=W",)
 
 
 #: How the summary names each law whose coefficients it prints on a line of their own.
