@@ -1,8 +1,9 @@
 """Import of data recorded elsewhere: a CSV file becomes a run file.
 
-The header row names each column ``name [unit]`` (or ``name (unit)``); the unit (m, m/s,
-m/s^2, g or V, with a prefix mm, um, mV...) gives the quantity. An optional ``time [s]`` (or
-``[ms]``) column replaces the sample rate given on the command line. Values are converted to SI
+The header row names each column ``name [unit]`` (or ``name (unit)``, or its names on one row
+and their units on the next); the unit (m, m/s, m/s^2, g or V, with a prefix mm, um, mV...)
+gives the quantity. An optional column in s (or ms), the time whatever its name, replaces the
+sample rate given on the command line. Values are converted to SI
 (g to m/s^2, mm/s to m/s). Files exported where the decimal mark is a comma separate their
 columns with semicolons (or tabs): their ``1,5`` reads as 1.5. Lines starting with ``#`` before
 or among the rows are comments; blank lines only above the first row or after the last (one
@@ -18,6 +19,7 @@ import csv
 import itertools
 import math
 import re
+import unicodedata
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
@@ -96,27 +98,28 @@ def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
             )
         written = match["name"].strip()
         unit = (match["unit"] if match["unit"] is not None else match["paren"]).strip()
-        name = re.sub(r"\s+", "_", written)
+        name = _channel_name(written)
         if not CHANNEL_NAME.fullmatch(name):  # the names a profile accepts
             raise InputFileError(
                 f"{path}: header column {number}: name {written!r} is not accepted; expected a "
                 "letter followed by letters, digits, '_', '-' or spaces (e.g. tip_velocity)"
             )
-        is_time = name.lower() == "time"
-        if is_time:              # (in a time column 'S' and 'MS' can only mean s and ms)
+        # (no channel is in s or ms: a column in them is the time, whatever its name, Zeit,
+        # t or X_Value; in a time column 'S' and 'MS' can only mean s and ms)
+        is_time = name.lower() == "time" or unit.lower() in TIME_UNITS
+        if is_time:
+            name = "time"
             scale = TIME_UNITS.get(unit.lower())
             parsed = ("s", scale) if scale is not None else None
         else:
             parsed = parse_unit(unit)
         if parsed is None:
-            hint = (f"; a time column is named 'time' (e.g. 'time [{unit}]')"
-                    if unit in TIME_UNITS and not is_time else "")
             raise InputFileError(
                 f"{path}: header column {number} ({written}): unit {unit!r} is not accepted; "
-                f"expected {ACCEPTED_UNITS}{hint}"
+                f"expected {ACCEPTED_UNITS}"
             )
         columns.append(Column(name, unit, parsed[0], parsed[1], written))
-    names = [c.name for c in columns]
+    names = [c.name for c in columns if not c.is_time]   # (two time columns: import_csv)
     duplicate = next((n for n in names if names.count(n) > 1), None)
     if duplicate:
         raise InputFileError(f"{path}: column name {duplicate!r} appears twice in the header")
@@ -136,16 +139,58 @@ def _later_header(path: Path, lines: list[str], refused: int) -> str:
         text = lines[number - 1]
         if _BLANK.fullmatch(text) or text.lstrip().startswith("#"):
             continue
+        separator = _separator(text)
+        cells = _cells(text, separator)
         try:
-            cells = next(csv.reader([text], delimiter=_separator(text), strict=True))
-            if len(cells) > 1 and not cells[-1].strip():
-                cells = cells[:-1]
             _parse_header(path, cells, number)
-        except (csv.Error, InputFileError):
-            continue
+        except InputFileError:
+            # or its names on this row and their units on the next
+            following = iter([_cells(lines[number], separator)] if number < len(lines) else [])
+            if _names_and_units(path, cells, following, number) is None:
+                continue
         above = f"line {refused}" if number == refused + 1 else f"lines {refused} to {number - 1}"
         return f"; line {number} ({text.strip()!r}) is one: begin {above} with '#'"
     return ""
+
+
+#: Letters spelled out in ASCII in a channel's name (the rest lose their accents).
+_SPELLED = str.maketrans({"ß": "ss", "ä": "ae", "ö": "oe", "ü": "ue", "Ä": "Ae", "Ö": "Oe",
+                          "Ü": "Ue", "æ": "ae", "ø": "o", "å": "a", "Æ": "Ae", "Ø": "O",
+                          "Å": "A"})
+
+
+def _channel_name(written: str) -> str:
+    """The channel name of a header's ``written`` name: letters in ASCII (Fußpunkt:
+    Fusspunkt, Vélocité: Velocite), and each run of spaces or other signs (``Point1:+Z``) as
+    one ``_``."""
+    ascii_text = unicodedata.normalize("NFKD", written.strip().translate(_SPELLED))
+    ascii_text = "".join(c for c in ascii_text if not unicodedata.combining(c))
+    return re.sub(r"[^A-Za-z0-9_-]+", "_", ascii_text).strip("_")
+
+
+def _names_and_units(path: Path, names: list[str], reader, line: int) -> list[Column] | None:
+    """The columns of a header written as a row of names (``names``, on file line ``line``)
+    and, on the next row ``reader`` gives, a row of their units (``s;mm/s`` or ``[s];[mm/s]``,
+    as LMS, DIAdem, dSPACE and oscilloscopes write them); None when the next row is not one
+    unit per name."""
+    try:
+        units = next(reader)
+    except (StopIteration, csv.Error):
+        return None
+    if len(units) > 1 and not units[-1].strip():
+        units = units[:-1]
+    if not names or not units:
+        return None
+    written = [unit.strip().removeprefix("[").removesuffix("]").removeprefix("(")
+               .removesuffix(")").strip() for unit in units]
+    if len(written) != len(names) or not all(
+            parse_unit(unit) is not None or unit.lower() in TIME_UNITS for unit in written):
+        return None
+    try:
+        return _parse_header(path, [f"{name.strip()} [{unit}]"
+                                    for name, unit in zip(names, written)], line)
+    except InputFileError:
+        return None
 
 
 def _cells(text: str, separator: str) -> list[str]:
@@ -329,10 +374,15 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
         # An export's rows often end with the separator: an empty last cell on every line.
         if len(cells) > 1 and not cells[-1].strip():
             cells = cells[:-1]
+        header_rows = 1
         try:
             columns = _parse_header(path, cells, numbers[0])
         except InputFileError as exc:
-            raise InputFileError(f"{exc}{_later_header(path, lines, numbers[0])}") from None
+            # an analyser's names on one row and their units on the next
+            columns = _names_and_units(path, cells, reader, numbers[0])
+            if columns is None:
+                raise InputFileError(f"{exc}{_later_header(path, lines, numbers[0])}") from None
+            header_rows = 2
         # (after the header: the lines above the first row of an export that holds a few
         # lines about itself are refused as a header, not as samples missing)
         first = next((n for n in range(numbers[0] + 1, len(lines) + 1) if holds_row(n)), None)
@@ -357,7 +407,7 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
         data = np.empty((len(lines), len(columns)))
         printing = _Printing(len(lines))
         row_lines = np.empty(len(lines), dtype=np.int64)
-        count, read = 0, 1                       # rows kept; rows read, the header first
+        count, read = 0, header_rows             # rows kept; rows read, the header first
         marks: dict[str, tuple[int, str]] = {}   # the first value with each decimal mark
         grouped = True          # every value with a mark so far reads as thousands (25.300)
         for row in reader:

@@ -66,8 +66,8 @@ def test_time_column_replaces_rate(tmp_path):
     (["time [s]", "tip [m/s]"], [[0, 1], [0.1, 2], [0.25, 3]], [],
      "the time column is not uniformly sampled"),
     (["tip [m/s]"], [[1], ["nan"]], ["--rate", "10"], "expected a finite number"),
-    (["tip/velocity [m/s]"], [[1], [2]], ["--rate", "10"],
-     "header column 1: name 'tip/velocity' is not accepted; expected a letter followed by "
+    (["3rd tip [m/s]"], [[1], [2]], ["--rate", "10"],
+     "header column 1: name '3rd tip' is not accepted; expected a letter followed by "
      "letters, digits, '_', '-' or spaces"),
     (["tip velocity [m/s]", "tip_velocity [m/s]"], [[1, 2], [2, 3]], ["--rate", "10"],
      "column name 'tip_velocity' appears twice"),
@@ -219,10 +219,9 @@ def test_a_utf16_export_with_its_byte_order_mark_is_read(tmp_path):
     ("x [m],y [m]\n\"1,5\",2\n1,2\n", "'1,5' is not a number (a decimal comma in a "
      "comma-separated file? separate the columns with semicolons)"),
     ("x [m];y [m]\n1.234,5;2\n1;2\n", "'1.234,5' is not a number\n"),
-    ("Zeit [s];v [m/s]\n0;1\n1;2\n",
-     "unit 's' is not accepted; expected m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n on "
-     "m, m/s, m/s^2 and V (mm/s, um, mV), or s or ms for the time column; a time column is "
-     "named 'time' (e.g. 'time [s]')"),
+    ("v [m/s];Kraft [N]\n0;1\n1;2\n",
+     "unit 'N' is not accepted; expected m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n on "
+     "m, m/s, m/s^2 and V (mm/s, um, mV), or s or ms for the time column"),
     (",x [m]\n0,1\n1,2\n", "line 1, header column 1 is empty (a table's index column? "
      "export without it, e.g. pandas' to_csv(index=False))"),
     ("Sample rate: 5000\nx [m]\n1\n2\n", "line 1, header column 1 is 'Sample rate: 5000'; "
@@ -540,3 +539,27 @@ def test_a_time_column_kept_in_single_precision_is_read(tmp_path):
     # (the rate from the column's ends, to single precision)
     assert read_run(tmp_path / "single.h5").channels["v"].sample_rate == pytest.approx(
         5000.0, rel=1e-7)
+
+
+def test_an_analyser_s_names_and_units_read_as_its_header(tmp_path):
+    """Names on one row and units on the next (LMS, DIAdem, dSPACE, oscilloscopes), a time
+    column in s under any name, and names with signs and letters outside ASCII: read as
+    channels named in ASCII, with the names written kept."""
+    path = tmp_path / "analyser.txt"
+    path.write_text("Zeit\tPoint1:+Z\tFußpunkt\n[s]\t[mm/s]\t[g]\n"
+                    "0\t1,5\t0\n0,0002\t2,5\t1\n0,0004\t2\t0\n", encoding="utf-8")
+    run = _imported(path)
+    tip, base = run.channels["Point1_Z"], run.channels["Fusspunkt"]
+    assert (tip.unit, tip.sample_rate, base.unit) == ("m/s", 5000.0, "m/s^2")
+    np.testing.assert_allclose(tip.data, [0.0015, 0.0025, 0.002], rtol=1e-12)
+    np.testing.assert_allclose(base.data, [0.0, STANDARD_GRAVITY, 0.0], rtol=1e-12)
+    assert run.channel_attrs["Point1_Z"]["original_name"] == "Point1:+Z"
+
+
+def test_lines_about_an_export_above_its_names_and_units_are_named(tmp_path):
+    path = tmp_path / "lms.txt"
+    path.write_text("Section\tSection1\nSampling frequency\t5120\n\nTime\tv\ns\tm/s\n"
+                    "0\t1\n0.0001953125\t2\n")
+    proc = cli("import", str(path), "-o", str(tmp_path / "lms.h5"))
+    assert proc.returncode == 2
+    assert "line 4 ('Time\\tv') is one: begin lines 1 to 3 with '#'" in proc.stderr
