@@ -520,6 +520,9 @@ def cmd_import(args) -> int:
         if not (sep and name.strip() and text.strip()):
             raise InputFileError(f"--sensitivity {item}: expected NAME=SENSITIVITY, e.g. "
                                  "tip_velocity=200mV/(mm/s)")
+        if name.strip() in sensitivities:
+            raise InputFileError(f"--sensitivity {item}: {name.strip()!r} is given twice; "
+                                 "expected one sensitivity per column")
         sensitivities[name.strip()] = text.strip()
     out = import_csv(args.csv, args.output, args.rate, args.reference, delays, sensitivities,
                      args.decimal_mark)
@@ -1066,7 +1069,7 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
                    help="signal delay of a column's sensor, e.g. tip_velocity=0.0011 (a "
                         "vibrometer's; `fsi-lab show` prints a run's as t0)")
     p.add_argument("--sensitivity", action="append", default=[], metavar="NAME=SENSITIVITY",
-                   help="calibrate a column written in volts (V or mV): its sensor's "
+                   help="calibrate a column written in volts (V, mV or uV): its sensor's "
                         "sensitivity in volts per unit, e.g. tip_velocity=200mV/(mm/s) (a "
                         "vibrometer's decoder at 5 mm/s per V) or base=100mV/g")
     p.add_argument("--decimal-mark", choices=(".", ","),

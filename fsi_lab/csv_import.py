@@ -6,7 +6,8 @@ gives the quantity. An optional column in s (or ms), the time whatever its name,
 sample rate given on the command line. Values are converted to SI
 (g to m/s^2, mm/s to m/s). Files exported where the decimal mark is a comma separate their
 columns with semicolons (or tabs): their ``1,5`` reads as 1.5. Lines starting with ``#`` before
-or among the rows are comments; blank lines only above the first row or after the last (one
+or among the rows are comments (a row whose first cell is a spreadsheet's error value, ``#NV``,
+is a missing sample); blank lines only above the first row or after the last (one
 among the rows is a missing sample, refused). What a run file gets from its profile and
 instruments and a CSV cannot say is given on import: the base acceleration column
 (``reference``), the sensors' signal delays, and the sensitivity of a sensor whose column is in
@@ -122,7 +123,9 @@ def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
     names = [c.name for c in columns if not c.is_time]   # (two time columns: import_csv)
     duplicate = next((n for n in names if names.count(n) > 1), None)
     if duplicate:
-        raise InputFileError(f"{path}: column name {duplicate!r} appears twice in the header")
+        written = " and ".join(repr(c.written) for c in columns if c.name == duplicate)
+        raise InputFileError(f"{path}: column name {duplicate!r} appears twice in the header "
+                             f"(written {written}); expected a name to each column")
     return columns
 
 
@@ -209,15 +212,11 @@ SHEET_ERRORS = ("#N/A", "#NV", "#NA", "#DIV/0!", "#VALUE!", "#WERT!", "#VALEUR!"
                 "#LEER!", "#SPILL!", "#ÜBERLAUF!", "#CALC!", "#GETTING_DATA")
 
 
-def _error_row(text: str, separator: str, columns: int) -> bool:
-    """Whether a line starting with ``#`` among the rows is a row of samples whose first cell
-    holds a spreadsheet's error value: that value (:data:`SHEET_ERRORS`), or, with more than
-    one column, as many cells as the header's with numbers after the first."""
+def _error_row(text: str, separator: str) -> bool:
+    """Whether a line is a row of samples whose first cell holds a spreadsheet's error value
+    (:data:`SHEET_ERRORS`), which starts with ``#`` as a comment does."""
     cells = _cells(text.strip(), separator)
-    if cells and cells[0].strip().upper() in SHEET_ERRORS:
-        return True
-    return columns > 1 and len(cells) == columns and _numbers_only(
-        separator.join(cells[1:]), separator)
+    return bool(cells) and cells[0].strip().upper() in SHEET_ERRORS
 
 
 def _numbers_only(text: str, separator: str) -> bool:
@@ -243,12 +242,15 @@ def _commented_header(path: Path, lines: list[str], first: int) -> int | None:
         body = text.lstrip()
         if not body.startswith("#"):
             return None
+        if _error_row(body, _separator(body)):
+            continue                    # (a row of samples, refused as such below)
         body = body[1:]
+        cells = _cells(body, _separator(body))
         try:
-            _parse_header(path, _cells(body, _separator(body)), number)
+            _parse_header(path, cells, number)
         except InputFileError:
             return None
-        return number
+        return number if cells else None
     return None
 
 
@@ -282,6 +284,10 @@ class Table:
     data: np.ndarray
     lines: np.ndarray
     time_rounding: np.ndarray
+    #: whether the time column holds single-precision numbers (:func:`_single_precision`)
+    time_single: bool = False
+    #: the column separator found
+    separator: str = ","
 
 
 class _Printing:
@@ -385,18 +391,18 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
             header_rows = 2
         # (after the header: the lines above the first row of an export that holds a few
         # lines about itself are refused as a header, not as samples missing)
-        first = next((n for n in range(numbers[0] + 1, len(lines) + 1) if holds_row(n)), None)
-        last = next((n for n in range(len(lines), numbers[0], -1) if holds_row(n)), 0)
+        top = numbers[header_rows - 1]               # the header's last row
+        first = next((n for n in range(top + 1, len(lines) + 1) if holds_row(n)), None)
+        last = next((n for n in range(len(lines), top, -1) if holds_row(n)), 0)
         if first is not None:
             blank = next((n for n in range(first + 1, last) if _BLANK.fullmatch(lines[n - 1])),
                          None)
             if blank is not None:
                 text = lines[blank - 1]
                 _missing_sample(path, blank, separator in text or bool(text.strip()))
-            for number in range(first + 1, last):
+            for number in range(top + 1, last):
                 text = lines[number - 1]
-                if "#" in text and text.lstrip().startswith("#") \
-                        and _error_row(text, separator, len(columns)):
+                if "#" in text and _error_row(text, separator):
                     raise InputFileError(
                         f"{path}: line {number} begins with {text.split(separator)[0].strip()!r}"
                         " (a spreadsheet's error value in a row of samples, not a comment): a "
@@ -470,7 +476,17 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
     if count < 2:
         raise InputFileError(f"{path}: fewer than two data rows")
     rounding = printing.rounding(count) if time is not None else np.zeros(count)
-    return Table(columns, data[:count], row_lines[:count], rounding)
+    single = time is not None and _single_precision(data[:count, time], printing)
+    return Table(columns, data[:count], row_lines[:count], rounding, single, separator)
+
+
+def _single_precision(values: np.ndarray, printing: "_Printing") -> bool:
+    """Whether a time column holds single-precision numbers (LabVIEW's SGL, a float32
+    array): printed to 9 significant digits or fewer, the most a float32 needs, or printed in
+    full and each exactly a float32."""
+    with np.errstate(over="ignore"):
+        exact = bool(np.all(values.astype(np.float32).astype(np.float64) == values))
+    return printing.digits <= 9 or exact
 
 
 def _missing_sample(path: Path, line: int, cells: bool) -> NoReturn:
@@ -515,10 +531,10 @@ def _check_rate(rate: float, where: str) -> float:
 
 
 def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: np.ndarray,
-                    given: float | None) -> float:
+                    given: float | None, single: bool = False) -> float:
     """The sample rate (Hz) of the time column's values ``time`` (s) on file lines ``lines``,
-    each within ``rounding`` (s) of the time it stands for: ``given`` (``--rate``) when the
-    column agrees with it."""
+    each within ``rounding`` (s) of the time it stands for (and, ``single``, within the
+    single-precision error of it): ``given`` (``--rate``) when the column agrees with it."""
     steps = np.diff(time)
     with np.errstate(over="ignore", invalid="ignore"):
         span = float(time[-1] - time[0])
@@ -533,11 +549,12 @@ def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: n
     # would otherwise pass a missing sample.
     # A column kept in single precision (LabVIEW's SGL, float32 arrays) errs by its unit in
     # the last place, 6e-8 of the time, at each end of a step.
-    single = FLOAT32_EPS * np.maximum(np.abs(time[:-1]), np.abs(time[1:]))
+    last_place = FLOAT32_EPS * np.maximum(np.abs(time[:-1]), np.abs(time[1:])) if single \
+        else np.zeros(steps.size)
     with np.errstate(over="ignore", invalid="ignore"):
         allowed = np.minimum(np.maximum.reduce([np.full(steps.size, TIME_TOLERANCE * step),
                                                 (rounding[:-1] + rounding[1:]) * (1 + 1e-9),
-                                                2.0 * single]), 0.49 * step)
+                                                2.0 * last_place]), 0.49 * step)
         excess = np.abs(steps - step) - allowed
     if not float(np.max(excess)) <= 0.0:
         worst = int(np.nanargmax(np.where(np.isnan(excess), np.inf, excess)))
@@ -655,7 +672,15 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     delays = dict(delays or {})
     table = read_csv(path, decimal_mark)
     columns, data, lines = table.columns, table.data, table.lines
-    calibrations = _calibrations(path, columns, dict(sensitivities or {}))
+    if decimal_mark == "," and table.separator == ",":
+        raise InputFileError(f"--decimal-mark ',': {path} separates its columns with commas; "
+                             "expected a decimal comma only in a file separated by semicolons "
+                             "or tabs")
+    # the names as the header wrote them, or as their channels are named
+    delays = {_channel_name(k): v for k, v in delays.items()}
+    reference = _channel_name(reference) if reference else reference
+    calibrations = _calibrations(path, columns, {_channel_name(k): v for k, v
+                                                 in (sensitivities or {}).items()})
     _check_analysis_inputs(path, columns, reference, delays, calibrations)
     times = [i for i, column in enumerate(columns) if column.is_time]
     if len(times) > 1:
@@ -668,7 +693,8 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     if times:
         factor = columns[times[0]].factor
         time = data[:, times[0]] * factor
-        rate = _rate_from_time(path, time, lines, table.time_rounding * factor, rate)
+        rate = _rate_from_time(path, time, lines, table.time_rounding * factor, rate,
+                               table.time_single)
         t0 = float(time[0])
         if abs(t0) > MAX_T0_S:
             raise InputFileError(f"{path}: line {lines[0]}: the time column starts at {t0:g} s; "

@@ -86,14 +86,6 @@ def to_si(unit: str) -> tuple[str, float]:
 #: which, after a slash (``200 mV/(mm/s)``, ``100mV/g``).
 _SENSITIVITY = re.compile(r"^\s*(?P<number>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*"
                           r"(?P<volts>[^\s/]*V)\s*/\s*(?P<unit>.+?)\s*$")
-def voltage_hint(quantity: str) -> str:
-    """For a message on a channel of ``quantity``: how a column imported in volts becomes
-    the motion it measures (``"; ..."``), or nothing for another quantity."""
-    if quantity != "voltage":
-        return ""
-    return ("; a column imported in volts becomes the motion it measures with its sensor's "
-            "sensitivity: fsi-lab import ... --sensitivity NAME=200mV/(mm/s)")
-
 #: How a sensitivity is written, for the messages.
 SENSITIVITY_FORM = ("a number, volts (V or mV) and the unit per which, e.g. 200mV/(mm/s) (a "
                     "vibrometer's decoder at 5 mm/s per V) or 100mV/g (an accelerometer)")
@@ -138,3 +130,12 @@ def parse_sensitivity(written: str) -> tuple[float, str] | None:
     if not (math.isfinite(value) and value > 0.0):
         return None
     return value, si_unit
+
+
+def voltage_hint(quantity: str) -> str:
+    """For a message on a channel of ``quantity``: how a column imported in volts becomes
+    the motion it measures (``"; ..."``), or nothing for another quantity."""
+    if quantity != "voltage":
+        return ""
+    return ("; a column imported in volts becomes the motion it measures with its sensor's "
+            "sensitivity: fsi-lab import ... --sensitivity NAME=200mV/(mm/s)")

@@ -485,7 +485,15 @@ def test_the_units_examples_run_as_written():
      "line 3 begins with '#NV' (a spreadsheet's error value in a row of samples, not a "
      "comment): a sample is missing there"),
     ("v [mm/s]\n1\n#DIV/0!\n3\n", "line 3 begins with '#DIV/0!'"),
-    ("v [mm/s],b [g]\n1,2\n#1,2\n3,4\n", "line 3 begins with '#1'"),
+    # the first row of samples too
+    ("a [m/s],b [m/s]\n#N/A,1\n2,3\n4,5\n", "line 2 begins with '#N/A'"),
+    # and below a header numpy wrote as a comment
+    ("# a [m/s];b [m/s]\n#NV;1,5\n2;3\n4;5\n", "line 2 begins with '#NV'"),
+    # names that meet once written as channel names
+    ("v+ [m/s],v [m/s]\n1,2\n3,4\n", "column name 'v' appears twice in the header (written "
+     "'v+' and 'v'); expected a name to each column"),
+    ("v [m/s],b [m/s]\n1,2\n3,4\n", "separates its columns with commas; expected a decimal "
+     "comma only in a file separated by semicolons or tabs"),
     # no header row: say so, with one for the columns found
     ("0,1.5,2\n0.001,1.6,2\n", "line 1 holds numbers, not a header row: the file has none; "
      "expected a first row naming its 3 columns 'name [unit]', e.g. 'time [s],tip velocity "
@@ -499,7 +507,8 @@ def test_an_export_that_would_be_read_wrong_is_refused_saying_what_to_change(tmp
                                                                              fragment):
     path = tmp_path / "bad.csv"
     path.write_text(text)
-    proc = cli("import", str(path), "-o", str(tmp_path / "bad.h5"), "--rate", "1000")
+    args = ["--decimal-mark", ","] if "decimal comma only" in fragment else []
+    proc = cli("import", str(path), "-o", str(tmp_path / "bad.h5"), "--rate", "1000", *args)
     assert proc.returncode == 2
     assert fragment in proc.stderr
     assert not (tmp_path / "bad.h5").exists()
@@ -515,8 +524,11 @@ def test_an_export_that_would_be_read_wrong_is_refused_saying_what_to_change(tmp
     ("# x [mm],y [m]\n1.5,0\n2.5,0\n", [], [0.0015, 0.0025]),
     # a CSV writer that doubles the carriage return (Windows, a file opened without newline='')
     ("x [mm],y [m]\r\r\n1.5,0\r\r\n2.5,0\r\r\n", [], [0.0015, 0.0025]),
-    # comments among the rows stay comments
+    # comments among the rows stay comments, numbers and separators in them too
     ("x [mm];y [m]\n1,5;0\n# the shaker stopped here\n2,5;0\n", [], [0.0015, 0.0025]),
+    ("x [mm],y [m]\n1.5,0\n# gain changed, 10\n2.5,0\n", [], [0.0015, 0.0025]),
+    # a blank line between an analyser's units row and its first row of samples
+    ("x;y\nmm;m\n\n1.5;0\n2.5;0\n", [], [0.0015, 0.0025]),
 ])
 def test_exports_read_as_meant(tmp_path, text, args, values):
     path = tmp_path / "good.csv"
@@ -524,8 +536,41 @@ def test_exports_read_as_meant(tmp_path, text, args, values):
     out = tmp_path / "good.h5"
     proc = cli("import", str(path), "-o", str(out), "--rate", "1000", *args)
     assert proc.returncode == 0, proc.stderr
-    np.testing.assert_allclose(read_run(out).channels["x" if "x [" in text else "Abstand"].data,
-                               values, rtol=1e-12)
+    channels = read_run(out).channels
+    np.testing.assert_allclose(channels["x" if "x" in channels else "Abstand"].data, values,
+                               rtol=1e-12)
+
+
+def test_a_time_column_in_double_precision_keeps_its_tolerance(tmp_path):
+    """The single-precision allowance is for single-precision columns: times printed to 9
+    decimals (double precision) with a step 2 % long late in the record are refused."""
+    t = np.arange(200000) / 10000.0
+    t[150000:] += 4e-6
+    path = tmp_path / "double.csv"
+    path.write_text("time [s],v [m/s]\n" + "".join(f"{v:.9f},1\n" for v in t))
+    proc = cli("import", str(path), "-o", str(tmp_path / "double.h5"))
+    assert proc.returncode == 2
+    assert "the time column is not uniformly sampled" in proc.stderr
+
+
+def test_the_sensitivity_the_delay_and_the_reference_take_the_names_as_written(tmp_path):
+    """A column named outside the channel-name rule is given to the options as the header
+    wrote it (or as its channel is named); one sensitivity per column."""
+    path = _write(tmp_path / "rec.csv", ["Fußpunkt [mV]", "tip velocity [m/s]"],
+                  [(100, 1), (200, 2), (300, 3)])
+    out = tmp_path / "rec.h5"
+    proc = cli("import", str(path), "--rate", "100", "-o", str(out), "--sensitivity",
+               "Fußpunkt=100mV/g", "--reference", "Fußpunkt", "--delay", "tip velocity=0.001")
+    assert proc.returncode == 0, proc.stderr
+    run = read_run(out)
+    assert run.attrs["reference"] == "Fusspunkt"
+    np.testing.assert_allclose(run.channels["Fusspunkt"].data,
+                               [STANDARD_GRAVITY, 2 * STANDARD_GRAVITY, 3 * STANDARD_GRAVITY])
+    assert run.channel_attrs["tip_velocity"]["sensor_delay_s"] == 0.001
+    proc = cli("import", str(path), "--rate", "100", "-o", str(tmp_path / "twice.h5"),
+               "--sensitivity", "Fusspunkt=100mV/g", "--sensitivity", "Fusspunkt=10mV/g")
+    assert proc.returncode == 2
+    assert "'Fusspunkt' is given twice; expected one sensitivity per column" in proc.stderr
 
 
 def test_a_time_column_kept_in_single_precision_is_read(tmp_path):
