@@ -33,6 +33,7 @@ import numpy as np
 from fsi_lab import accuracy as method_accuracy
 from fsi_lab.aggregate_extract import ExtractTask, ModeExtract, RunExtract, extract_run
 from fsi_lab.errors import FsiLabError
+from fsi_lab.summary import fluid_power_words
 
 #: Modes of different runs closer than this (relative) to a group's median natural frequency
 #: are the same mode.
@@ -403,12 +404,11 @@ def _interval(bounds) -> str:
 
 
 def _power(entry: dict[str, Any]) -> str:
-    """``, fluid term as |v|^p (95 %: lo to hi)``: the power of the velocity the union's fluid
-    term grows with, or nothing when it was not tested."""
+    """The power of the velocity the union's fluid term grows with, in words, or nothing
+    when it was not tested."""
     if entry.get("fluid_power") is None:
         return ""
-    low, high = entry["fluid_power_ci95"]
-    return f", fluid term as |v|^{entry['fluid_power']:.2f} (95 %: {low:.2f} to {high:.2f})"
+    return fluid_power_words(entry["fluid_power"], entry["fluid_power_ci95"])
 
 
 def _widening(entry: dict[str, Any]) -> str:

@@ -264,8 +264,7 @@ def fit_union(runs: Sequence[RunDecays]) -> UnionFit:
     cov[exact, exact] = floor[exact] ** 2
     accuracy_factor[exact & (floor > 0)] = math.inf
     power = None
-    lower = quad.params[1] - float(sstats.t.ppf(0.975, max(quad.dof, 1))) * math.sqrt(
-        max(float(cov[1, 1]), 0.0))
+    lower = quad.params[1] - q * math.sqrt(max(float(cov[1, 1]), 0.0))
     if pooled == "union" and lower > 0.0:
         try:
             power = fluid_power(quad, whiteners)

@@ -58,6 +58,16 @@ def warnings_of(entry: dict[str, Any]) -> list[tuple[str, str]]:
     return found
 
 
+def fluid_power_words(power: float, ci95: Any = None) -> str:
+    """``, fluid term as |v|^2.01 (95 %: 1.94 to 2.08)``: the power of the velocity a fluid
+    term grows with (2 for the quadratic law), and its interval when ``ci95`` holds two
+    numbers."""
+    text = f", fluid term as |v|^{power:.2f}"
+    if isinstance(ci95, (list, tuple)) and len(ci95) == 2 and None not in ci95:
+        text += f" (95 %: {ci95[0]:.2f} to {ci95[1]:.2f})"
+    return text
+
+
 def format_value(value: Any) -> str:
     """A plain value as text: numbers with four significant digits, booleans and strings as
     they are."""

@@ -18,6 +18,7 @@ from fsi_lab.plugins.analysis.results import (
     Integrated,
 )
 from fsi_lab.presentation import SummaryText
+from fsi_lab.summary import fluid_power_words
 
 METHODS = ("law", "regression", "envelope")
 
@@ -89,10 +90,7 @@ def fsi_lab_summary_lines(component):
         text += f", preferred law: {eq['preferred_law']}"
     if eq.get("fluid_power") is not None:
         # how far the record bears out the quadratic law's square of the velocity
-        text += f", fluid term as |v|^{eq['fluid_power']:.2f}"
-        bounds = eq.get("fluid_power_ci95")
-        if _interval(bounds):
-            text += f" (95 %: {bounds[0]:.2f} to {bounds[1]:.2f})"
+        text += fluid_power_words(eq["fluid_power"], eq.get("fluid_power_ci95"))
     for name in ("c_i", "c_f"):
         bounds = eq.get(f"{name}_ci95")
         if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
