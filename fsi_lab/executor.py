@@ -336,6 +336,37 @@ def _killed_worker(exc: BaseException) -> bool:
     return type(exc).__name__ == "KilledWorker"
 
 
+def _answers_as_scheduler(address: str, timeout: float) -> None:
+    """Return once whatever listens at ``address`` has answered Dask's handshake.
+
+    Dask's own connect bounds the TCP connection by its timeout but waits for ever for the
+    handshake, so a peer that accepts and never speaks Dask (a web server, another tool's
+    port) would hang ``Client``. The whole exchange is bounded here.
+
+    Raises
+    ------
+    TimeoutError
+        No handshake within ``timeout`` s.
+    OSError, ValueError
+        Nothing listens there, or the address is not one Dask reads.
+    """
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def handshake() -> None:
+        comm = await connect(address, timeout=timeout)
+        await comm.close()
+
+    async def bounded() -> None:
+        try:
+            await asyncio.wait_for(handshake(), timeout)
+        except asyncio.TimeoutError:
+            raise TimeoutError(f"no Dask handshake within {timeout:g} s") from None
+
+    asyncio.run(bounded())
+
+
 class DaskExecutor(Executor):
     """The workers of the Dask distributed scheduler at ``address`` (``fsi-lab[cluster]``).
 
@@ -362,6 +393,7 @@ class DaskExecutor(Executor):
                 f"extra: pip install 'fsi-lab[cluster]' ({exc})") from None
         self.address = address
         try:
+            _answers_as_scheduler(address, connect_timeout)
             self.client = Client(address, timeout=connect_timeout, set_as_default=False)
         except Exception as exc:  # noqa: BLE001 - OSError, TimeoutError, ValueError (address)
             raise ParameterError(

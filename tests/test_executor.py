@@ -143,6 +143,42 @@ def test_no_scheduler_at_the_address_is_refused_naming_it():
                             "tcp://127.0.0.1:8786")
 
 
+def test_a_peer_that_never_speaks_dask_is_refused_within_the_timeout():
+    # a port that accepts connections and never answers (a web server waiting for a request):
+    # dask's own connect would wait for its handshake for ever
+    import socket
+    import threading
+
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(4)
+    listener.settimeout(0.2)
+    accepted, stop = [], threading.Event()
+
+    def hold() -> None:
+        while not stop.is_set():
+            try:
+                accepted.append(listener.accept()[0])
+            except OSError:
+                continue
+
+    holder = threading.Thread(target=hold, daemon=True)
+    holder.start()
+    address = f"tcp://127.0.0.1:{listener.getsockname()[1]}"
+    try:
+        with pytest.raises(ParameterError) as info:
+            DaskExecutor(address, connect_timeout=2)
+    finally:
+        stop.set()
+        holder.join(5)
+        for conn in accepted:
+            conn.close()
+        listener.close()
+    assert accepted, "the test's peer was never connected to"
+    assert str(info.value).startswith(f"--scheduler {address}: no Dask scheduler answered "
+                                      "there within 2 s (TimeoutError: no Dask handshake")
+
+
 def test_a_dask_cluster_runs_the_same_tasks(dask_cluster):
     with DaskExecutor(dask_cluster.scheduler_address, connect_timeout=30) as executor:
         assert executor.workers == 2
