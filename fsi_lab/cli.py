@@ -524,10 +524,13 @@ def cmd_import(args) -> int:
             raise InputFileError(f"--sensitivity {item}: {name.strip()!r} is given twice; "
                                  "expected one sensitivity per column")
         sensitivities[name.strip()] = text.strip()
+    notes: list[str] = []
     out = import_csv(args.csv, args.output, args.rate, args.reference, delays, sensitivities,
-                     args.decimal_mark)
+                     args.decimal_mark, notes)
+    for text in notes:
+        print(f"[note] {text}", file=sys.stderr)
     if args.json:
-        _emit_json({"run": str(out)})
+        _emit_json({"run": str(out), "notes": notes})
     else:
         print(f"wrote {out}")
     return 0

@@ -29,7 +29,7 @@ from typing import Mapping, NoReturn
 import numpy as np
 
 from fsi_lab.errors import InputFileError
-from fsi_lab.inputfiles import read_text
+from fsi_lab.inputfiles import read_text_and_encoding
 from fsi_lab.profile import CHANNEL_NAME
 from fsi_lab.runcheck import CHANNEL_RATES_HZ, MAX_T0_S
 from fsi_lab.runfile import RunFileWriter, new_run_path, software_version, utc_now
@@ -50,11 +50,17 @@ FLOAT32_EPS = 2.0 ** -24
 #: The way out of a time column refused, for its messages.
 _WITHOUT_TIME = ("; if the samples were taken at a steady rate, delete the time column and give "
                  "the rate with --rate HZ")
-EXPECTED = ("a UTF-8 CSV file with a header row of 'name [unit]' cells and rows of numbers, "
-            "separated by commas (or by semicolons or tabs, with a decimal comma or point)")
+EXPECTED = ("a CSV file (UTF-8, or Windows-1252) with a header row of 'name [unit]' cells and "
+            "rows of numbers, separated by commas (or by semicolons or tabs, with a decimal "
+            "comma or point)")
 #: The units accepted, in words, for the messages.
 ACCEPTED_UNITS = ("m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n on m, m/s, m/s^2 and V "
                   "(mm/s, um, mV), or s or ms for the time column")
+#: The encoding of a CSV file that is not UTF-8: Windows-1252, the code page of Excel and
+#: analysers on Western European Windows (it reads Latin-1's µ and ² as well).
+SINGLE_BYTE = "cp1252"
+#: The second line of a universal file: its first dataset's number, in 6 characters.
+_UFF_DATASET = re.compile(r"(?=[ \d]{6}(?:b|\s|$)) *\d+(?:b?\s.*|b)?")
 #: A value grouped in thousands (25.300, -1,234): one mark, three digits after it, and 1 to 3
 #: before it not starting with 0 (a decimal value below 1, 0.125, is never grouped).
 _GROUPED = re.compile(r"[-+]?[1-9]\d{0,2}[.,]\d{3}")
@@ -288,6 +294,8 @@ class Table:
     time_single: bool = False
     #: the column separator found
     separator: str = ","
+    #: the encoding the file was read in (``"utf-8"``, ``"utf-16"`` or :data:`SINGLE_BYTE`)
+    encoding: str = "utf-8"
 
 
 class _Printing:
@@ -332,7 +340,8 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
     uses.
     """
     path = Path(path)
-    text = read_text(path, EXPECTED, utf16=True)
+    # (a Windows program in a Western European language writes µ and ² in one byte each)
+    text, encoding = read_text_and_encoding(path, EXPECTED, utf16=True, fallback=SINGLE_BYTE)
     if "\x00" in text:
         raise InputFileError(f"{path}: holds NUL characters (UTF-16 text without its byte-order "
                              f"mark?); expected {EXPECTED}")
@@ -353,6 +362,16 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
         found = "only comments" if any(not _BLANK.fullmatch(line) for line in lines) else "empty"
         raise InputFileError(f"{path}: {found}; expected a header row 'name [unit],...' and "
                              "data")
+    # a universal file's datasets open with '    -1' and the dataset's number, each printed
+    # in 6 characters ('    58' for a function such as a time record)
+    if header.rstrip() == "    -1":
+        following = next(rows, "")
+        if _UFF_DATASET.fullmatch(following.rstrip()):
+            raise InputFileError(
+                f"{path}: is a universal file (UFF, dataset {following.split()[0]}), not a CSV "
+                f"file; expected {EXPECTED}: export the channels as CSV from the program that "
+                "wrote it")
+        rows = itertools.chain([following], rows) if following else rows
     separator = _separator(header)
     if _numbers_only(header, separator):
         # numpy's savetxt writes its header row as a comment ("# time [s],v [m/s]")
@@ -477,7 +496,8 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
         raise InputFileError(f"{path}: fewer than two data rows")
     rounding = printing.rounding(count) if time is not None else np.zeros(count)
     single = time is not None and _single_precision(data[:count, time], printing)
-    return Table(columns, data[:count], row_lines[:count], rounding, single, separator)
+    return Table(columns, data[:count], row_lines[:count], rounding, single, separator,
+                 encoding)
 
 
 def _single_precision(values: np.ndarray, printing: "_Printing") -> bool:
@@ -638,7 +658,7 @@ def _check_analysis_inputs(path: Path, columns: list[Column], reference: str | N
 def import_csv(path: str | Path, out: str | Path, rate: float | None,
                reference: str | None = None, delays: Mapping[str, float] | None = None,
                sensitivities: Mapping[str, str] | None = None,
-               decimal_mark: str | None = None) -> Path:
+               decimal_mark: str | None = None, notes: list[str] | None = None) -> Path:
     """Write the CSV file ``path`` as the run file ``out``; returns ``out``.
 
     Parameters
@@ -667,11 +687,21 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     decimal_mark
         ``"."`` or ``","``: the decimal mark of a file separated by semicolons or tabs whose
         values could be grouped in thousands (:func:`read_csv`); None: as found.
+    notes
+        A list the sentences the user should read about the import are appended to (the
+        file read as Windows-1252, not UTF-8); None: not kept.
     """
     path, out = Path(path), Path(out)
     delays = dict(delays or {})
     table = read_csv(path, decimal_mark)
     columns, data, lines = table.columns, table.data, table.lines
+    if table.encoding == SINGLE_BYTE and notes is not None:
+        cells = [f"{c.written} [{c.unit}]" for c in columns]
+        read = [cell for cell in cells if not cell.isascii()]
+        notes.append(f"{path}: not UTF-8; read as Windows-1252 (the text of Excel and analysers "
+                     "on Western European Windows)"
+                     + (f", which gives the header {', '.join(map(repr, read))}" if read else "")
+                     + "; if that reads wrong, save the file as UTF-8")
     if decimal_mark == "," and table.separator == ",":
         raise InputFileError(f"--decimal-mark ',': {path} separates its columns with commas; "
                              "expected a decimal comma only in a file separated by semicolons "
@@ -725,6 +755,7 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     writer = RunFileWriter(out, {
         "uuid": run_uuid, "start_time": started, "kind": "imported",
         "source_file": str(path), "profile": "", "software_version": software_version(),
+        **({"source_encoding": table.encoding} if table.encoding != "utf-8" else {}),
         **({"reference": reference} if reference else {}),
     })
     try:

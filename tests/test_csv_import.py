@@ -23,7 +23,7 @@ def test_import_with_rate(tmp_path):
     out = tmp_path / "rec.h5"
     data, proc = cli_json("import", str(csv_path), "--rate", "1000", "-o", str(out))
     assert proc.returncode == 0, proc.stderr
-    assert data == {"run": str(out)}
+    assert data == {"run": str(out), "notes": []}
     run = read_run(out)
     assert run.attrs["kind"] == "imported" and run.attrs["exit_status"] == "completed"
     tip = run.channels["tip"]
@@ -337,13 +337,56 @@ def test_utf16_without_its_byte_order_mark_is_refused_naming_it(tmp_path):
     assert "holds NUL characters (UTF-16 text without its byte-order mark?)" in proc.stderr
 
 
-def test_a_latin1_export_is_refused_naming_the_likely_encoding(tmp_path):
-    path = tmp_path / "latin.csv"
-    path.write_bytes("v [µm/s]\n1\n2\n".encode("latin-1"))
-    proc = cli("import", str(path), "-o", str(tmp_path / "latin.h5"), "--rate", "10")
+def test_a_windows_1252_export_is_read_and_says_so(tmp_path):
+    # German Excel's "CSV (Trennzeichen-getrennt)": µ and ² a byte each, semicolons, commas
+    path = tmp_path / "excel.csv"
+    text = ("Zeit [s];Geschwindigkeit [µm/s];Fußpunkt [m/s²]\r\n"
+            + "".join(f"{i / 1000:.3f};{1.5 * i:.1f};{0.25 * i:.2f}\r\n".replace(".", ",")
+                      for i in range(6)))
+    path.write_bytes(text.encode("cp1252"))
+    out = tmp_path / "excel.h5"
+    data, proc = cli_json("import", str(path), "-o", str(out))
+    assert proc.returncode == 0, proc.stderr
+    note = (f"{path}: not UTF-8; read as Windows-1252 (the text of Excel and analysers on "
+            "Western European Windows), which gives the header 'Geschwindigkeit [µm/s]', "
+            "'Fußpunkt [m/s²]'; if that reads wrong, save the file as UTF-8")
+    assert data == {"run": str(out), "notes": [note]}
+    assert f"[note] {note}" in proc.stderr
+    run = read_run(out)
+    assert run.attrs["source_encoding"] == "cp1252"
+    assert run.channels["Geschwindigkeit"].sample_rate == pytest.approx(1000.0)
+    np.testing.assert_allclose(run.channels["Geschwindigkeit"].data, 1.5e-6 * np.arange(6))
+    np.testing.assert_allclose(run.channels["Fusspunkt"].data, 0.25 * np.arange(6))
+    assert run.channel_attrs["Fusspunkt"]["original_name"] == "Fußpunkt"
+
+
+@pytest.mark.parametrize("content, fragment", [
+    # not UTF-8 and a byte Windows-1252 leaves undefined
+    (b"v [m/s]\n1\n\x81\n", "not UTF-8 text (byte 0x81 at offset 10, nor Windows-1252 text)"),
+    # UTF-8 (a µ in two bytes) and then a byte that is not: damaged, not another encoding
+    ("v [µm/s]\n1\n".encode() + b"\xb5\n",
+     "not UTF-8 text (byte 0xb5 at offset 12 after UTF-8 characters: damaged UTF-8?)"),
+    (b"PK\x03\x04\x14\x00\x06\x00", "is a zip archive (a spreadsheet workbook such as .xlsx "
+     "or .ods?), not text; expected a CSV file"),
+    (b"MATLAB 5.0 MAT-file, Platform: GLNXA64", "is a MATLAB MAT-file, not text"),
+    (b"TDSm\x0e\x00\x00\x00", "is a TDMS file (LabVIEW, DIAdem), not text"),
+    (b"    -1\n    58\nTip velocity\n", "is a universal file (UFF, dataset 58), not a CSV file"),
+])
+def test_files_that_are_not_csv_text_are_refused_as_what_they_are(tmp_path, content, fragment):
+    path = tmp_path / "export.csv"
+    path.write_bytes(content)
+    out = tmp_path / "export.h5"
+    proc = cli("import", str(path), "-o", str(out), "--rate", "10")
     assert proc.returncode == 2
-    assert "not UTF-8 text (byte 0xb5 at offset 3: a Latin-1 or Windows-1252 character such " \
-        "as µ or ², written in one byte?)" in proc.stderr
+    assert f"fsi-lab: error: {path}: " in proc.stderr and fragment in proc.stderr
+    assert not out.exists()
+
+
+def test_a_column_of_numbers_under_minus_one_is_not_taken_for_a_universal_file(tmp_path):
+    path = tmp_path / "numbers.csv"
+    path.write_text("-1\n2\n3\n")
+    proc = cli("import", str(path), "-o", str(tmp_path / "n.h5"), "--rate", "10")
+    assert proc.returncode == 2 and "line 1 holds numbers, not a header row" in proc.stderr
 
 
 def test_existing_output_is_never_overwritten(tmp_path):

@@ -32,6 +32,14 @@ def test_a_profile_that_is_not_utf8_is_refused(tmp_path, encode, fragment):
              "expected a profile (TOML text) saved as UTF-8")
 
 
+def test_a_run_file_given_for_a_profile_is_refused_as_what_it_is(tmp_path):
+    path = tmp_path / "p.toml"
+    path.write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(64))
+    _refused(*run_main("profile", "check", str(path)),
+             f"{path}: is an HDF5 file (a MATLAB v7.3 MAT-file, or a run file?), not text; "
+             "expected a profile (TOML text)")
+
+
 def test_a_profile_with_a_utf8_byte_order_mark_is_read(tmp_path):
     path = tmp_path / "p.toml"
     path.write_bytes(b"\xef\xbb\xbf" + GOOD_PROFILE.read_bytes())
@@ -87,5 +95,5 @@ def test_a_csv_field_over_the_csv_module_limit_is_refused(tmp_path):
     out = tmp_path / "out.h5"
     _refused(*run_main("import", str(path), "--rate", "10", "-o", str(out)),
              f"{path}: line 2: field larger than field limit (131072)",
-             "expected a UTF-8 CSV file")
+             "expected a CSV file (UTF-8, or Windows-1252)")
     assert not out.exists()
