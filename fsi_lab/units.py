@@ -84,11 +84,14 @@ def to_si(unit: str) -> tuple[str, float]:
 
 #: A sensitivity as a data sheet writes it: a number, volts (V, mV, uV) and the unit per
 #: which, after a slash (``200 mV/(mm/s)``, ``100mV/g``).
-_SENSITIVITY = re.compile(r"^\s*(?P<number>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*"
-                          r"(?P<volts>[^\s/]*V)\s*/\s*(?P<unit>.+?)\s*$")
+_NUMBER = r"^\s*(?P<number>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*"
+_SENSITIVITY = re.compile(_NUMBER + r"(?P<volts>[^\s/]*V)\s*/\s*(?P<unit>.+?)\s*$")
+#: A scale factor, the motion per volt (a vibrometer decoder's range, 5mm/s/V)
+_SCALE = re.compile(_NUMBER + r"(?P<unit>.+)/\s*(?P<volts>[^\s/()]*V)\s*$")
 #: How a sensitivity is written, for the messages.
 SENSITIVITY_FORM = ("a number, volts (V or mV) and the unit per which, e.g. 200mV/(mm/s) (a "
-                    "vibrometer's decoder at 5 mm/s per V) or 100mV/g (an accelerometer)")
+                    "vibrometer's decoder at 5 mm/s per V) or 100mV/g (an accelerometer), or "
+                    "a scale factor as a decoder's range gives it, 5mm/s/V")
 
 
 def parse_sensitivity(written: str) -> tuple[float, str] | None:
@@ -98,7 +101,8 @@ def parse_sensitivity(written: str) -> tuple[float, str] | None:
     ----------
     written
         As a data sheet gives it: a positive number, volts (``V``, ``mV``, ``uV``), a slash
-        and a unit :func:`parse_unit` reads other than volts, in parentheses or not.
+        and a unit :func:`parse_unit` reads other than volts, in parentheses or not; or as a
+        scale factor, the unit per volt (``5mm/s/V``, a vibrometer decoder's range).
 
     Returns
     -------
@@ -113,20 +117,29 @@ def parse_sensitivity(written: str) -> tuple[float, str] | None:
     >>> volts, unit = parse_sensitivity("100mV/g")
     >>> print(f"{volts:.5f} V/({unit})")
     0.01020 V/(m/s^2)
-    >>> parse_sensitivity("5 mm/s/V") is None
+    >>> parse_sensitivity("5 mm/s/V")
+    (200.0, 'm/s')
+    >>> parse_sensitivity("5 mm/s") is None
     True
     """
+    scale = False
     match = _SENSITIVITY.match(written)
     if match is None:
-        return None
-    volts, unit = parse_unit(match["volts"]), match["unit"]
+        match, scale = _SCALE.match(written), True
+        if match is None:
+            return None
+    volts, unit = parse_unit(match["volts"]), match["unit"].strip()
     if unit.startswith("(") and unit.endswith(")"):
         unit = unit[1:-1]
     per = parse_unit(unit)
     if volts is None or volts[0] != "V" or per is None or per[0] == "V":
         return None
     si_unit, to_si_factor = to_si(per[0])
-    value = float(match["number"]) * volts[1] / (per[1] * to_si_factor)
+    number = float(match["number"])
+    if scale and number * per[1] * to_si_factor == 0.0:
+        return None
+    value = (volts[1] / (number * per[1] * to_si_factor) if scale else
+             number * volts[1] / (per[1] * to_si_factor))
     if not (math.isfinite(value) and value > 0.0):
         return None
     return value, si_unit

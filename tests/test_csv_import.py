@@ -468,12 +468,29 @@ def test_a_column_in_volts_is_calibrated_with_its_sensor_s_sensitivity(tmp_path)
     assert run.attrs["reference"] == "base"
 
 
+@pytest.mark.parametrize("written", ["200mV/(mm/s)", "5mm/s/V", "5 mm/s / V", "0.2 V/(mm/s)"])
+def test_a_decoder_s_scale_factor_and_its_sensitivity_calibrate_alike(tmp_path, written):
+    # a vibrometer decoder's range is given as a scale factor (Polytec: 5 mm/s/V)
+    millivolts = [10.0, -20.0, 5.0]
+    path = _write(tmp_path / "decoder.csv", ["tip [mV]"], [(v,) for v in millivolts])
+    out = tmp_path / "decoder.h5"
+    proc = cli("import", str(path), "--rate", "100", "-o", str(out),
+               "--sensitivity", f"tip={written}")
+    assert proc.returncode == 0, proc.stderr
+    run = read_run(out)
+    # 10 mV at 5 mm/s per V is 0.05 mm/s
+    np.testing.assert_allclose(run.channels["tip"].data, np.array(millivolts) * 5e-6,
+                               rtol=1e-12)
+    assert run.channel_attrs["tip"]["sensitivity"] == pytest.approx(200.0, rel=1e-12)
+
+
 @pytest.mark.parametrize("given, fragment", [
     ("speed=200mV/(mm/s)", "--sensitivity speed=200mV/(mm/s): 'speed' is not a data column"),
     ("base=200mV/(mm/s)", "--sensitivity base=200mV/(mm/s): the column is written in g, "
      "already calibrated; expected a column in V or mV"),
-    ("tip=5 mm/s/V", "--sensitivity tip=5 mm/s/V: not understood; expected a number, volts "
+    ("tip=5 mm/s", "--sensitivity tip=5 mm/s: not understood; expected a number, volts "
      "(V or mV) and the unit per which, e.g. 200mV/(mm/s)"),
+    ("tip=0 mm/s/V", "--sensitivity tip=0 mm/s/V: not understood"),
     ("tip=0 mV/g", "--sensitivity tip=0 mV/g: not understood"),
     ("tip=100mV/V", "--sensitivity tip=100mV/V: not understood"),
     ("tip", "--sensitivity tip: expected NAME=SENSITIVITY, e.g. tip_velocity=200mV/(mm/s)"),
