@@ -526,7 +526,7 @@ def cmd_import(args) -> int:
         sensitivities[name.strip()] = text.strip()
     notes: list[str] = []
     out = import_csv(args.csv, args.output, args.rate, args.reference, delays, sensitivities,
-                     args.decimal_mark, notes)
+                     args.decimal_mark, notes, args.ignore_time)
     for text in notes:
         print(f"[note] {text}", file=sys.stderr)
     if args.json:
@@ -1075,6 +1075,9 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
                    help="calibrate a column written in volts (V, mV or uV): its sensor's "
                         "sensitivity in volts per unit, e.g. tip_velocity=200mV/(mm/s) (a "
                         "vibrometer's decoder at 5 mm/s per V) or base=100mV/g")
+    p.add_argument("--ignore-time", action="store_true",
+                   help="leave the time column out and take the rate from --rate (a column "
+                        "printed with too few digits, or time stamps with jitter)")
     p.add_argument("--decimal-mark", choices=(".", ","),
                    help="the decimal mark of a file separated by semicolons or tabs whose "
                         "values could be grouped in thousands (25.300: 25.3 or 25300?)")

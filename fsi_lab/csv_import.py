@@ -48,8 +48,8 @@ TIME_TOLERANCE = 1e-3  # relative spread of the time steps accepted as uniform s
 #: Half the spacing of single-precision numbers relative to their value (2^-24).
 FLOAT32_EPS = 2.0 ** -24
 #: The way out of a time column refused, for its messages.
-_WITHOUT_TIME = ("; if the samples were taken at a steady rate, delete the time column and give "
-                 "the rate with --rate HZ")
+_WITHOUT_TIME = ("; if the samples were taken at a steady rate, give the rate with --rate HZ "
+                 "--ignore-time (the time column is then left out)")
 EXPECTED = ("a CSV file (UTF-8, or Windows-1252) with a header row of 'name [unit]' cells and "
             "rows of numbers, separated by commas (or by semicolons or tabs, with a decimal "
             "comma or point)")
@@ -658,7 +658,8 @@ def _check_analysis_inputs(path: Path, columns: list[Column], reference: str | N
 def import_csv(path: str | Path, out: str | Path, rate: float | None,
                reference: str | None = None, delays: Mapping[str, float] | None = None,
                sensitivities: Mapping[str, str] | None = None,
-               decimal_mark: str | None = None, notes: list[str] | None = None) -> Path:
+               decimal_mark: str | None = None, notes: list[str] | None = None,
+               ignore_time: bool = False) -> Path:
     """Write the CSV file ``path`` as the run file ``out``; returns ``out``.
 
     Parameters
@@ -687,6 +688,9 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     decimal_mark
         ``"."`` or ``","``: the decimal mark of a file separated by semicolons or tabs whose
         values could be grouped in thousands (:func:`read_csv`); None: as found.
+    ignore_time
+        Leave the time column out (one printed with too few digits, or a scope's time stamps
+        with jitter): the samples start at 0 s and follow at ``rate``, which must be given.
     notes
         A list the sentences the user should read about the import are appended to (the
         file read as Windows-1252, not UTF-8); None: not kept.
@@ -720,7 +724,11 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
         raise InputFileError(f"{path}: only a time column; expected data columns 'name [unit]' "
                              "beside it")
     t0 = 0.0
-    if times:
+    if ignore_time:
+        if rate is None:
+            raise InputFileError("--ignore-time: the sample rate is then --rate's; expected "
+                                 "--rate HZ beside it")
+    if times and not ignore_time:
         factor = columns[times[0]].factor
         time = data[:, times[0]] * factor
         rate = _rate_from_time(path, time, lines, table.time_rounding * factor, rate,
@@ -736,7 +744,7 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
         _check_rate(rate, f"--rate {rate:g}")
     values = {}
     for col, column in enumerate(columns):
-        if col in times:
+        if column.is_time:
             continue
         si_unit, factor = to_si(column.base)
         if column.name in calibrations:             # volts over volts per SI unit

@@ -337,6 +337,25 @@ def test_utf16_without_its_byte_order_mark_is_refused_naming_it(tmp_path):
     assert "holds NUL characters (UTF-16 text without its byte-order mark?)" in proc.stderr
 
 
+def test_a_time_column_refused_is_left_out_with_ignore_time(tmp_path):
+    # a scope's time stamps printed to whole ms at 2 kHz: refused, and read at the given rate
+    path = tmp_path / "scope.csv"
+    path.write_text("time [s],v [m/s]\n" + "".join(f"{i / 2000:.3f},{i}\n" for i in range(8)))
+    out = tmp_path / "scope.h5"
+    proc = cli("import", str(path), "-o", str(out), "--rate", "2000")
+    assert proc.returncode == 2 and "--rate HZ --ignore-time" in proc.stderr
+    proc = cli("import", str(path), "-o", str(out), "--ignore-time")
+    assert proc.returncode == 2
+    assert "--ignore-time: the sample rate is then --rate's; expected --rate HZ" in proc.stderr
+    assert not out.exists()
+    proc = cli("import", str(path), "-o", str(out), "--rate", "2000", "--ignore-time")
+    assert proc.returncode == 0, proc.stderr
+    run = read_run(out)
+    assert list(run.channels) == ["v"]
+    assert (run.channels["v"].sample_rate, run.channels["v"].t0) == (2000.0, 0.0)
+    np.testing.assert_array_equal(run.channels["v"].data, np.arange(8.0))
+
+
 def test_a_windows_1252_export_is_read_and_says_so(tmp_path):
     # German Excel's "CSV (Trennzeichen-getrennt)": µ and ² a byte each, semicolons, commas
     path = tmp_path / "excel.csv"
@@ -561,7 +580,8 @@ def test_the_units_examples_run_as_written():
     # time columns refused name the way out
     ("time [s],v [m/s]\n0.000,1\n0.000,2\n0.001,3\n", "the time column does not increase "
      "(line 3: printed with too few digits for its step?); if the samples were taken at a "
-     "steady rate, delete the time column and give the rate with --rate HZ"),
+     "steady rate, give the rate with --rate HZ --ignore-time (the time column is then left "
+     "out)"),
 ])
 def test_an_export_that_would_be_read_wrong_is_refused_saying_what_to_change(tmp_path, text,
                                                                              fragment):
