@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from fsi_lab.errors import FsiLabError, InputFileError, ProfileError, RunAborted
+from fsi_lab.errors import FsiLabError, InputFileError, ParameterError, ProfileError, RunAborted
 from fsi_lab.events import DataBlock, EventBus, LogRecord, Progress, StateChanged
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
 
@@ -541,6 +541,9 @@ def cmd_show(args) -> int:
     from fsi_lab.summary import format_value
 
     if args.run.is_dir() or args.run.name == "sequence.h5":
+        if args.strict:
+            raise ParameterError(f"--strict: {args.run} is a sequence's record; expected a "
+                                 "run file (fsi-lab show RUN.h5 --strict)")
         return _show_sequence(args)
     run = read_run(args.run, load_data=False)
     summary = read_analysis_summary(args.run)
@@ -564,9 +567,10 @@ def cmd_show(args) -> int:
     info["warnings"] = warnings
     for text in warnings:
         print(f"[warning] {text}", file=sys.stderr)
+    code = _show_strict_exit(args.run, summary, warnings) if args.strict else 0
     if args.json:
         _emit_json(info)
-        return 0
+        return code
     print(f"{'run file:':<18}{args.run}")
     for key in ("kind", "uuid", "start_time", "stop_time", "exit_status", "stopped_early",
                 "error", "software_version"):
@@ -592,7 +596,21 @@ def cmd_show(args) -> int:
         print(f"{'analysed with:':<18}{' '.join(analysed_with)} (beyond the run's own settings)")
     if summary_text:
         print(summary_text)
-    return 0
+    return code
+
+
+def _show_strict_exit(path: Path, summary: dict[str, Any] | None, warnings: list[str]) -> int:
+    """``show --strict``: :data:`EXIT_STRICT`, the reasons on stderr, when the run file's
+    stored analysis has problems (:func:`strict_problems`), it holds none, or the run file
+    itself is warned (``warnings``); else 0."""
+    problems = [f"run: {text}" for text in warnings]
+    if not summary:
+        problems.append(f"no analysis stored: fsi-lab analyze {path}")
+    else:
+        problems.extend(strict_problems(summary))
+    for line in problems:
+        print(f"[strict] {line}", file=sys.stderr)
+    return EXIT_STRICT if problems else 0
 
 
 def _excitation_units(plugin: Any) -> dict[str, str]:
@@ -1087,6 +1105,9 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
 
     p = sub.add_parser("show", help="describe a run file, or the sequence in a directory")
     p.add_argument("run", type=Path)
+    p.add_argument("--strict", action="store_true",
+                   help="exit 3 when the run file's stored analysis has a refused or warned "
+                        "result, or it holds none, or the run never finished")
     common(p)
     p.set_defaults(func=cmd_show)
 

@@ -230,6 +230,27 @@ def test_strict_and_the_text_summary_see_the_frf_warnings(tmp_path):
     assert strict == [f"[strict] channel tip frf: {w}" for w in warnings]
     assert [line for line in proc.stdout.splitlines() if "warning:" in line] == [
         f"  frf warning: {w}" for w in warnings]
+    # the analysis stored in the run file fails `show --strict` the same way
+    proc = cli("show", str(run), "--strict")
+    assert proc.returncode == 3
+    assert [line for line in proc.stderr.splitlines() if line.startswith("[strict]")] == strict
+
+
+def test_show_strict_passes_a_clean_analysis_and_fails_none(imported_run, example_plugin_dir):
+    proc = cli("show", str(imported_run), "--strict")
+    assert proc.returncode == 3
+    assert proc.stderr.splitlines() == [
+        f"[strict] no analysis stored: fsi-lab analyze {imported_run}"]
+    env = {"PYTHONPATH": str(example_plugin_dir)}
+    assert cli("analyze", str(imported_run), "--set", "analysis.chain=rms",
+               env=env).returncode == 0
+    data, proc = cli_json("show", str(imported_run), "--strict", env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert data["analysis"]["channels"]["tip"]["rms"] > 0
+    proc = cli("show", str(imported_run.parent), "--strict")
+    assert proc.returncode == 2
+    assert f"--strict: {imported_run.parent} is a sequence's record; expected a run file" \
+        in proc.stderr
 
 
 def test_show_gives_the_excitation_s_parameters_with_their_units(sim_profile, tmp_path):
