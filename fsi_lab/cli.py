@@ -288,6 +288,8 @@ def _analyze_batch(args) -> int:
         else:
             paths.append(path)
     tasks = [AnalyseTask(str(path), tuple(args.set), args.mass_per_length) for path in paths]
+    if args.set:
+        refuse_bad_sets_once(tasks)
     files: list[dict[str, Any]] = [{"run": str(path), "status": "pending", "exit_code": 0}
                                    for path in paths]
     started = time.perf_counter()
@@ -461,6 +463,26 @@ def check_aggregate_sets(sets: list[str]) -> None:
                            f"(the runs were recorded with their own); {accepted}")
 
 
+def refuse_bad_sets_once(tasks) -> None:
+    """Refuse, once and before any run is analysed, a ``--set`` value of a batch analysis or
+    an aggregate (``tasks``: each with ``path`` and ``sets``) that the runs' analysis settings
+    refuse (each run would otherwise fail with it, one error per run).
+    Runs that cannot be read, or whose own settings are refused, are left to the extraction,
+    which reports them run by run."""
+    from fsi_lab.run_profile import analysis_profile
+    from fsi_lab.runfile import read_run
+
+    registry = _loaded_plugins()
+    for task in tasks:
+        try:
+            analysis_profile(read_run(task.path, load_data=False), registry, task.sets)
+        except ProfileError as exc:
+            if any(f"--set {item}:" in str(exc) for item in task.sets):
+                raise
+        except FsiLabError:
+            continue
+
+
 def cmd_aggregate(args) -> int:
     """``fsi-lab aggregate RUN.h5 ... | DIR``: the runs' modes grouped by frequency, C_i and
     C_f fitted to the union of their free decays, backbones and damping curves on one
@@ -472,6 +494,8 @@ def cmd_aggregate(args) -> int:
     require_mass_per_length(args.mass_per_length)
     check_aggregate_sets(args.set)
     tasks, notes = aggregate_tasks(args.runs, args.set, args.mass_per_length)
+    if args.set:
+        refuse_bad_sets_once(tasks)
     executor = make_executor(args.jobs, args.scheduler)
     bus = EventBus()
     console = Console(args.quiet or args.json, args.verbose)

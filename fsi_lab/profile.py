@@ -352,7 +352,15 @@ def parse_profile(text: str, path: str, registry: Registry, overrides: list[str]
                          complete=sections is None,
                          bench_kept=sections is None or "bench" in sections)
     except ParameterError as exc:
-        raise ProfileError(f"{path}: {exc}") from None
+        raise ProfileError(f"{_culprit(str(exc), path, overrides)}: {exc}") from None
+
+
+def _culprit(message: str, path: str, overrides: list[str] | tuple[str, ...]) -> str:
+    """Where the value a message about ``KEY: ...`` refuses came from: the profile at
+    ``path``, and the last ``--set`` of that key when one gave it."""
+    key = message.partition(":")[0].strip()
+    given = [item for item in overrides if item.partition("=")[0].strip() == key]
+    return f"{path}: --set {given[-1]}" if given else path
 
 
 def _channel(name: str, table: Any, roles: Mapping[str, RoleConfig] | None) -> ChannelConfig:

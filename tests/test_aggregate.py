@@ -472,6 +472,22 @@ def test_records_equal_sample_for_sample_are_pooled_once_naming_the_files(files,
     assert "between runs" not in text  # one record: no spread between runs to give
 
 
+def test_an_analysis_value_every_run_refuses_is_refused_once(files):
+    """A bad value of an analysis parameter failed each run with the same error, one per
+    run, blamed on the run file's profile; refused once, before any run is identified."""
+    paths = [str(files[f"level{k}"]) for k in range(3)]
+    code, out, err = run_main("aggregate", *paths, "--mass-per-length", str(MASS), "--set",
+                              "analysis.hvd.components=nonsense")
+    assert code == 2 and out == ""
+    assert err.count("fsi-lab: error: ") == 1 and "identifying the modes" not in err
+    assert ("--set analysis.hvd.components=nonsense: analysis.hvd.components: cannot read "
+            "'nonsense'; expected an integer >= 1") in err
+    # a batch analysis likewise
+    code, out, err = run_main("analyze", *paths, "--mass-per-length", str(MASS), "--set",
+                              "analysis.hvd.components=nonsense")
+    assert code == 2 and err.count("fsi-lab: error: ") == 1 and "== " not in out
+
+
 @pytest.mark.parametrize("item", ["specimen.fluid=air", "run.duration=3"])
 def test_aggregate_sets_analysis_parameters_only_and_says_so_once(files, item, tmp_path):
     """`aggregate --set specimen.fluid=air` on water runs was accepted and gave an 18 times

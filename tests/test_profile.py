@@ -129,6 +129,15 @@ def test_bad_set_is_refused(registry, override, fragment):
     assert fragment in str(info.value) and str(GOOD) in str(info.value)
 
 
+def test_a_value_refused_names_the_set_that_gave_it(registry):
+    # the profile's own value is good; the second --set of the key is the one refused
+    sets = ["excitation.height=0.001", "excitation.height=20"]
+    with pytest.raises(ProfileError) as info:
+        load_profile(GOOD, registry, sets)
+    assert str(info.value).startswith(f"{GOOD}: --set excitation.height=20: excitation.height: "
+                                      "20.0 is out of bounds")
+
+
 def test_safety_limits_refuse_before_anything_is_written(tmp_path):
     out = tmp_path / "runs"
     proc = cli("run", str(GOOD), "--out", str(out), "--set", "excitation.height=0.1")
