@@ -870,8 +870,7 @@ def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
 
 
 def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
-                components: Any, band: tuple[float, float] | None, f_dom: float,
-                sigma: float
+                band: tuple[float, float] | None, f_dom: float, sigma: float
                 ) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray, np.ndarray]:
     """Candidate mode frequencies (Hz) and spectral amplitudes from the windows' averaged
     spectrum, notes on the peaks left out, the frequencies (Hz) of those left out that
@@ -950,13 +949,23 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
         listed = ", ".join(f"{v:.4g}" for v in np.sort(f)) or "none"
         raise fail("identify", f"band {band[0]:g} to {band[1]:g} Hz holds none of the record's "
                                f"modes (found at {listed} Hz); expected a band around one")
-    inside = f.size if band is None else int(np.sum((f >= band[0]) & (f <= band[1])))
-    if isinstance(components, int) and inside < components:
-        raise fail("identify", f"{components} component(s) asked for, but the record's "
-                               f"free decays show {inside} usable spectral peak(s)"
-                               + (f" ({', '.join(f'{v:.4g}' for v in f)} Hz)" if f.size
-                                  else "") + "; ask for fewer or use components = 'auto'")
     return f, a, notes, np.array(guards, dtype=np.float64), np.array(steady, dtype=np.float64)
+
+
+def _too_few_peaks(components: Any, f: np.ndarray, band: tuple[float, float] | None,
+                   notes: list[str]) -> str | None:
+    """Why ``components`` (an int, or ``"auto"``) asks for more modes than the frequencies
+    ``f`` (Hz) of the peaks with free decays of their own inside ``band`` hold, or None; with
+    ``notes``, why other peaks were left out. Asked once the peaks are known to be free
+    decays: a peak that is none (a shaker's resonance driving the record) is not counted."""
+    inside = f.size if band is None else int(np.sum((f >= band[0]) & (f <= band[1])))
+    if components == "auto" or inside >= int(components):
+        return None
+    return (f"{int(components)} component(s) asked for, but the record's free decays show "
+            f"{inside} usable spectral peak(s)"
+            + (f" ({', '.join(f'{v:.4g}' for v in f)} Hz)" if f.size else "")
+            + "; ask for fewer or use components = 'auto'"
+            + "".join(f"; {note}" for note in notes))
 
 
 def _late_lines(x: np.ndarray, fs: float, segments: list[tuple[int, int]], f_dom: float,
@@ -2741,9 +2750,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         raise fail(func, f"found no free decay of at least {MIN_WINDOW} samples")
     if reference is not None:
         windows = _unforced(windows, reference, fs, f_dom)
-    cand_f, cand_a, notes, guards, steady = _candidates(
-        record, fs, windows, int(components) if components != "auto" else "auto", band_t,
-        f_dom, sigma)
+    cand_f, cand_a, notes, guards, steady = _candidates(record, fs, windows, band_t, f_dom,
+                                                        sigma)
     for a, b in plateaus:
         notes.insert(0, f"the record holds a steady oscillation from {a / fs:.4g} to "
                         f"{b / fs:.4g} s before it decays (a forcing such as a sine dwell "
@@ -2892,6 +2900,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         if followers and not dropped:
             raise fail(func, "no spectral peak has a free decay of its own; " + "; ".join(notes))
         raise fail(func, _too_short(windows, dropped + followers, fs) + "; ".join(notes))
+    too_few = _too_few_peaks(components, np.array([m.frequency for m in modes]), band_t, notes)
+    if too_few is not None:
+        raise fail(func, too_few)
     # Step 5: first fits, then the floor judged on the fitted envelope.
     for mode in modes:
         half = _pooled_half_period(mode.decays)

@@ -1235,6 +1235,13 @@ def test_a_peak_that_decays_as_the_base_rings_is_no_mode_of_the_structure():
     assert note.startswith("the spectral peak at 30.")
     rates = [float(x) for x in re.findall(r"\((\S+) against (\S+) 1/s", note)[0]]
     assert rates == pytest.approx([15.0, 15.0], rel=0.2)
+    # two components asked for: the base's peak is not counted among the record's modes
+    with pytest.raises(ValueError) as info:
+        identify(v, fs, reference=a, components=2)
+    message = str(info.value)
+    assert re.search(r"2 component\(s\) asked for, but the record's free decays show 1 usable "
+                     r"spectral peak\(s\) \((16\.9\d|17\.0\d?) Hz\)", message), message
+    assert "the spectral peak at 30." in message and "decays as the base's own motion" in message
 
 
 def test_ratios_and_widenings_beyond_a_thousand_are_not_given_digits():
