@@ -153,8 +153,11 @@ def _later_header(path: Path, lines: list[str], refused: int) -> str:
         try:
             _parse_header(path, cells, number)
         except InputFileError:
-            # or its names on this row and their units on the next
-            following = iter([_cells(lines[number], separator)] if number < len(lines) else [])
+            # or its names on this row and their units on the next (a blank line between)
+            below = next((line for line in lines[number:number + HEADER_SEARCH]
+                          if not _BLANK.fullmatch(line) and not line.lstrip().startswith("#")),
+                         None)
+            following = iter([_cells(below, separator)] if below is not None else [])
             if _names_and_units(path, cells, following, number) is None:
                 continue
         above = f"line {refused}" if number == refused + 1 else f"lines {refused} to {number - 1}"

@@ -681,9 +681,11 @@ def test_an_analyser_s_names_and_units_read_as_its_header(tmp_path):
     assert run.channel_attrs["Point1_Z"]["original_name"] == "Point1:+Z"
 
 
-def test_lines_about_an_export_above_its_names_and_units_are_named(tmp_path):
+@pytest.mark.parametrize("between", ["", "\n"])
+def test_lines_about_an_export_above_its_names_and_units_are_named(tmp_path, between):
+    # (the names row and the units row may stand a blank line apart)
     path = tmp_path / "lms.txt"
-    path.write_text("Section\tSection1\nSampling frequency\t5120\n\nTime\tv\ns\tm/s\n"
+    path.write_text(f"Section\tSection1\nSampling frequency\t5120\n\nTime\tv\n{between}s\tm/s\n"
                     "0\t1\n0.0001953125\t2\n")
     proc = cli("import", str(path), "-o", str(tmp_path / "lms.h5"))
     assert proc.returncode == 2
