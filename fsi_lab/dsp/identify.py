@@ -432,6 +432,8 @@ class ModeIdentification:
         preferred law's whitened residuals (:func:`_residual_correlation`); ``band_noise``:
         the band's noise, measured before the excitation and after the decays, over the white
         noise's share in it, where measured (:func:`_band_noise_ratio`);
+        ``extrema_scatter``: the extrema's scatter about the quadratic law's envelope over
+        that share (:func:`_extrema_scatter`);
         ``frequency_wander``, ``frequency_low``, ``frequency_high``: when the early, middle
         and late cycles' frequencies disagree, the factor the frequency's standard error was
         widened by and the lowest and highest of them, Hz (:func:`_frequency_wander`). A
@@ -1432,6 +1434,24 @@ def _scatter_without_decay(mode: _Mode) -> float | None:
         return None
     scatter = math.sqrt(fit.rss / fit.dof) / max(mode.noise, 1e-300)
     return scatter if scatter > SCATTER_EXCESS else None
+
+
+def _extrema_scatter(mode: _Mode) -> float | None:
+    """How far the extrema scatter about the quadratic law's envelope (the whitened
+    residual RMS), over the white noise's share in the mode's band: about 1 when the band
+    holds the record's white noise, several times more with noise that is not white (1/f
+    noise of a sensor: 3.5 to 4 at 1 % of the peak) or a law that misfits. None when the
+    fit has no degrees of freedom left."""
+    fit = mode.fits.get("quadratic")
+    if fit is None or fit.dof <= 0 or not math.isfinite(fit.rss):
+        return None
+    scatter = math.sqrt(fit.rss / fit.dof)
+    # A noise-free record's extrema leave its numerical residue, not noise: no ratio.
+    largest = max((float(np.max(d["amplitude"])) for d in mode.decays if d["amplitude"].size),
+                  default=0.0)
+    if scatter < PRECISION * largest:
+        return None
+    return scatter / max(mode.noise, 1e-300)
 
 
 def _whiteners(mode: _Mode) -> list[Whitener]:
@@ -2535,6 +2555,7 @@ def _warnings(m: ModeIdentification) -> list[str]:
     if cmp.preferred != "quadratic":       # (its numbers are the ones the record supports)
         out.extend(_precision_warnings(cmp.fits[cmp.preferred], "the preferred law's "))
     coloured = m.start_drift.get("band_noise", 0.0)
+    scatter = m.start_drift.get("extrema_scatter", 0.0)
     if coloured > TAIL_EXCESS:
         out.append(f"the noise in this mode's band is {_times(coloured)} the record's white "
                    "noise there (measured before the excitation and after its decays: noise that "
@@ -2542,6 +2563,15 @@ def _warnings(m: ModeIdentification) -> list[str]:
                    "is integrated, or a line such as mains hum too close to the mode to be "
                    "told apart): the intervals take its size, not how it correlates from "
                    "cycle to cycle, and may be too narrow")
+    elif scatter > SCATTER_EXCESS:
+        out.append(f"the extrema scatter about the fitted envelope {_times(scatter)} as far as "
+                   "the record's white noise in this mode's band explains: noise there that is "
+                   "not white (a sensor's 1/f noise, a motion relative to a base whose "
+                   "accelerometer noise is integrated, a line close to the mode), or a decay the "
+                   "law does not describe; the intervals take the scatter's size, not how it "
+                   "correlates from cycle to cycle, and may be too narrow, and the smallest "
+                   "extrema, read down to a floor set by the white noise, are lifted by it "
+                   "(C_i low, C_f high)")
     low, high = m.band_hz
     if not low <= m.frequency_hz <= high:
         out.append(f"the natural frequency {m.frequency_hz:.4g} Hz lies outside the mode's band "
@@ -2960,6 +2990,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
             _take_joint(mode)
         if (ratio := _band_noise_ratio(mode, fs)) is not None:
             mode.drift["band_noise"] = ratio
+        if mode.joint is None and (scatter := _extrema_scatter(mode)) is not None:
+            mode.drift["extrema_scatter"] = scatter
         if mode.wander is not None:
             mode.drift.update(zip(("frequency_wander", "frequency_low", "frequency_high"),
                                   mode.wander))
