@@ -885,12 +885,13 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
     steady = []
     segs = [(a, c) for a, _, c in windows]
     freqs, amp = _decay_spectrum(x, fs, segs, f_dom)
-    shortest = min(c - a for a, c in segs) / fs
     longest = max(c - a for a, c in segs) / fs
     # Every local peak first (a weak mode on a strong one's tail has little prominence), then
-    # those high enough, standing out of their surroundings and above the noise.
+    # those high enough, standing out of their surroundings and above the noise. From two
+    # cycles of the longest decay up: a short window (a strong steady line, mains hum, cuts a
+    # decay where its envelope beats) hid every mode below two of its own cycles.
     peaks = find_peaks_interpolated(freqs, amp, min_relative=1e-4, smoothing=PEAK_SMOOTHING,
-                                    fmin=2.0 / shortest, _func="identify")
+                                    fmin=2.0 / longest, _func="identify")
     high = peaks.amplitudes >= MODE_THRESHOLD * float(np.max(peaks.amplitudes, initial=0.0))
     f, a = peaks.frequencies[high], peaks.amplitudes[high]
     level = _spectrum_level(freqs, amp, f, a)
