@@ -341,9 +341,10 @@ def test_a_run_file_without_the_channel_to_analyse_exits_2_and_says_so(sim_profi
 
 
 def test_a_run_whose_record_identifies_nothing_exits_2_as_analyze_does(tmp_path):
-    """In air the profile's 2 components find one peak in the free decays: hvd is refused and
-    nothing is identified. `run` printed that and exited 0 where `analyze` of the same file
-    exits 2; now both exit 2, `run` adding that its file is complete."""
+    """In air the wet profile's record has no free decay of the beam: its one peak is the
+    shaker's resonance driving it (hvd is refused saying so, not that 2 components found one
+    peak) and nothing is identified. `run` printed that and exited 0 where `analyze` of the
+    same file exits 2; now both exit 2, `run` adding that its file is complete."""
     proc = cli("run", "profiles/wet-beam-sim.toml", "--out", str(tmp_path),
                "--set", "specimen.fluid=air", timeout=300)
     assert proc.returncode == 2, proc.stderr
@@ -357,12 +358,15 @@ def test_a_run_whose_record_identifies_nothing_exits_2_as_analyze_does(tmp_path)
     # The refusal is said once; the analyses that needed hvd's result are named after it
     # (they repeated it, one line each and one log line each on stderr).
     lines = again.stdout.splitlines()
-    assert sum(1 for line in lines if "2 component(s) asked for" in line) == 1
+    refusal = "no spectral peak has a free decay of its own; the spectral peak at "
+    assert sum(1 for line in lines if refusal in line) == 1
+    assert "(a shaker's own resonance) and drives the record" in again.stdout
+    assert "2 component(s) asked for" not in again.stdout
     assert "  no result, for want of hvd's (hvd failed, above): integrate, instantaneous, " \
            "backbone, damping, equivalent-damping, modal-model" in lines
     logged = [line for line in again.stderr.splitlines() if line.startswith("[error] analysis ")]
     assert len(logged) == 7
-    assert sum(1 for line in logged if "2 component(s) asked for" in line) == 1
+    assert sum(1 for line in logged if refusal in line) == 1
 
 
 def test_a_noise_free_simulation_is_not_said_to_hold_coloured_noise(tmp_path):

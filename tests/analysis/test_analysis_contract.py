@@ -97,8 +97,10 @@ def test_the_profile_check_refuses_such_a_chain(registry):
 
     profile = ROOT / "profiles" / "wet-beam-sim.toml"
     load_profile(profile, registry)                                  # as shipped: valid
-    message = (f"{profile}: analysis.chain: modal-model requires the 'components' result, which "
-               "no analysis before it in the chain provides; add hvd before modal-model")
+    # (named with the --set that gave the chain)
+    message = (f"{profile}: --set analysis.chain=spectrum,modal-model: analysis.chain: "
+               "modal-model requires the 'components' result, which no analysis before it in "
+               "the chain provides; add hvd before modal-model")
     with pytest.raises(ProfileError, match=re.escape(message)):
         load_profile(profile, registry, ["analysis.chain=spectrum,modal-model"])
     proc = cli("profile", "check", str(profile), "--set", "analysis.chain=spectrum,modal-model")
