@@ -1235,10 +1235,15 @@ def _band_quiet(parts: np.ndarray, fs: float) -> list[np.ndarray]:
 
 
 def _too_short(windows: list[tuple[int, int, int]], modes: list[_Mode], fs: float) -> str:
-    """Why no mode has a usable free decay, and how long the decays must be."""
+    """Why no mode has a usable free decay, and how long the decays must be (or, when the
+    longest is long enough, that the noise hides them: the notes that follow say how)."""
     longest = max(c - b for _, b, c in windows) / fs
     lowest = min(m.frequency for m in modes)
     need = MIN_CYCLES / lowest
+    if longest >= need:
+        return (f"no spectral peak has a free decay of {MIN_CYCLES} cycles above the noise "
+                f"floor: the longest free decay, {longest:.3g} s, would hold them for the mode "
+                f"at {lowest:.4g} Hz; the noise in its band is what hides them; ")
     spacing = (f"; {_spacing_advice(lowest)} (and further still for the decays to last "
                f"{need:.2g} s above the noise)" if len(windows) > 1 else "")
     return (f"no spectral peak has a free decay of {MIN_CYCLES} cycles above the noise floor: "
