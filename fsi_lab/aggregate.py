@@ -33,7 +33,7 @@ import numpy as np
 from fsi_lab import accuracy as method_accuracy
 from fsi_lab.aggregate_extract import ExtractTask, ModeExtract, RunExtract, extract_run
 from fsi_lab.errors import FsiLabError
-from fsi_lab.summary import fluid_power_words
+from fsi_lab.summary import fluid_power_words, interval_words
 
 #: Modes of different runs closer than this (relative) to a group's median natural frequency
 #: are the same mode.
@@ -399,8 +399,6 @@ def without_curves(agg: dict[str, Any]) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------- text
-def _interval(bounds) -> str:
-    return f"95 %: {bounds[0]:.4g} to {bounds[1]:.4g}"
 
 
 def _power(entry: dict[str, Any]) -> str:
@@ -481,8 +479,8 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
                        f"{1e3 * entry['amplitude_range_m'][1]:.3g} mm")
         if "c_i" in entry:
             lines.append(f"{indent}  C_i = {entry['c_i']:.4g} kg/(m s) "
-                         f"({_interval(entry['c_i_ci95'])}), C_f = {entry['c_f']:.4g} kg/m^2 "
-                         f"({_interval(entry['c_f_ci95'])}), preferred law: "
+                         f"{interval_words(entry['c_i_ci95'])}, C_f = {entry['c_f']:.4g} kg/m^2 "
+                         f"{interval_words(entry['c_f_ci95'])}, preferred law: "
                          f"{entry['preferred_law']}{_power(entry)}{_widening(entry)}")
             if entry.get("pooled_by") == "weighted mean":
                 lines.append(f"{indent}  (the runs' own C_i and C_f averaged with their "
@@ -505,8 +503,8 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
                          + "; ".join(parts))
         for run in entry["per_run"]:
             lines.append(f"{indent}    {run['label']}: {run['frequency_hz']:.4f} Hz, C_i = "
-                         f"{run['c_i']:.4g} kg/(m s) ({_interval(run['c_i_ci95'])}), C_f = "
-                         f"{run['c_f']:.4g} kg/m^2 ({_interval(run['c_f_ci95'])}), amplitude "
+                         f"{run['c_i']:.4g} kg/(m s) {interval_words(run['c_i_ci95'])}, C_f = "
+                         f"{run['c_f']:.4g} kg/m^2 {interval_words(run['c_f_ci95'])}, amplitude "
                          f"{1e3 * run['amplitude_range_m'][0]:.3g} to "
                          f"{1e3 * run['amplitude_range_m'][1]:.3g} mm")
     return "\n".join(lines)

@@ -58,6 +58,14 @@ def warnings_of(entry: dict[str, Any]) -> list[tuple[str, str]]:
     return found
 
 
+def interval_words(bounds: Any) -> str:
+    """``(95 %: 0.6429 to 0.654)``: a 95 % interval with four significant digits, or nothing
+    when ``bounds`` does not hold two numbers."""
+    if not isinstance(bounds, (list, tuple)) or len(bounds) != 2 or None in bounds:
+        return ""
+    return f"(95 %: {bounds[0]:.4g} to {bounds[1]:.4g})"
+
+
 def fluid_power_words(power: float, ci95: Any = None) -> str:
     """``, fluid term as |v|^2.01 (95 %: 1.94 to 2.08)``: the power of the velocity a fluid
     term grows with (2 for the quadratic law), and its interval when ``ci95`` holds two

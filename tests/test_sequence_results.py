@@ -162,9 +162,13 @@ def test_show_prints_every_component_of_a_run(completed):
     assert len(components) == 2
     lines = show_text(completed).splitlines()
     for component in components:
+        eq = component["equivalent_damping"]
+        (ci_low, ci_high), (cf_low, cf_high) = eq["c_i_ci95"], eq["c_f_ci95"]
+        # with the intervals, as fsi-lab analyze prints them
         start = (f"tip_velocity component {component['index']} at "
-                 f"{component['frequency_hz']:.3f} Hz: C_i = "
-                 f"{component['equivalent_damping']['c_i']:.4g} kg/(m s)")
+                 f"{component['frequency_hz']:.3f} Hz: C_i = {eq['c_i']:.4g} kg/(m s) "
+                 f"(95 %: {ci_low:.4g} to {ci_high:.4g}), C_f = {eq['c_f']:.4g} kg/m^2 "
+                 f"(95 %: {cf_low:.4g} to {cf_high:.4g})")
         assert sum(line.strip().startswith(start) for line in lines) == 1, start
 
 

@@ -18,7 +18,7 @@ from fsi_lab.plugins.analysis.results import (
     Integrated,
 )
 from fsi_lab.presentation import SummaryText
-from fsi_lab.summary import fluid_power_words
+from fsi_lab.summary import fluid_power_words, interval_words
 
 METHODS = ("law", "regression", "envelope")
 
@@ -66,13 +66,6 @@ def fsi_lab_default_chain():
     return ["equivalent-damping"]
 
 
-def _interval(bounds) -> str:
-    """``(95 %: lo to hi)`` with four significant digits, or nothing."""
-    if not isinstance(bounds, (list, tuple)) or len(bounds) != 2 or None in bounds:
-        return ""
-    return f"(95 %: {bounds[0]:.4g} to {bounds[1]:.4g})"
-
-
 @hookimpl
 def fsi_lab_summary_lines(component):
     """C_i, C_f, R^2, the preferred law and the power of the velocity the fluid term grows
@@ -83,8 +76,8 @@ def fsi_lab_summary_lines(component):
     eq = component.get("equivalent_damping")
     if not isinstance(eq, dict) or eq.get("c_i") is None:
         return SummaryText(keys=("equivalent_damping",))
-    text = (f": C_i = {eq['c_i']:.4g} kg/(m s) {_interval(eq.get('c_i_ci95'))}, "
-            f"C_f = {eq['c_f']:.4g} kg/m^2 {_interval(eq.get('c_f_ci95'))}, "
+    text = (f": C_i = {eq['c_i']:.4g} kg/(m s) {interval_words(eq.get('c_i_ci95'))}, "
+            f"C_f = {eq['c_f']:.4g} kg/m^2 {interval_words(eq.get('c_f_ci95'))}, "
             f"R^2 = {eq['r2']:.3f}")
     if eq.get("preferred_law"):
         text += f", preferred law: {eq['preferred_law']}"
@@ -124,9 +117,9 @@ def _preferred_law_line(eq: dict) -> tuple[str, ...]:
             or law.get("c_i") is None:
         return ()
     text = (f"{_LAW_WORDS[eq['preferred_law']]} (preferred): C_i = {law['c_i']:.4g} kg/(m s) "
-            f"{_interval(law.get('c_i_ci95'))}")
+            f"{interval_words(law.get('c_i_ci95'))}")
     if law.get("c_f") is not None:
-        text += f", C_f = {law['c_f']:.4g} kg/m^2 {_interval(law.get('c_f_ci95'))}"
+        text += f", C_f = {law['c_f']:.4g} kg/m^2 {interval_words(law.get('c_f_ci95'))}"
     if law.get("damping_ratio") is not None:
         bounds = law.get("damping_ratio_ci95")
         text += f", damping ratio {100.0 * law['damping_ratio']:.4g} %"
@@ -134,5 +127,5 @@ def _preferred_law_line(eq: dict) -> tuple[str, ...]:
             text += f" (95 %: {100.0 * bounds[0]:.4g} to {100.0 * bounds[1]:.4g} %)"
     if law.get("friction_force_per_length") is not None:
         text += (f", friction force = {law['friction_force_per_length']:.4g} N/m "
-                 f"{_interval(law.get('friction_force_per_length_ci95'))}")
+                 f"{interval_words(law.get('friction_force_per_length_ci95'))}")
     return (text.rstrip(),)
