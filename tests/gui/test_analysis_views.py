@@ -475,3 +475,26 @@ def test_backbone_components_are_drawn_relative_to_their_own_frequency(qtbot, tm
     low, high = plot.viewRange()[1]
     # both modes on one axis of a few tenths of a percent: component 0's bend is in view
     assert low <= 100 * (-10 * amp.max()) / 17 and high >= 0 and high - low < 5
+
+
+def test_analyses_that_failed_for_want_of_hvd_are_named_once_after_it(qtbot, make_window,
+                                                                     registry, tmp_path):
+    """White noise holds no free decay: hvd is refused, and every analysis after it fails
+    for want of its result. The state line gave each one's message in full, hvd's refusal
+    repeated inside each; it names them together after hvd's, as fsi-lab analyze does."""
+    from support import cli
+
+    rng = np.random.default_rng(3)
+    csv_path = tmp_path / "noise.csv"
+    csv_path.write_text("tip_velocity [m/s]\n" + "\n".join(
+        f"{v:.6e}" for v in 1e-3 * rng.standard_normal(4000)) + "\n")
+    run = tmp_path / "noise.h5"
+    assert cli("import", str(csv_path), "--rate", "2000", "-o", str(run)).returncode == 0
+    assert cli("analyze", str(run), "--mass-per-length", "0.1346").returncode == 2
+    text = _open(qtbot, make_window(registry), run).state.text()
+    failures = text.removeprefix("failed: ").split("; ")
+    assert text.startswith("failed: hvd on tip_velocity: ")
+    assert text.count("identify: ") == 1, text
+    (wanting,) = [f for f in failures if "for want of" in f]
+    assert wanting.endswith("on tip_velocity: no result, for want of hvd's (hvd failed, above)")
+    assert "backbone" in wanting and "equivalent-damping" in wanting

@@ -17,6 +17,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from fsi_lab.contract import failed_provider, for_want_of
 from fsi_lab.gui.analysis.dataset_browser import DatasetBrowser
 from fsi_lab.gui.analysis.datasets import chain_of
 from fsi_lab.gui.analysis.generic_view import GenericView
@@ -227,9 +228,7 @@ class AnalysisViews(QWidget):
             self.state.setText("not computed: this run file has no analysis results "
                                f"(exit status {status}); set the parameters and re-run")
         else:
-            errors = [f"{r.plugin} on {r.channel}: {r.error}"
-                      for groups in results.analysis.values()
-                      for r in groups.values() if not r.ok]
+            errors = _failures(results)
             self.state.setText("failed: " + "; ".join(errors) if errors else "")
         self.state.setVisible(bool(self.state.text()))
         self.state.setStyleSheet("color: #b00020;" if results.analysis and
@@ -322,3 +321,22 @@ class AnalysisViews(QWidget):
         self.parameters.note.setText(f"failed: {message}")
         self.message.emit("ERROR", f"analysis of {Path(path).name} failed: {message}")
         self.analysis_failed.emit(path)
+
+
+def _failures(results: RunResults) -> list[str]:
+    """Each failed analysis of the run, ``PLUGIN on CHANNEL: why``; those that failed only
+    for want of the result of one that failed before them on the channel are named together
+    after it, as ``fsi-lab analyze`` prints them, rather than repeating its message."""
+    failed = [r for groups in results.analysis.values() for r in groups.values() if not r.ok]
+    own = {(r.channel, r.plugin) for r in failed}
+    wanting: dict[tuple[str, str], list[str]] = {}
+    lines = []
+    for r in failed:
+        provider = failed_provider(r.error)
+        if provider is not None and (r.channel, provider) in own:
+            wanting.setdefault((r.channel, provider), []).append(r.plugin)
+        else:
+            lines.append(f"{r.plugin} on {r.channel}: {r.error}")
+    lines.extend(f"{', '.join(plugins)} on {channel}: {for_want_of(provider)}"
+                 for (channel, provider), plugins in wanting.items())
+    return lines
