@@ -189,8 +189,7 @@ def _names_and_units(path: Path, names: list[str], reader, line: int) -> list[Co
         units = next(reader)
     except (StopIteration, csv.Error):
         return None
-    if len(units) > 1 and not units[-1].strip():
-        units = units[:-1]
+    units = _trimmed(units)
     if not names or not units:
         return None
     written = [unit.strip().removeprefix("[").removesuffix("]").removeprefix("(")
@@ -212,6 +211,12 @@ def _cells(text: str, separator: str) -> list[str]:
         cells = next(csv.reader([text], delimiter=separator, strict=True))
     except csv.Error:
         return []
+    return _trimmed(cells)
+
+
+def _trimmed(cells: list[str]) -> list[str]:
+    """A row's cells without the empty last one of a row that ends with the separator (as
+    an export's rows often do)."""
     return cells[:-1] if len(cells) > 1 and not cells[-1].strip() else cells
 
 
@@ -398,10 +403,7 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
 
     reader = csv.reader(itertools.chain([header], rows), delimiter=separator, strict=True)
     try:
-        cells = next(reader)
-        # An export's rows often end with the separator: an empty last cell on every line.
-        if len(cells) > 1 and not cells[-1].strip():
-            cells = cells[:-1]
+        cells = _trimmed(next(reader))
         header_rows = 1
         try:
             columns = _parse_header(path, cells, numbers[0])
@@ -727,10 +729,9 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
         raise InputFileError(f"{path}: only a time column; expected data columns 'name [unit]' "
                              "beside it")
     t0 = 0.0
-    if ignore_time:
-        if rate is None:
-            raise InputFileError("--ignore-time: the sample rate is then --rate's; expected "
-                                 "--rate HZ beside it")
+    if ignore_time and rate is None:
+        raise InputFileError("--ignore-time: the sample rate is then --rate's; expected "
+                             "--rate HZ beside it")
     if times and not ignore_time:
         factor = columns[times[0]].factor
         time = data[:, times[0]] * factor
