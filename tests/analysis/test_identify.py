@@ -266,6 +266,24 @@ def test_a_release_record_gives_c_i_c_f_and_the_natural_frequency_from_its_first
     assert est.frequency == pytest.approx(WET_F, rel=2e-3)
 
 
+@pytest.mark.parametrize("scale", [1e-4, 1e3])
+def test_the_record_s_unit_changes_no_decision_and_no_number(scale):
+    """A decay read in another unit (a small decay in m/s, or the same in um/s) gives the same
+    extrema, the same damping rate and the same beta times the scale, to rounding: the edge
+    predictor once put its constant's column at 1 whatever the record's size, and a record of
+    1e-4 m/s kept other extrema and read beta 0.3 % apart."""
+    case = release(noise=0.03, fs=500.0, duration=4.0)
+    record = trial(case, 3)
+    one = identify(record, case.fs).modes[0]
+    other = identify(record * scale, case.fs).modes[0]
+    assert [d.amplitude.size for d in other.decays] == [d.amplitude.size for d in one.decays]
+    a_one, beta_one = one.quadratic.params
+    a_other, beta_other = other.quadratic.params
+    assert a_other == pytest.approx(a_one, rel=1e-7)
+    assert beta_other * scale == pytest.approx(beta_one, rel=1e-7)
+    assert other.frequency_hz == pytest.approx(one.frequency_hz, rel=1e-9)
+
+
 def test_the_intervals_cover_the_truth_in_a_fast_monte_carlo_slice():
     """Twenty trials at 1 % noise, 10 kHz, 3 s (fixed seeds): the 95 % intervals hold the truth
     in 16 or more (a calibrated interval misses 4 or more of 20 with 1.6 % probability), and
