@@ -555,6 +555,32 @@ def _check_rate(rate: float, where: str) -> float:
     return rate
 
 
+def _refuse_gaps(path: Path, time: np.ndarray, lines: np.ndarray, steps: np.ndarray,
+                 allowed: np.ndarray) -> None:
+    """Refuse a time column with samples missing (steps of 1.5 typical steps or more beyond
+    their tolerance ``allowed``, s, at no more than one step in a hundred): a DAQ's buffer
+    overrun, a dropped block, two exports joined. Reading it at a steady rate
+    (``--ignore-time``) would join the two sides of each gap and move every later sample
+    early, which shifts the frequency."""
+    typical = float(np.median(steps))
+    with np.errstate(invalid="ignore"):
+        gaps = np.flatnonzero((steps >= 1.5 * typical) & (steps - typical > allowed))
+    if gaps.size == 0 or gaps.size > steps.size // 100:    # none, or the stamps' own rounding
+        return
+    first = int(gaps[0])
+    missing = steps[first] / typical - 1.0
+    more = f" (and {gaps.size - 1} more gap(s) after it)" if gaps.size > 1 else ""
+    raise InputFileError(
+        f"{path}: the time column jumps from {time[first]:.6g} s to {time[first + 1]:.6g} s at "
+        f"line {lines[first + 1]}, where its steps are {typical:.6g} s: about {missing:.0f} "
+        f"samples are missing there{more} (a buffer overrun, a dropped block, two exports "
+        f"joined); expected samples at a steady rate. --ignore-time would join the two sides "
+        f"and put every later sample {steps[first] - typical:.3g} s early, which shifts the "
+        f"frequency: import the part before line {lines[first + 1]} and the part from it on "
+        f"as two files (the header row on each), or export the record again"
+    )
+
+
 def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: np.ndarray,
                     given: float | None, single: bool = False) -> float:
     """The sample rate (Hz) of the time column's values ``time`` (s) on file lines ``lines``,
@@ -583,6 +609,7 @@ def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: n
         excess = np.abs(steps - step) - allowed
     if not float(np.max(excess)) <= 0.0:
         worst = int(np.nanargmax(np.where(np.isnan(excess), np.inf, excess)))
+        _refuse_gaps(path, time, lines, steps, allowed)
         raise InputFileError(
             f"{path}: the time column is not uniformly sampled (step {steps[worst]:.6g} s at "
             f"line {lines[worst + 1]} against a mean of {step:.6g} s); expected uniform "

@@ -633,6 +633,23 @@ def test_a_time_column_in_double_precision_keeps_its_tolerance(tmp_path):
     assert "the time column is not uniformly sampled" in proc.stderr
 
 
+def test_a_time_column_with_samples_missing_is_refused_as_a_gap_not_as_jitter(tmp_path):
+    """A DAQ that dropped a block: 100 samples' time missing 1.2 s into a 2 kHz record. The
+    refusal names the gap (where, how many samples) and says why --ignore-time would not do:
+    it would join the two sides (the frequency read 0.44 % off that way). No run file."""
+    t = np.arange(6000) / 2000.0
+    t = np.concatenate((t[:2400], t[2500:]))
+    path = tmp_path / "gap.csv"
+    path.write_text("time [s],v [m/s]\n" + "".join(f"{v:.6f},{np.sin(v)}\n" for v in t))
+    out = tmp_path / "gap.h5"
+    proc = cli("import", str(path), "-o", str(out))
+    assert proc.returncode == 2
+    assert ("the time column jumps from 1.1995 s to 1.25 s at line 2402, where its steps are "
+            "0.0005 s: about 100 samples are missing there") in proc.stderr
+    assert "--ignore-time would join the two sides" in proc.stderr
+    assert not out.exists()
+
+
 def test_the_sensitivity_the_delay_and_the_reference_take_the_names_as_written(tmp_path):
     """A column named outside the channel-name rule is given to the options as the header
     wrote it (or as its channel is named); one sensitivity per column."""
