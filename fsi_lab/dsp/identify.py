@@ -2066,7 +2066,7 @@ def _frequency_step(mode: _Mode, quantity: str, seed: bool = False) -> None:
             r = r + jac[:, 1] * (mode.alpha * top)
             step, cov, dof, resid = solve([0, *offsets])
             mode.alpha = 0.0
-            if seed and seeded and mode.alpha == 0.0 and not mode.stiffness_tried:
+            if seed and seeded and not mode.stiffness_tried:
                 mode.alpha, mode.stiffness_tried = seeded, True
         else:
             mode.alpha = alpha_new
@@ -2605,9 +2605,12 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.append(off)
     wander = m.start_drift.get("frequency_wander")
     if wander is not None:
+        low, high = m.start_drift["frequency_low"], m.start_drift["frequency_high"]
+        # enough decimals to tell them apart (not "17 to 17 Hz")
+        places = max(2, 1 - math.floor(math.log10(max(high - low, 1e-9))))
         out.append(f"the frequency is not the same over each decay: the early, middle and late "
-                   f"cycles give {m.start_drift['frequency_low']:.5g} to "
-                   f"{m.start_drift['frequency_high']:.5g} Hz, further apart than their noise "
+                   f"cycles give {low:.{places}f} to {high:.{places}f} Hz, further apart than "
+                   "their noise "
                    "explains (a drifting frequency, a close mode or a line pulling some cycles, "
                    "a stiffness that changes with amplitude); its interval is widened "
                    f"{_fold(wander)}")
