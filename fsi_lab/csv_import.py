@@ -90,6 +90,12 @@ class Column:
         return self.name.lower() == "time"
 
 
+#: Units of quantities fsi-lab does not read (force, pressure, temperature, current, ...).
+_OTHER_UNIT = re.compile(r"(?i)(m|k)?(n|lbf|pa|bar|a|ohm)|mpa|°c|degc|°f|k|%|hz|rpm")
+#: Header cells that name a sample number or a table's index (no unit).
+_INDEX_NAME = re.compile(r"(?i)(index|idx|sample|samples|no\.?|nr\.?|n|#|unnamed: ?\d+)")
+
+
 def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
     columns = []
     for number, cell in enumerate(cells, start=1):
@@ -98,6 +104,9 @@ def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
             found = f"{cell!r}" if cell.strip() else (
                 "empty (a table's index column? export without it, e.g. pandas' "
                 "to_csv(index=False))")
+            if _INDEX_NAME.fullmatch(cell.strip()):
+                found += (" (a sample number or index column? export without it, or delete "
+                          "it from a copy of the file)")
             raise InputFileError(
                 f"{path}: line {line}, header column {number} is {found}; expected 'name "
                 f"[unit]' (or 'name (unit)') with unit {ACCEPTED_UNITS}. The first line that "
@@ -121,9 +130,11 @@ def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
         else:
             parsed = parse_unit(unit)
         if parsed is None:
+            other = (" (a column of another quantity, such as a hammer's force, is not read: "
+                     "delete it from a copy of the file)") if _OTHER_UNIT.fullmatch(unit) else ""
             raise InputFileError(
                 f"{path}: header column {number} ({written}): unit {unit!r} is not accepted; "
-                f"expected {ACCEPTED_UNITS}"
+                f"expected {ACCEPTED_UNITS}{other}"
             )
         columns.append(Column(name, unit, parsed[0], parsed[1], written))
     names = [c.name for c in columns if not c.is_time]   # (two time columns: import_csv)

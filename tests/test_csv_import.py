@@ -66,6 +66,14 @@ def test_time_column_replaces_rate(tmp_path):
     (["time [s]", "tip [m/s]"], [[0, 1], [0.1, 2], [0.25, 3]], [],
      "the time column is not uniformly sampled"),
     (["tip [m/s]"], [[1], ["nan"]], ["--rate", "10"], "expected a finite number"),
+    (["time [s]", "tip [m/s]", "index"], [[0, 1, 0], [0.1, 2, 1]], [],
+     "header column 3 is 'index' (a sample number or index column? export without it, or "
+     "delete it from a copy of the file)"),
+    (["time [s]", "tip [m/s]", "hammer [N]"], [[0, 1, 0], [0.1, 2, 1]], [],
+     "unit 'N' is not accepted; expected m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n "
+     "on m, m/s, m/s^2 and V (mm/s, um, mV), or s or ms for the time column (a column of "
+     "another quantity, such as a hammer's force, is not read: delete it from a copy of the "
+     "file)"),
     (["3rd tip [m/s]"], [[1], [2]], ["--rate", "10"],
      "header column 1: name '3rd tip' is not accepted; expected a letter followed by "
      "letters, digits, '_', '-' or spaces"),
