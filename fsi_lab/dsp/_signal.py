@@ -191,8 +191,9 @@ def rfft(x: np.ndarray, n: int | None = None) -> np.ndarray:
 #: (float64 sums of the stretch's products), not directions the data spans.
 EIGEN_FLOOR = 1e-13
 #: Ridge of the prediction's normal equations when no rank is given, relative to the mean
-#: power of the stretch's lagged samples.
-RIDGE = 1e-6
+#: power of the stretch's lagged samples: small, so a clean decay is continued to 1e-9 of
+#: itself (at 1e-6 the first samples of a rate reduction moved by 5e-4).
+RIDGE = 1e-9
 
 
 def _lstsq_normal(basis: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -255,8 +256,7 @@ def ar_extend(x: np.ndarray, n_ext: int, order: int, stride: int, fit_length: in
         # constant by centring (least squares with an intercept) and the ridge relative to
         # the stretch's own power: a column of ones beside the samples made the ridge depend
         # on the record's unit, and a decay of 1e-4 m/s was read 2 % apart from the same
-        # decay in mm/s. RIDGE is about the share a velocity record of 0.01 to 0.02 m/s, in
-        # m/s, was given before.
+        # decay in mm/s.
         lag_mean, target_mean = lagged.mean(axis=0), float(target.mean())
         lagged = lagged - lag_mean
         gram = lagged.T @ lagged
