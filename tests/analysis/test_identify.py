@@ -270,8 +270,8 @@ def test_a_release_record_gives_c_i_c_f_and_the_natural_frequency_from_its_first
 def test_the_record_s_unit_changes_no_decision_and_no_number(scale):
     """A decay read in another unit (a small decay in m/s, or the same in um/s) gives the same
     extrema, the same damping rate and the same beta times the scale, to rounding: the edge
-    predictor once put its constant's column at 1 whatever the record's size, and a record of
-    1e-4 m/s kept other extrema and read beta 0.3 % apart."""
+    predictor once put its constant's column at 1 whatever the record's size, and this record
+    scaled by 1e-4 read its damping rate 2.2 % apart (by 1e3, 6e-6)."""
     case = release(noise=0.03, fs=500.0, duration=4.0)
     record = trial(case, 3)
     one = identify(record, case.fs).modes[0]
