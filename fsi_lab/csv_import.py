@@ -581,8 +581,10 @@ def _refuse_gaps(path: Path, time: np.ndarray, lines: np.ndarray, steps: np.ndar
     first = int(gaps[0])
     missing = steps[first] / typical - 1.0
     more = f" (and {gaps.size - 1} more gap(s) after it)" if gaps.size > 1 else ""
+    places = max(0, 1 - math.floor(math.log10(typical)))    # a tenth of a step
     raise InputFileError(
-        f"{path}: the time column jumps from {time[first]:.6g} s to {time[first + 1]:.6g} s at "
+        f"{path}: the time column jumps from {time[first]:.{places}f} s to "
+        f"{time[first + 1]:.{places}f} s at "
         f"line {lines[first + 1]}, where its steps are {typical:.6g} s: about {missing:.0f} "
         f"samples are missing there{more} (a buffer overrun, a dropped block, two exports "
         f"joined); expected samples at a steady rate. --ignore-time would join the two sides "

@@ -652,7 +652,7 @@ def test_a_time_column_with_samples_missing_is_refused_as_a_gap_not_as_jitter(tm
     out = tmp_path / "gap.h5"
     proc = cli("import", str(path), "-o", str(out))
     assert proc.returncode == 2
-    assert ("the time column jumps from 1.1995 s to 1.25 s at line 2402, where its steps are "
+    assert ("the time column jumps from 1.19950 s to 1.25000 s at line 2402, where its steps are "
             "0.0005 s: about 100 samples are missing there") in proc.stderr
     assert "--ignore-time would join the two sides" in proc.stderr
     assert not out.exists()
