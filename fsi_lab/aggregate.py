@@ -399,8 +399,6 @@ def without_curves(agg: dict[str, Any]) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------- text
-
-
 def _power(entry: dict[str, Any]) -> str:
     """The power of the velocity the union's fluid term grows with, in words, or nothing
     when it was not tested."""

@@ -92,6 +92,8 @@ _BINARY_FORMATS = (
     (b"\x89HDF\r\n\x1a\n", "an HDF5 file (a MATLAB v7.3 MAT-file, or a run file?)"),
     (b"TDSm", "a TDMS file (LabVIEW, DIAdem)"),
 )
+
+
 #: Encodings by the names users know them by.
 _ENCODING_NAMES = {"cp1252": "Windows-1252", "latin-1": "Latin-1"}
 

@@ -2062,9 +2062,9 @@ def _frequency_step(mode: _Mode, quantity: str, seed: bool = False) -> None:
             if p_data.size >= 3:
                 x_amp = amp / mode.w0 if quantity == "velocity" else amp
                 seen, seen_se = _data_stiffening(p_data, x_amp, x_amp / np.max(x_amp))
-                visible = (abs(seen) > 5.0 * seen_se and seen * shift > 0
-                           and abs(seen) >= 0.5 * abs(shift))
-                if abs(seen) > 5.0 * seen_se and abs(seen) >= STIFFNESS_SHIFT:
+                resolved = abs(seen) > 5.0 * seen_se
+                visible = resolved and seen * shift > 0 and abs(seen) >= 0.5 * abs(shift)
+                if resolved and abs(seen) >= STIFFNESS_SHIFT:
                     seeded = seen * mode.w0 ** 2 / (0.375 * float(np.max(x_amp)) ** 2)
         if abs(alpha_new) <= 5.0 * se_alpha or abs(shift) < STIFFNESS_SHIFT or not visible:
             # The model's stiffness left out: the frequency's step is taken with its removal's
