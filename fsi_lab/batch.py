@@ -117,8 +117,10 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     Returns
     -------
     dict
-        ``summary`` (the object ``fsi-lab analyze --json`` prints for one file) and
-        ``worker`` (``pid`` and ``peak_rss_mib``, the process's peak memory so far, MiB).
+        ``summary`` (the object ``fsi-lab analyze --json`` prints for one file),
+        ``refused`` (why the input was not what the analyses need although they ran, or None:
+        :func:`fsi_lab.summary.uncalibrated`) and ``worker`` (``pid`` and ``peak_rss_mib``,
+        the process's peak memory so far, MiB).
 
     Raises
     ------
@@ -127,7 +129,7 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     """
     from fsi_lab.runfile import read_run, require_analysable
     from fsi_lab.store import analyse_and_store
-    from fsi_lab.summary import nothing_identified
+    from fsi_lab.summary import nothing_identified, uncalibrated
 
     registry = registry if registry is not None else worker_registry()
     run = read_run(task.path, load_data=False, lazy=True)  # a channel is read when used
@@ -148,4 +150,6 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
                                 analysed_with(task))
     if keep_earlier(summary):
         summary["not_stored"] = KEPT
-    return {"summary": summary, "worker": {"pid": os.getpid(), "peak_rss_mib": peak_rss_mib()}}
+    quantities = {name: channel.quantity for name, channel in run.channels.items()}
+    return {"summary": summary, "refused": uncalibrated(summary, quantities),
+            "worker": {"pid": os.getpid(), "peak_rss_mib": peak_rss_mib()}}

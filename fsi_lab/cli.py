@@ -234,8 +234,9 @@ def cmd_analyze(args) -> int:
     bus.subscribe(console)
     bus.subscribe(args.signal_note.checkpoint)  # a signal whose exception was swallowed
     try:
-        summary = analyse_file(AnalyseTask(str(args.run[0]), tuple(args.set),
-                                           args.mass_per_length), registry, bus)["summary"]
+        result = analyse_file(AnalyseTask(str(args.run[0]), tuple(args.set),
+                                          args.mass_per_length), registry, bus)
+        summary = result["summary"]
     finally:
         console.close()
     args.signal_note.check()
@@ -243,7 +244,7 @@ def cmd_analyze(args) -> int:
         _emit_json(summary)
     else:
         print(format_summary(summary, registry))
-    refused = nothing_identified(summary, registry)
+    refused = nothing_identified(summary, registry) or result["refused"]
     if refused:
         kept = f"; {summary['not_stored']}" if summary.get("not_stored") else ""
         print(f"fsi-lab: error: {args.run[0]}: {refused}{kept}", file=sys.stderr)
@@ -315,7 +316,8 @@ def _analyze_batch(args) -> int:
                     entry.update(status="analysed", analysis=summary, problems=problems,
                                  worker=result.value["worker"],
                                  exit_code=EXIT_STRICT if args.strict and problems else 0)
-                    refused = nothing_identified(summary, _loaded_plugins())
+                    refused = nothing_identified(summary, _loaded_plugins()) \
+                        or result.value["refused"]
                     if refused and summary.get("not_stored"):
                         refused += f"; {summary['not_stored']}"
                     if refused:

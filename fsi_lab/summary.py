@@ -208,6 +208,24 @@ def nothing_identified(summary: dict[str, Any], registry) -> str | None:
     return "nothing was identified: " + "; ".join(reasons) if reasons else None
 
 
+def uncalibrated(summary: dict[str, Any], quantities: dict[str, str]) -> str | None:
+    """Why an analysed channel in volts is refused, or None: a channel whose samples are a
+    sensor's volts (imported without ``--sensitivity``) gives frequencies, but the analyses
+    that need the motion it measures (amplitudes, backbones, damping curves, C_i and C_f)
+    fail on it, so the exit code says the input was not what they need (2), although what
+    could be computed was stored. ``quantities`` holds each channel's quantity by name."""
+    from fsi_lab.units import voltage_hint
+
+    reasons = []
+    for name, info in (summary.get("channels") or {}).items():
+        failed = [error["plugin"] for error in info.get("errors", []) if error.get("plugin")]
+        if quantities.get(name) == "voltage" and failed:
+            reasons.append(f"channel {name} holds volts, not the motion its sensor measures: "
+                           f"its frequencies are stored, but {', '.join(failed)} need that "
+                           "motion")
+    return "; ".join(reasons) + voltage_hint("voltage") if reasons else None
+
+
 def _provides(registry, analysis: Any, kind: str) -> bool:
     try:
         return registry.get("analysis", analysis).provides == kind

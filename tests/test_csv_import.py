@@ -1,5 +1,7 @@
 """`fsi-lab import`: CSV files recorded elsewhere become run files."""
 
+import json
+
 import h5py
 import numpy as np
 import pytest
@@ -543,11 +545,26 @@ def test_a_record_in_volts_alone_is_refused_saying_how_to_calibrate_it(tmp_path)
     assert proc.returncode == 2
     assert "nothing to analyse" in proc.stderr
     assert "--sensitivity NAME=200mV/(mm/s)" in proc.stderr
-    # named, it gives its spectrum; C_i and C_f are refused with the same advice
+    # named, it gives its spectrum and frequencies (stored); C_i and C_f are refused with the
+    # same advice, and the exit code says the input was not what they need
     proc = cli("analyze", str(run), "--set", "analysis.channels=tip",
                "--mass-per-length", "0.1346")
     refused = [line for line in proc.stdout.splitlines() if "failed equivalent-damping" in line]
     assert refused and "--sensitivity NAME=200mV/(mm/s)" in refused[0], proc.stdout
+    assert proc.returncode == 2, proc.stderr
+    assert "channel tip holds volts, not the motion its sensor measures: its frequencies are " \
+        "stored, but integrate, backbone, damping, equivalent-damping need that motion" \
+        in proc.stderr and "--sensitivity NAME=200mV/(mm/s)" in proc.stderr, proc.stderr
+    with h5py.File(run, "r") as handle:
+        summary = json.loads(handle["analysis"].attrs["summary"])
+    stored = summary["channels"]["tip"]["components"]
+    assert stored and abs(stored[0]["frequency_hz"] - 17.0) < 0.05
+    # the same record calibrated is analysed (exit 0 or 3 with --strict, not 2)
+    calibrated = tmp_path / "calibrated.h5"
+    assert cli("import", str(path), "--rate", "1000", "-o", str(calibrated),
+               "--sensitivity", "tip=200mV/(mm/s)").returncode == 0
+    proc = cli("analyze", str(calibrated), "--mass-per-length", "0.1346")
+    assert proc.returncode == 0 and "holds volts" not in proc.stderr, proc.stderr
 
 
 def test_the_units_examples_run_as_written():
