@@ -552,7 +552,7 @@ def cmd_import(args) -> int:
         sensitivities[name.strip()] = text.strip()
     notes: list[str] = []
     out = import_csv(args.csv, args.output, args.rate, args.reference, delays, sensitivities,
-                     args.decimal_mark, notes, args.ignore_time)
+                     args.decimal_mark, notes, args.ignore_time, args.skip)
     for text in notes:
         print(f"[note] {text}", file=sys.stderr)
     if args.json:
@@ -952,6 +952,18 @@ def _strict_exit(summary: dict[str, Any], code: int) -> int:
     return EXIT_STRICT
 
 
+def _column_number(text: str) -> int:
+    """``--skip N``: a column number >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a column number (1 is the "
+                                         "file's first column)")
+    return value
+
+
 def _jobs(text: str) -> int:
     """``--jobs N``: a number of worker processes >= 1."""
     try:
@@ -1125,6 +1137,9 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     p.add_argument("--decimal-mark", choices=(".", ","),
                    help="the decimal mark of a file separated by semicolons or tabs whose "
                         "values could be grouped in thousands (25.300: 25.3 or 25300?)")
+    p.add_argument("--skip", action="append", default=[], type=_column_number, metavar="N",
+                   help="leave out the file's column N (from 1; e.g. a hammer's force or a "
+                        "sample index); may be repeated")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="RUN.h5")
     common(p)
     p.set_defaults(func=cmd_import)

@@ -24,7 +24,7 @@ import unicodedata
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
-from typing import Mapping, NoReturn
+from typing import Collection, Mapping, NoReturn
 
 import numpy as np
 
@@ -76,14 +76,16 @@ _SEPARATOR_NAMES = {";": "semicolons", "\t": "tabs", ",": "commas"}
 @dataclass(frozen=True)
 class Column:
     """A column of the file: its channel ``name``, the ``unit`` it is written in, the unit of
-    :data:`~fsi_lab.units.QUANTITY_OF_UNIT` (or ``s``) it is one of and the factor to it, and
-    the name the header wrote (spaces become ``_`` in the channel name)."""
+    :data:`~fsi_lab.units.QUANTITY_OF_UNIT` (or ``s``) it is one of and the factor to it, the
+    name the header wrote (spaces become ``_`` in the channel name) and its column number in
+    the file (from 1, counting the columns ``--skip`` leaves out)."""
 
     name: str
     unit: str
     base: str
     factor: float
     written: str
+    number: int = 0
 
     @property
     def is_time(self) -> bool:
@@ -96,17 +98,20 @@ _OTHER_UNIT = re.compile(r"(?i)(m|k)?(n|lbf|pa|bar|a|ohm)|mpa|°c|degc|°f|k|%|h
 _INDEX_NAME = re.compile(r"(?i)(index|idx|sample|samples|no\.?|nr\.?|n|#|unnamed: ?\d+)")
 
 
-def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
+def _parse_header(path: Path, cells: list[str], line: int,
+                  numbers: list[int] | None = None) -> list[Column]:
+    """The columns of the header row ``cells`` (file line ``line``), whose column numbers in
+    the file are ``numbers`` (default 1, 2, ...)."""
     columns = []
-    for number, cell in enumerate(cells, start=1):
+    for number, cell in zip(numbers or itertools.count(1), cells):
         match = _HEADER.match(cell)
         if not match:
             found = f"{cell!r}" if cell.strip() else (
                 "empty (a table's index column? export without it, e.g. pandas' "
                 "to_csv(index=False))")
             if _INDEX_NAME.fullmatch(cell.strip()):
-                found += (" (a sample number or index column? export without it, or delete "
-                          "it from a copy of the file)")
+                found += (" (a sample number or index column? leave it out with --skip "
+                          f"{number}, or export without it)")
             raise InputFileError(
                 f"{path}: line {line}, header column {number} is {found}; expected 'name "
                 f"[unit]' (or 'name (unit)') with unit {ACCEPTED_UNITS}. The first line that "
@@ -131,12 +136,12 @@ def _parse_header(path: Path, cells: list[str], line: int) -> list[Column]:
             parsed = parse_unit(unit)
         if parsed is None:
             other = (" (a column of another quantity, such as a hammer's force, is not read: "
-                     "delete it from a copy of the file)") if _OTHER_UNIT.fullmatch(unit) else ""
+                     f"leave it out with --skip {number})") if _OTHER_UNIT.fullmatch(unit) else ""
             raise InputFileError(
                 f"{path}: header column {number} ({written}): unit {unit!r} is not accepted; "
                 f"expected {ACCEPTED_UNITS}{other}"
             )
-        columns.append(Column(name, unit, parsed[0], parsed[1], written))
+        columns.append(Column(name, unit, parsed[0], parsed[1], written, number))
     names = [c.name for c in columns if not c.is_time]   # (two time columns: import_csv)
     duplicate = next((n for n in names if names.count(n) > 1), None)
     if duplicate:
@@ -191,26 +196,38 @@ def _channel_name(written: str) -> str:
     return re.sub(r"[^A-Za-z0-9_-]+", "_", ascii_text).strip("_")
 
 
-def _names_and_units(path: Path, names: list[str], reader, line: int) -> list[Column] | None:
+def _names_and_units(path: Path, names: list[str], reader, line: int,
+                     kept: list[int] | None = None) -> list[Column] | None:
     """The columns of a header written as a row of names (``names``, on file line ``line``)
     and, on the next row ``reader`` gives, a row of their units (``s;mm/s`` or ``[s];[mm/s]``,
     as LMS, DIAdem, dSPACE and oscilloscopes write them); None when the next row is not one
-    unit per name."""
+    unit per name. ``kept``: the indices of the file's columns ``names`` holds (all)."""
     try:
         units = next(reader)
     except (StopIteration, csv.Error):
         return None
     units = _trimmed(units)
+    if kept is not None:
+        if len(units) <= kept[-1]:
+            return None
+        units = [units[i] for i in kept]
     if not names or not units:
         return None
     written = [unit.strip().removeprefix("[").removesuffix("]").removeprefix("(")
                .removesuffix(")").strip() for unit in units]
-    if len(written) != len(names) or not all(
-            parse_unit(unit) is not None or unit.lower() in TIME_UNITS for unit in written):
+    read = [parse_unit(unit) is not None or unit.lower() in TIME_UNITS for unit in written]
+    # (a unit of another quantity, a hammer's N, beside units read: a row of units whose
+    # column is refused by name and number, with --skip)
+    other = [not ok and bool(_OTHER_UNIT.fullmatch(unit)) for ok, unit in zip(read, written)]
+    if len(written) != len(names) or not any(read) or not all(
+            ok or oth for ok, oth in zip(read, other)):
         return None
+    cells = [f"{name.strip()} [{unit}]" for name, unit in zip(names, written)]
+    numbers = [i + 1 for i in kept] if kept is not None else None
+    if any(other):
+        return _parse_header(path, cells, line, numbers)   # refuses that column
     try:
-        return _parse_header(path, [f"{name.strip()} [{unit}]"
-                                    for name, unit in zip(names, written)], line)
+        return _parse_header(path, cells, line, numbers)
     except InputFileError:
         return None
 
@@ -348,8 +365,10 @@ class _Printing:
         return np.fmax(fixed, significant)
 
 
-def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
-    """The columns and values of a CSV file (:class:`Table`).
+def read_csv(path: str | Path, decimal_mark: str | None = None,
+             skip: Collection[int] = ()) -> Table:
+    """The columns and values of a CSV file (:class:`Table`), without the columns numbered
+    ``skip`` (from 1: a hammer's force, a sample index).
 
     The separator is found on the header row (:func:`_separator`); with semicolons or tabs, a
     comma in a value is its decimal mark, and a file that holds both a decimal comma and a
@@ -415,12 +434,15 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
     reader = csv.reader(itertools.chain([header], rows), delimiter=separator, strict=True)
     try:
         cells = _trimmed(next(reader))
+        width = len(cells)
+        kept = _kept_columns(path, skip, width, numbers[0])
+        cells = [cells[i] for i in kept]
         header_rows = 1
         try:
-            columns = _parse_header(path, cells, numbers[0])
+            columns = _parse_header(path, cells, numbers[0], [i + 1 for i in kept])
         except InputFileError as exc:
             # an analyser's names on one row and their units on the next
-            columns = _names_and_units(path, cells, reader, numbers[0])
+            columns = _names_and_units(path, cells, reader, numbers[0], kept)
             if columns is None:
                 raise InputFileError(f"{exc}{_later_header(path, lines, numbers[0])}") from None
             header_rows = 2
@@ -461,14 +483,16 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
                 if line < last:
                     _missing_sample(path, line, True)
                 continue                                 # a sheet's blank rows at its end
-            if len(row) == len(columns) + 1 and not row[-1].strip():
+            if len(row) == width + 1 and not row[-1].strip():
                 row = row[:-1]
-            if len(row) != len(columns):
+            if len(row) != width:
                 raise InputFileError(
                     f"{path}: line {line} has {_plural(len(row), 'value')}; the header has "
-                    f"{_plural(len(columns), 'column')} (separated by "
+                    f"{_plural(width, 'column')} (separated by "
                     f"{_SEPARATOR_NAMES[separator]})"
                 )
+            if len(kept) != width:
+                row = [row[i] for i in kept]
             for col, cell in enumerate(row):
                 value_text = cell.strip()
                 if separator != ",":
@@ -477,13 +501,14 @@ def read_csv(path: str | Path, decimal_mark: str | None = None) -> Table:
                             marks[mark] = (line, cell)
                     if decimal_mark is not None and _OTHER_MARK[decimal_mark] in value_text:
                         raise InputFileError(
-                            f"{path}: line {line}, column {col + 1} ({columns[col].written}): "
+                            f"{path}: line {line}, column {columns[col].number} "
+                            f"({columns[col].written}): "
                             f"{cell!r} holds {_OTHER_MARK[decimal_mark]!r}, and the decimal "
                             f"mark given is {decimal_mark!r}; expected no thousands separators")
                     if grouped and ("," in value_text or "." in value_text):
                         grouped = bool(_GROUPED.fullmatch(value_text))
                     value_text = value_text.replace(",", ".")
-                data[count, col] = _number(path, line, col, columns[col], cell, value_text,
+                data[count, col] = _number(path, line, columns[col], cell, value_text,
                                            separator == ",")
                 if col == time:
                     printing.add(count, value_text)
@@ -536,7 +561,7 @@ def _missing_sample(path: Path, line: int, cells: bool) -> NoReturn:
     )
 
 
-def _number(path: Path, line: int, col: int, column: Column, cell: str, text: str,
+def _number(path: Path, line: int, column: Column, cell: str, text: str,
             commas: bool) -> float:
     """The finite value of ``cell`` (read as ``text``) on file line ``line`` of a file whose
     columns are separated by commas (``commas``) or not."""
@@ -546,15 +571,30 @@ def _number(path: Path, line: int, col: int, column: Column, cell: str, text: st
         hint = (" (a decimal comma in a comma-separated file? separate the columns with "
                 "semicolons)" if commas and "," in cell else "")
         raise InputFileError(
-            f"{path}: line {line}, column {col + 1} ({column.written}): {cell!r} is not a "
+            f"{path}: line {line}, column {column.number} ({column.written}): {cell!r} is not a "
             f"number{hint}"
         ) from None
     if not math.isfinite(value):
         raise InputFileError(
-            f"{path}: line {line}, column {col + 1} ({column.written}): {cell!r}; expected a "
+            f"{path}: line {line}, column {column.number} ({column.written}): {cell!r}; expected a "
             "finite number"
         )
     return value
+
+
+def _kept_columns(path: Path, skip: Collection[int], width: int, line: int) -> list[int]:
+    """The indices of the columns of a header row of ``width`` cells (file line ``line``)
+    left when the columns numbered ``skip`` (from 1) are left out."""
+    outside = sorted(number for number in skip if not 1 <= number <= width)
+    if outside:
+        raise InputFileError(
+            f"--skip {outside[0]}: {path} has {_plural(width, 'column')} (header row, line "
+            f"{line}); expected a column number from 1 to {width}")
+    kept = [i for i in range(width) if i + 1 not in set(skip)]
+    if not kept:
+        raise InputFileError(f"--skip leaves none of the {_plural(width, 'column')} of {path}; "
+                             "expected at least one data column kept")
+    return kept
 
 
 def _check_rate(rate: float, where: str) -> float:
@@ -704,7 +744,7 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
                reference: str | None = None, delays: Mapping[str, float] | None = None,
                sensitivities: Mapping[str, str] | None = None,
                decimal_mark: str | None = None, notes: list[str] | None = None,
-               ignore_time: bool = False) -> Path:
+               ignore_time: bool = False, skip: Collection[int] = ()) -> Path:
     """Write the CSV file ``path`` as the run file ``out``; returns ``out``.
 
     Parameters
@@ -739,10 +779,13 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     notes
         A list the sentences the user should read about the import are appended to (the
         file read as Windows-1252, not UTF-8); None: not kept.
+    skip
+        Numbers (from 1) of the file's columns to leave out (a hammer's force, a sample
+        index): they are not read; the run file's ``skipped_columns`` names them.
     """
     path, out = Path(path), Path(out)
     delays = dict(delays or {})
-    table = read_csv(path, decimal_mark)
+    table = read_csv(path, decimal_mark, skip)
     columns, data, lines = table.columns, table.data, table.lines
     if table.encoding == SINGLE_BYTE and notes is not None:
         cells = [f"{c.written} [{c.unit}]" for c in columns]
@@ -763,8 +806,9 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     _check_analysis_inputs(path, columns, reference, delays, calibrations)
     times = [i for i, column in enumerate(columns) if column.is_time]
     if len(times) > 1:
-        raise InputFileError(f"{path}: header columns {times[0] + 1} and {times[1] + 1} are both "
-                             "time columns; expected at most one 'time [s]' column")
+        raise InputFileError(f"{path}: header columns {columns[times[0]].number} and "
+                             f"{columns[times[1]].number} are both time columns; expected at "
+                             "most one 'time [s]' column")
     if len(times) == len(columns):
         raise InputFileError(f"{path}: only a time column; expected data columns 'name [unit]' "
                              "beside it")
@@ -798,9 +842,9 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
             values[column.name] = data[:, col] * (column.factor * factor)
         if not np.all(np.isfinite(values[column.name])):
             line = lines[int(np.argmax(~np.isfinite(values[column.name])))]
-            raise InputFileError(f"{path}: line {line}, column {col + 1} ({column.written}): too "
-                                 f"large to convert from {column.unit} to {si_unit}; expected a "
-                                 "finite value")
+            raise InputFileError(f"{path}: line {line}, column {column.number} "
+                                 f"({column.written}): too large to convert from {column.unit} "
+                                 f"to {si_unit}; expected a finite value")
     if out.exists():
         raise InputFileError(f"{out}: already exists; choose another output file")
     _, run_uuid, started = new_run_path(out.parent)
@@ -809,6 +853,7 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
         "source_file": str(path), "profile": "", "software_version": software_version(),
         **({"source_encoding": table.encoding} if table.encoding != "utf-8" else {}),
         **({"reference": reference} if reference else {}),
+        **({"skipped_columns": sorted(set(skip))} if skip else {}),
     })
     try:
         for column in columns:

@@ -5,7 +5,7 @@ import json
 import h5py
 import numpy as np
 import pytest
-from support import cli, cli_json
+from support import cli, cli_json, run_main
 
 from fsi_lab.runfile import read_run
 from fsi_lab.units import STANDARD_GRAVITY
@@ -69,13 +69,12 @@ def test_time_column_replaces_rate(tmp_path):
      "the time column is not uniformly sampled"),
     (["tip [m/s]"], [[1], ["nan"]], ["--rate", "10"], "expected a finite number"),
     (["time [s]", "tip [m/s]", "index"], [[0, 1, 0], [0.1, 2, 1]], [],
-     "header column 3 is 'index' (a sample number or index column? export without it, or "
-     "delete it from a copy of the file)"),
+     "header column 3 is 'index' (a sample number or index column? leave it out with --skip "
+     "3, or export without it)"),
     (["time [s]", "tip [m/s]", "hammer [N]"], [[0, 1, 0], [0.1, 2, 1]], [],
      "unit 'N' is not accepted; expected m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n "
      "on m, m/s, m/s^2 and V (mm/s, um, mV), or s or ms for the time column (a column of "
-     "another quantity, such as a hammer's force, is not read: delete it from a copy of the "
-     "file)"),
+     "another quantity, such as a hammer's force, is not read: leave it out with --skip 3)"),
     (["3rd tip [m/s]"], [[1], [2]], ["--rate", "10"],
      "header column 1: name '3rd tip' is not accepted; expected a letter followed by "
      "letters, digits, '_', '-' or spaces"),
@@ -465,6 +464,49 @@ def test_a_time_column_s_unit_is_read_in_any_case(tmp_path, unit, step):
     run = _imported(path)
     assert run.channels["tip"].sample_rate == pytest.approx(1000.0)
     np.testing.assert_array_equal(run.channels["tip"].data, np.array(SAMPLES, dtype=float))
+
+
+def test_columns_left_out_with_skip_are_not_read_and_later_columns_keep_their_numbers(
+        tmp_path):
+    """A sample index and a hammer's force beside the motion: ``--skip`` leaves them out (the
+    run file names them), the other columns are read as without them, and a refusal names a
+    column by its number in the file. A number outside the header, or one that leaves nothing,
+    is refused before anything is written."""
+    t = np.arange(300) / 1000.0
+    v = 0.01 * np.sin(2 * np.pi * 17 * t)
+    path = _write(tmp_path / "hammer.csv", ["index", "time [s]", "force [N]", "tip [mm/s]"],
+                  zip(range(t.size), t, 5.0 + 0 * t, 1e3 * v))
+    run = _imported(path, "--skip", "3", "--skip", "1")
+    assert list(run.channels) == ["tip"] and list(run.attrs["skipped_columns"]) == [1, 3]
+    assert run.channels["tip"].sample_rate == pytest.approx(1000.0)
+    np.testing.assert_allclose(run.channels["tip"].data, v, rtol=1e-12, atol=1e-15)
+    # the same rows with a value that is not a number in the 4th column: named as the 4th
+    bad = path.read_text().splitlines()
+    bad[5] = ",".join(bad[5].split(",")[:3] + ["x"])
+    path.write_text("\n".join(bad) + "\n")
+    for args, fragment in (
+            (["--skip", "1", "--skip", "3"], "line 6, column 4 (tip): 'x' is not a number"),
+            (["--skip", "5"], "--skip 5: " + str(path) + " has 4 columns (header row, line 1); "
+                              "expected a column number from 1 to 4"),
+            (["--skip", "1", "--skip", "2", "--skip", "3", "--skip", "4"],
+             "--skip leaves none of the 4 columns"),
+            (["--skip", "0"], "'0': expected a column number")):
+        out = tmp_path / "refused.h5"
+        code, _, err = run_main("import", str(path), "-o", str(out), *args)
+        assert code == 2 and fragment in err, err
+        assert not out.exists()
+    # an analyser's names over their units: the force is refused by its name and number, and
+    # left out the same way
+    two_rows = tmp_path / "names_units.csv"
+    two_rows.write_text("Time;Force;Velocity\ns;N;mm/s\n"
+                        + "".join(f"{k / 1000:g};5;{1e3 * x:g}\n".replace(".", ",")
+                                  for k, x in enumerate(v)))
+    code, _, err = run_main("import", str(two_rows), "-o", str(tmp_path / "refused.h5"))
+    assert code == 2 and "header column 2 (Force): unit 'N' is not accepted" in err \
+        and "leave it out with --skip 2" in err, err
+    run = _imported(two_rows, "--skip", "2")
+    assert list(run.channels) == ["Velocity"]
+    np.testing.assert_allclose(run.channels["Velocity"].data, v, rtol=1e-5, atol=1e-9)
 
 
 def test_a_column_in_volts_is_calibrated_with_its_sensor_s_sensitivity(tmp_path):
