@@ -197,18 +197,21 @@ def _channel_name(written: str) -> str:
 
 
 def _names_and_units(path: Path, names: list[str], reader, line: int,
-                     kept: list[int] | None = None) -> list[Column] | None:
+                     skipped: tuple[list[int], int] | None = None) -> list[Column] | None:
     """The columns of a header written as a row of names (``names``, on file line ``line``)
     and, on the next row ``reader`` gives, a row of their units (``s;mm/s`` or ``[s];[mm/s]``,
     as LMS, DIAdem, dSPACE and oscilloscopes write them); None when the next row is not one
-    unit per name. ``kept``: the indices of the file's columns ``names`` holds (all)."""
+    unit per name. ``skipped``: when ``--skip`` left columns out of ``names``, the indices of
+    those it holds and the number of columns in the file's row."""
     try:
         units = next(reader)
     except (StopIteration, csv.Error):
         return None
     units = _trimmed(units)
-    if kept is not None:
-        if len(units) <= kept[-1]:
+    kept = None
+    if skipped is not None:
+        kept, width = skipped
+        if len(units) != width:
             return None
         units = [units[i] for i in kept]
     if not names or not units:
@@ -442,7 +445,8 @@ def read_csv(path: str | Path, decimal_mark: str | None = None,
             columns = _parse_header(path, cells, numbers[0], [i + 1 for i in kept])
         except InputFileError as exc:
             # an analyser's names on one row and their units on the next
-            columns = _names_and_units(path, cells, reader, numbers[0], kept)
+            columns = _names_and_units(path, cells, reader, numbers[0],
+                                       (kept, width) if len(kept) != width else None)
             if columns is None:
                 raise InputFileError(f"{exc}{_later_header(path, lines, numbers[0])}") from None
             header_rows = 2
@@ -590,7 +594,8 @@ def _kept_columns(path: Path, skip: Collection[int], width: int, line: int) -> l
         raise InputFileError(
             f"--skip {outside[0]}: {path} has {_plural(width, 'column')} (header row, line "
             f"{line}); expected a column number from 1 to {width}")
-    kept = [i for i in range(width) if i + 1 not in set(skip)]
+    left_out = set(skip)
+    kept = [i for i in range(width) if i + 1 not in left_out]
     if not kept:
         raise InputFileError(f"--skip leaves none of the {_plural(width, 'column')} of {path}; "
                              "expected at least one data column kept")
