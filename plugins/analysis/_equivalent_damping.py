@@ -147,8 +147,11 @@ def _law_entry_of(fit: Any, delta_aicc: float, mass: float, scale: float, level:
            for p, s in zip(fit.names, fit.se)}}
     if not preferred:
         return entry
+    # In the coordinate the coefficients belong to (the measured amplitude over ``scale``),
+    # a quadratic term's coefficient is beta times the scale and a friction force per unit
+    # mass gamma over it (x = scale q in x'' + ... + beta |x'| x' + gamma sgn(x') = 0).
     per_length = {"a": ("c_i", 2.0 * mass), "beta": ("c_f", mass * scale),
-                  "gamma": ("friction_force_per_length", mass * scale)}
+                  "gamma": ("friction_force_per_length", mass / scale)}
     for name in fit.names:
         key, factor = per_length[name]
         low, high = fit.interval(name, level)

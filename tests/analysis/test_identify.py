@@ -456,6 +456,20 @@ def test_fluid_damping_with_dry_friction_beside_it_is_read_with_both(tmp_path):
                 if "linear + quadratic + Coulomb law (preferred)" in x)
     assert f"C_f = {law['c_f']:.4g} kg/m^2 (95 %: " in line
     assert f"friction force = {law['friction_force_per_length']:.4g} N/m" in line
+    # in a modal coordinate (the measured amplitude over W = 2, as at a cantilever's tip: x =
+    # 2 q in the law) C_f doubles, the friction force halves and C_i stays; the friction force
+    # was once doubled too, 4 times its value
+    code, out, err = run_main("analyze", str(run), "--json", "--mass-per-length", mass,
+                              "--set", "analysis.equivalent-damping.modal_scale=2")
+    assert code == 0, err
+    (modal,) = json.loads(out)["channels"]["tip"]["components"]
+    scaled = modal["equivalent_damping"]["laws"]["quadratic_coulomb"]
+    assert scaled["c_i"] == pytest.approx(law["c_i"], rel=1e-9)
+    assert scaled["c_f"] == pytest.approx(2.0 * law["c_f"], rel=1e-9)
+    assert scaled["friction_force_per_length"] == pytest.approx(
+        0.5 * law["friction_force_per_length"], rel=1e-9)
+    low, high = scaled["friction_force_per_length_ci95"]
+    assert low <= 0.1 * WET_MASS / 2.0 <= high
 
 
 def test_the_preferred_law_s_own_numbers_say_how_far_to_trust_them():
