@@ -440,13 +440,17 @@ def _amplitude_kind(entry: dict[str, Any]) -> str:
     q (the displacement at the measuring point over the mode shape there), or the
     displacement at the measuring point."""
     convention = str(entry.get("amplitude_convention", ""))
+    chain = "the measuring chain's gain" in convention   # (its filters taken out)
     if not convention.startswith("modal"):
-        return "displacement amplitude at the measuring point"
+        return "displacement amplitude at the measuring point" + (
+            " over the measuring chain's gain" if chain else "")
     scale = entry.get("modal_scale")
     found = re.match(r"modal: (q_\d+) ", convention)
     name = found.group(1) if found else "q"
     return (f"modal amplitude {name}" + (f" (the displacement at the measuring point / "
-                                         f"{abs(scale):.4g})" if scale else ""))
+                                         f"{abs(scale):.4g}" + (", the mode shape there times "
+                                         "the measuring chain's gain" if chain else "") + ")"
+                                         if scale else ""))
 
 
 def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:

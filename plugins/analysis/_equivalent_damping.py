@@ -74,10 +74,44 @@ def modal_scale_from_beam(specimen: Any, frequency_hz: float, mode: int | None =
     return value, int(mode)
 
 
+def chain_gain(params: dict[str, Any], f_hz: float) -> tuple[float, str]:
+    """The gain at ``f_hz`` (Hz) of the measuring chain's filters the parameters describe
+    (``highpass_hz``, ``lowpass_hz``: Butterworth corners, Hz, of orders ``highpass_order``
+    and ``lowpass_order``), and the words that say so (empty when there are none).
+
+    A filter whose corner lies near a mode passes it with a gain G below 1: every amplitude
+    of the mode is read G times its size, so C_f (damping per unit amplitude) would come out
+    1/G times too large; the analysis divides the amplitudes by G."""
+    gain, parts = 1.0, []
+    for kind, corner, order in (("high-pass", params.get("highpass_hz"),
+                                 params.get("highpass_order", 1)),
+                                ("low-pass", params.get("lowpass_hz"),
+                                 params.get("lowpass_order", 4))):
+        if corner is None:
+            continue
+        ratio = float(corner) / f_hz if kind == "high-pass" else f_hz / float(corner)
+        gain /= math.sqrt(1.0 + ratio ** (2 * int(order)))
+        parts.append(f"{kind} at {float(corner):g} Hz, order {int(order)}")
+    if not parts:
+        return 1.0, ""
+    return gain, (f"; amplitudes divided by the measuring chain's gain {gain:.4g} at "
+                  f"{f_hz:.4g} Hz ({', '.join(parts)}, Butterworth)")
+
+
 def amplitude_convention(context: AnalysisContext, params: dict[str, Any], f_hz: float
                          ) -> tuple[float, str]:
-    """``modal_scale`` for a component at ``f_hz`` (Hz) and the words that say which amplitude
-    the coefficients belong to (see :mod:`fsi_lab.dsp.equivalent_damping`)."""
+    """``modal_scale`` for a component at ``f_hz`` (Hz), times the measuring chain's gain
+    there (:func:`chain_gain`), and the words that say which amplitude the coefficients
+    belong to (see :mod:`fsi_lab.dsp.equivalent_damping`)."""
+    scale, words = _coordinate(context, params, f_hz)
+    gain, said = chain_gain(params, f_hz)
+    return scale * gain, words + said
+
+
+def _coordinate(context: AnalysisContext, params: dict[str, Any], f_hz: float
+                ) -> tuple[float, str]:
+    """``modal_scale`` for a component at ``f_hz`` (Hz) and the words that say which
+    coordinate the coefficients belong to."""
     given = params["modal_scale"]
     if given is not None:
         return float(given), f"modal (modal_scale = {given:g} given)"

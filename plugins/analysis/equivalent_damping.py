@@ -43,6 +43,19 @@ PLUGIN = AnalysisPlugin(
               help="W_n(x_meas) (Eq. 15 normalisation) to express amplitudes in the modal "
                    "coordinate; unset = from the beam model when the run has a specimen, else "
                    "1 (amplitudes as measured)."),
+        Param("highpass_hz", "float", "Hz", None, minimum=1e-3,
+              help="Corner of a high-pass in the measuring chain (an AC coupling, a "
+                   "decoder's high-pass; Butterworth of order highpass_order): each "
+                   "component's amplitudes are divided by its gain at the component's "
+                   "frequency, so C_f is multiplied by it; unset = none."),
+        Param("highpass_order", "int", "", 1, minimum=1, maximum=8,
+              help="Order of the measuring chain's high-pass (1: an RC AC coupling)."),
+        Param("lowpass_hz", "float", "Hz", None, minimum=1e-3,
+              help="Corner of a low-pass in the measuring chain (a decoder's or a DAQ's "
+                   "anti-alias filter; Butterworth of order lowpass_order), taken out as "
+                   "highpass_hz is; unset = none."),
+        Param("lowpass_order", "int", "", 4, minimum=1, maximum=8,
+              help="Order of the measuring chain's low-pass."),
         Param("mode", "int", "", None, minimum=1,
               help="Mode number for the modal conversion; unset = nearest calculated natural "
                    "frequency."),
@@ -89,7 +102,17 @@ def fsi_lab_summary_lines(component):
         if bounds and None not in bounds and bounds[0] <= 0.0 <= bounds[1]:
             text += f"; {name[0].upper()}{name[1:]} is not resolved (its interval contains 0)"
     return SummaryText(keys=("equivalent_damping",), inline=text,
-                       lines=_preferred_law_line(eq) + _measured_line(eq))
+                       lines=_preferred_law_line(eq) + _measured_line(eq) + _chain_line(eq))
+
+
+def _chain_line(eq: dict) -> tuple[str, ...]:
+    """Where the measuring chain's filters were taken out of the amplitudes, by how much."""
+    convention = str(eq.get("amplitude_convention", ""))
+    _, said, rest = convention.partition("; amplitudes divided by the measuring chain's gain")
+    if not said:
+        return ()
+    return (f"C_f with the amplitudes divided by the measuring chain's gain{rest}; the "
+            "backbone's and damping curve's amplitudes are as measured",)
 
 
 def _measured_line(eq: dict) -> tuple[str, ...]:

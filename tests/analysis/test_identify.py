@@ -517,6 +517,47 @@ def test_a_dry_friction_record_reports_the_friction_law_s_coefficients_with_inte
     assert f"friction force = {eq['friction_force_per_length']:.4g} N/m (95 %: " in line
 
 
+def test_a_filter_of_the_measuring_chain_described_is_taken_out_of_c_f(tmp_path):
+    """A 17 Hz decay (wet C_i and C_f, 0.3 % noise) recorded through a first-order high-pass
+    at 12 Hz (an AC coupling; gain 0.817 at the mode): C_f read 1/G = 22 % high with an
+    interval that excludes the truth and no warning, C_i right. Described to the analysis
+    (``highpass_hz``), the amplitudes are divided by the gain at the mode: C_f holds the truth
+    again, C_i and the frequency are unchanged, and the text says what was taken out."""
+    from scipy.signal import butter, lfilter
+    from support import run_main
+
+    case = release(noise=0.003, fs=2000.0, duration=6.0)
+    b, a = butter(1, 12.0, "highpass", fs=case.fs)
+    record = lfilter(b, a, trial(case, 4))
+    path = tmp_path / "coupled.csv"
+    path.write_text("tip [m/s]\n" + "\n".join(map(repr, record.tolist())) + "\n")
+    run = tmp_path / "coupled.h5"
+    assert run_main("import", str(path), "--rate", str(case.fs), "-o", str(run))[0] == 0
+    found = {}
+    for sets in ((), ("--set", "analysis.equivalent-damping.highpass_hz=12")):
+        code, out, err = run_main("analyze", str(run), "--json", "--mass-per-length",
+                                  f"{WET_MASS!r}", *sets)
+        assert code == 0, err
+        (component,) = json.loads(out)["channels"]["tip"]["components"]
+        found[bool(sets)] = component
+    raw, corrected = found[False]["equivalent_damping"], found[True]["equivalent_damping"]
+    gain = 1.0 / math.sqrt(1.0 + (12.0 / WET_F) ** 2)
+    assert raw["c_f_ci95"][0] > WET_C_F                      # the filter's bias, unsaid
+    assert raw["c_f"] * gain == pytest.approx(WET_C_F, rel=0.03)
+    low, high = corrected["c_f_ci95"]
+    assert low <= WET_C_F <= high
+    assert corrected["c_f"] == pytest.approx(raw["c_f"] * gain, rel=1e-3)
+    assert corrected["c_i"] == pytest.approx(raw["c_i"], rel=1e-12)
+    assert found[True]["frequency_hz"] == found[False]["frequency_hz"]
+    f_hz = found[True]["frequency_hz"]
+    said = (f"the measuring chain's gain {1.0 / math.sqrt(1.0 + (12.0 / f_hz) ** 2):.4g} at "
+            f"{f_hz:.4g} Hz (high-pass at 12 Hz, order 1, Butterworth)")
+    assert said in corrected["amplitude_convention"]
+    code, text, err = run_main("analyze", str(run), "--mass-per-length", f"{WET_MASS!r}",
+                               "--set", "analysis.equivalent-damping.highpass_hz=12")
+    assert f"C_f with the amplitudes divided by {said}" in text, text
+
+
 @pytest.mark.parametrize("fs", [2000.0, 10000.0])
 def test_a_noise_free_heavily_damped_decay_is_read_to_where_the_processing_residue_starts(fs):
     """A 5 Hz mode with 9.5 % linear damping and the wet C_f, released from 2 mm, no noise:
