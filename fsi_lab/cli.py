@@ -952,28 +952,23 @@ def _strict_exit(summary: dict[str, Any], code: int) -> int:
     return EXIT_STRICT
 
 
-def _column_number(text: str) -> int:
-    """``--skip N``: a column number >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a column number (1 is the "
-                                         "file's first column)")
-    return value
+def _counting(expected: str):
+    """An argparse type: a whole number >= 1, else an error saying ``expected``."""
+    def count(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = 0
+        if value < 1:
+            raise argparse.ArgumentTypeError(f"{text!r}: expected {expected}")
+        return value
+    return count
 
 
-def _jobs(text: str) -> int:
-    """``--jobs N``: a number of worker processes >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a number of worker processes "
-                                         ">= 1")
-    return value
+#: ``--skip N``: a column number >= 1.
+_column_number = _counting("a column number (1 is the file's first column)")
+#: ``--jobs N``: a number of worker processes >= 1.
+_jobs = _counting("a number of worker processes >= 1")
 
 
 def _window_size(text: str) -> tuple[int, int]:

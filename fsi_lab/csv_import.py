@@ -227,11 +227,11 @@ def _names_and_units(path: Path, names: list[str], reader, line: int,
         return None
     cells = [f"{name.strip()} [{unit}]" for name, unit in zip(names, written)]
     numbers = [i + 1 for i in kept] if kept is not None else None
-    if any(other):
-        return _parse_header(path, cells, line, numbers)   # refuses that column
     try:
         return _parse_header(path, cells, line, numbers)
     except InputFileError:
+        if any(other):
+            raise                                  # that column's refusal
         return None
 
 
