@@ -135,6 +135,15 @@ HIDDEN_RATIO = 1.5
 HIDDEN_SHARE = 0.1
 #: The decays are split on the record low-passed at this multiple of its dominant frequency.
 SPLIT_BAND = 8.0
+#: A burst of broadband noise in a decay (a knock on the table, a vibrometer losing its
+#: signal): the record's content above the split band, RMS over blocks of BURST_BLOCK periods
+#: of the dominant oscillation (at least BURST_SAMPLES samples), rising BURST_RISE times above
+#: both its lowest since the decay became free and the white noise's share there
+#: (:func:`_burst_start`). Decays end where one starts.
+BURST_BLOCK, BURST_SAMPLES, BURST_RISE = 0.25, 32, 5.0
+#: ... and rising above this share of the record's largest value (a noise-free record's
+#: content there is the processing's residue, which rises and falls at random).
+BURST_LEVEL = 1e-3
 #: A steady forced response before a decay (:func:`_plateau_end`): the half periods it is
 #: judged on (down to PLATEAU_DOWN of the largest), the fewest in the flat part and in the
 #: decay, how much better a hinge must fit than a straight line, and how slowly (relative to
@@ -514,8 +523,8 @@ class Identification:
 def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
              starts: Sequence[float] | None, resolution: float = 0.0,
              plateaus: list[tuple[int, int]] | None = None,
-             forced: list[tuple[int, int]] | None = None
-             ) -> list[tuple[int, int, int]]:
+             forced: list[tuple[int, int]] | None = None,
+             bursts: list[int] | None = None) -> list[tuple[int, int, int]]:
     """Free-decay windows ``(start, free, stop)``: analysis starts at ``start`` (a quarter
     period before the decay's largest sample, so an extremum there is a complete one),
     extrema count from ``free`` (the largest sample, or a later excitation end).
@@ -529,7 +538,8 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     (:func:`_plateau_end`) is left out: the decay starts at the record's largest sample near
     its end, and ``plateaus`` (when given) gets its first and last sample. So is a forced
     response that rises again after the largest sample (:func:`_forced_end`; a burst of
-    random forcing), into ``forced``."""
+    random forcing), into ``forced``. A decay ends where a burst of broadband noise starts
+    (:func:`_burst_start`), into ``bursts``."""
     n = x.size
     period = 1.0 / f_dom
     cutoff = SPLIT_BAND * f_dom
@@ -537,13 +547,32 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     if 1.25 * cutoff < 0.45 * fs:
         smooth = _band_limited(x, fs, cutoff)
         noise = sigma * math.sqrt(min(1.0, 1.125 * cutoff / (0.5 * fs)))
-    segments = decay_segments(smooth, fs, 0.5 * period, max(SPLIT_FLOOR * noise, resolution),
+    # Bursts of broadband noise: blocks whose content above the split band exceeds the
+    # white noise's share there by BURST_RISE and the oscillation's below it.
+    burst_rms, quiet = None, smooth
+    if smooth is not x and n >= 2 * max(BURST_SAMPLES, int(BURST_BLOCK * fs / f_dom)):
+        width = max(BURST_SAMPLES, int(BURST_BLOCK * fs / f_dom))
+        count = n // width
+        burst_rms = np.sqrt(np.mean(((x - smooth)[:count * width]).reshape(count, width) ** 2,
+                                    axis=1))
+        burst_floor = max(BURST_RISE * sigma * math.sqrt(max(0.0, 1.0 - 1.25 * cutoff
+                                                               / (0.5 * fs))),
+                          BURST_LEVEL * float(np.max(np.abs(x))))
+        lows = np.sqrt(np.mean(smooth[:count * width].reshape(count, width) ** 2, axis=1))
+        inside = _bursts(burst_rms, lows, burst_floor)
+        if inside.any():                # (a burst's low frequencies start no decay)
+            quiet = smooth.copy()
+            quiet[:count * width].reshape(count, width)[inside] = 0.0
+    segments = decay_segments(quiet, fs, 0.5 * period, max(SPLIT_FLOOR * noise, resolution),
                               confirm=2)
-    if len(segments) == 1:
+    reach = max(1, int(0.25 * fs / f_dom))
+    if len(segments) == 1 and quiet is smooth:
         segments = [(first_decay_peak(x, fs, period, max(10.0 * sigma, resolution)), n)]
     else:
+        if len(segments) == 1:          # (a burst may outgrow the decay in the record)
+            segments = [(first_decay_peak(quiet, fs, period, max(10.0 * noise, resolution)),
+                         n)]
         # Each decay's largest sample in the record itself (the low-pass moves it a little).
-        reach = max(1, int(0.25 * fs / f_dom))
         segments = [(max(0, b - reach) + int(np.argmax(np.abs(x[max(0, b - reach):b + reach]))),
                      e) for b, e in segments]
     out = []
@@ -586,6 +615,15 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
             later = [int(math.ceil(s * fs)) for s in starts if first <= s * fs < stop]
             if later and max(later) > free:
                 free, lead = max(later), 0
+        if burst_rms is not None and inside[min(free // width + 1, count - 1)]:
+            if bursts is not None:          # (no free decay starts inside a burst)
+                bursts.append(free)
+            continue
+        if burst_rms is not None and (burst := _burst_start(burst_rms, width, free, stop,
+                                                           burst_floor)) is not None:
+            stop = burst
+            if bursts is not None:
+                bursts.append(burst)
         out.append((max(0, free - lead), free, stop))
     # A window must hold motion: the zero-phase low-pass rings ahead of a step (a noise-free
     # record released from rest after exact zeros), and with no noise to hide it that ringing
@@ -597,6 +635,37 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     # an impulse train too dense, which the candidates' notes then name).
     enough = [w for w in out if (w[2] - w[1]) * f_dom >= MIN_CYCLES * fs]
     return enough or out
+
+
+def _bursts(high: np.ndarray, low: np.ndarray, floor: float) -> np.ndarray:
+    """Which blocks lie in a burst of broadband noise: runs of blocks whose RMS above the
+    split band (``high``) exceeds ``floor`` and the RMS below it (``low``), after which the
+    oscillation is no larger than before (an impact also outgrows the oscillation in its
+    block, a hammer's on an accelerometer, but a decay starts after it)."""
+    loud = (high > floor) & (high > low)
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], loud.view(np.int8), [0]))))
+    for first, stop in zip(edges[0::2], edges[1::2]):
+        before = low[first - 1] if first else 0.0
+        if np.any(low[stop:stop + 2] > 2.0 * before):
+            loud[first:stop] = False
+    return loud
+
+
+def _burst_start(rms: np.ndarray, width: int, free: int, stop: int, floor: float
+                 ) -> int | None:
+    """First sample of the first burst of broadband noise in a decay (``free`` to ``stop``,
+    samples), or None: the first block (``width`` samples, RMS ``rms`` of the record's content
+    above its split band) after the one holding ``free`` whose RMS exceeds :data:`BURST_RISE`
+    times the lowest before it since then and ``floor`` (that many times the white noise's
+    share). The excitation's own broadband content and higher modes only fall after the decay
+    is free; a knock or a vibrometer losing its signal rises out of them."""
+    first, last = free // width + 1, min(rms.size, stop // width)
+    if last - first < 2:
+        return None
+    seen = np.minimum.accumulate(rms[first:last])
+    rise = np.flatnonzero((rms[first + 1:last] > BURST_RISE * seen[:-1])
+                          & (rms[first + 1:last] > floor))
+    return (first + 1 + int(rise[0])) * width if rise.size else None
 
 
 def _dominant(record: np.ndarray, fs: float) -> Any:
@@ -2806,8 +2875,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     sigma = _noise_rms(record, fs, top.frequencies)
     plateaus: list[tuple[int, int]] = []
     forced: list[tuple[int, int]] = []
+    bursts: list[int] = []
     windows = _windows(record, fs, f_dom, sigma, decay_starts,
-                       PRECISION * float(np.max(np.abs(record))), plateaus, forced)
+                       PRECISION * float(np.max(np.abs(record))), plateaus, forced, bursts)
     if not windows:
         raise fail(func, f"found no free decay of at least {MIN_WINDOW} samples")
     if reference is not None:
@@ -2828,6 +2898,12 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                         + " taken from the end of that span (a start given for a decay, "
                         "analysis.hvd.start_s or identify's decay_starts, says where the "
                         "excitation ended and turns this check off)")
+    if bursts:
+        notes.insert(0, "the record holds bursts of broadband noise (a knock, a vibrometer "
+                        f"losing its signal), at {_times_of(np.array(sorted(bursts)), fs)}: its "
+                        "content above the modes rises out of a decay more than "
+                        f"{BURST_RISE:g}-fold, or outgrows the oscillation, as no free decay's "
+                        "does; decays end where one starts, and none is taken from inside one")
     if spikes.size:
         notes.insert(0, f"{spikes.size} isolated sample{'s' if spikes.size > 1 else ''} "
                         f"stand{'' if spikes.size > 1 else 's'} far off the oscillation their "

@@ -79,6 +79,11 @@ def test_fsi_lab_natural_frequencies_against_the_reference_and_the_ssi_peer(beam
         assert ours.frequency == pytest.approx(30.78, rel=0.003), ours.channel
         assert ours.frequency_ci[0] <= ssi <= ours.frequency_ci[1], (ours, ssi)
     assert low[0].frequency == pytest.approx(low[1].frequency, rel=5e-4)
+    # Every channel's damping ratios agree with SSI's within 20 % (measured: 0.0270, 0.0268
+    # against 0.0280; 0.0046, 0.0042, 0.0048 against 0.0047). An impact taken for a burst of
+    # noise moved channel 1's start and read 0.0029 there.
+    for ours, peer in [(o, peers[0]) for o in low] + [(o, peers[1]) for o in rows[1]]:
+        assert ours.zeta == pytest.approx(peer.zeta, rel=0.2), (ours.channel, peer.frequency)
     # The two upper modes have 4.4 and 2.3 samples per cycle: left out, each with a note.
     for ours in rows[2]:
         assert "undersampled" in ours.refused
