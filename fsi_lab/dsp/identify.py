@@ -254,6 +254,11 @@ START_KEPT_CHANGE = 0.05
 #: The power of the fluid term (step 8d) is warned of when 2 lies outside its 95 % interval
 #: and the damping ratio it gives differs from the quadratic law's by more than this.
 POWER_CHANGE = 0.05
+#: ... or, whatever that change, when 2 lies more than this many standard errors from it: a
+#: decay read through a measuring chain that compresses its largest values by 5 to 10 % (a
+#: decoder or amplifier near the end of its range) gives a power of 1.92 +- 0.05 and a
+#: damping ratio within 3 % of the quadratic law's, while C_f reads 6 to 9 % low.
+POWER_Z = 3.0
 #: Moves of the coefficients beyond this many standard errors widen their intervals.
 DRIFT_Z = 2.5
 #: The larger and the smaller half's laws (step 8b) are warned of as not one law beyond this
@@ -2522,16 +2527,23 @@ def _law_power(mode: _Mode) -> dict[str, float]:
 def fluid_power_warning(power: float, low: float, high: float, change: float) -> list[str]:
     """The warning on a fluid term's power (step 8d) when the quadratic law's 2 lies outside
     its 95 % interval ``low`` to ``high`` and a law with ``power`` changes the damping ratio
-    by more than :data:`POWER_CHANGE` (relative ``change``) over the fitted amplitudes; else
-    none."""
-    if low <= 2.0 <= high or not change > POWER_CHANGE:
+    by more than :data:`POWER_CHANGE` (relative ``change``) over the fitted amplitudes, or
+    when 2 lies more than :data:`POWER_Z` standard errors (the interval's half width over
+    1.96) from ``power``; else none."""
+    if low <= 2.0 <= high:
+        return []
+    z = abs(power - 2.0) / max(0.5 * (high - low) / 1.96, 1e-300)
+    if not (change > POWER_CHANGE or z > POWER_Z):
         return []
     return [f"the fluid damping grows as the velocity to the power {power:.2f} (95 %: "
-            f"{low:.2f} to {high:.2f}), not as its square: over the fitted amplitudes, the "
-            f"damping ratio the quadratic law gives differs by up to {100 * change:.0f} % "
-            "from that of a law with this power. C_i and C_f are the quadratic law's best "
-            "fit to a drag it does not describe (a flow regime that changes with amplitude, "
-            "friction)"]
+            f"{low:.2f} to {high:.2f}, {z:.1f} standard errors from 2), not as its square: "
+            f"over the fitted amplitudes, the damping ratio the quadratic law gives differs "
+            f"by up to {100 * change:.0f} % from that of a law with this power, and C_i and "
+            "C_f are the quadratic law's best fit to a decay it does not describe: a drag "
+            "that is not quadratic (a flow regime that changes with amplitude, friction), or "
+            "a measuring chain that reads the largest cycles low (a vibrometer's decoder or "
+            "an amplifier near the end of its range compresses them, and C_f reads low by "
+            "several times that change: keep the signal well inside the range)"]
 
 
 def _residual_correlation(mode: _Mode, comparison: LawComparison) -> float:
