@@ -72,7 +72,7 @@ def as_record(x: Any, func: str, *, min_samples: int = 16, name: str = "signal",
     lo = float(arr.min())
     hi = float(arr.max())
     if not allow_constant and hi - lo <= 1e-12 * max(abs(lo), abs(hi), 1e-300):
-        raise fail(func, f"{name} is constant (every sample is {lo:g}); expected an "
+        raise fail(func, f"{name} is constant (every sample is {lo + 0.0:g}); expected an "
                          "oscillating record")
     if check_clipping:
         where = clipping(arr)
@@ -88,10 +88,14 @@ def clipping(x: np.ndarray) -> str | None:
     A record is called clipped when its maximum (or minimum) value is held over 3 or more
     consecutive identical samples at two or more places, or over a single stretch longer than
     ``max(8, len(x) // 1000)`` samples. An analogue signal reaches its extreme once, so equal
-    neighbours at the extreme betray a converter or amplifier at the end of its range.
+    neighbours at the extreme betray a converter or amplifier at the end of its range. A
+    record on a converter's grid holds its extreme over the samples the oscillation spends
+    within one step of its crest: runs no longer than :func:`_crest_hold` allows (a slow mode
+    sampled fast by a coarse converter) are not clipping.
     """
     n = x.size
     long_run = max(8, n // 1000)
+    step = None
     for label, value in (("maximum", x.max()), ("minimum", x.min())):
         at = x == value
         if at.sum() < 3:
@@ -99,11 +103,56 @@ def clipping(x: np.ndarray) -> str | None:
         # Run lengths of consecutive True.
         edges = np.flatnonzero(np.diff(np.concatenate(([0], at.view(np.int8), [0]))))
         lengths = edges[1::2] - edges[0::2]
-        flat = lengths[lengths >= 3]
+        long = lengths >= 3
+        flat = lengths[long]
         if flat.size >= 2 or (flat.size and flat.max() > long_run):
+            step = _grid_step(x) if step is None else step
+            if step and all(_crest_hold(x, int(a), int(b), float(value), step)
+                            for a, b in zip(edges[0::2][long], edges[1::2][long])):
+                continue
             return (f"the {label} {value:g} is held flat over {int(flat.sum())} samples in "
                     f"{flat.size} place(s)")
     return None
+
+
+#: :func:`_crest_hold` measures a crest's width where the record falls CREST_DEPTH and 4 times
+#: CREST_DEPTH grid steps below it ...
+CREST_DEPTH = 4
+#: ... and allows a run at the crest this many times as long as the curvature gives (noise
+#: shortens runs).
+CREST_MARGIN = 1.5
+
+
+def _grid_step(x: np.ndarray) -> float:
+    """The step of the converter grid the samples lie on (unit of x), or 0 when they do not
+    lie on one: at least 16 and at most a quarter as many distinct values as samples, every
+    gap between them a whole number of the smallest (within 1 %)."""
+    values = np.unique(x)
+    if not 16 <= values.size <= x.size // 4:
+        return 0.0
+    gaps = np.diff(values)
+    step = float(gaps.min())
+    ratio = gaps / step
+    return step if float(np.max(np.abs(ratio - np.round(ratio)))) <= 0.01 else 0.0
+
+
+def _crest_hold(x: np.ndarray, start: int, stop: int, value: float, step: float) -> bool:
+    """Whether the run ``[start, stop)`` of samples equal to the extreme ``value`` is no longer
+    than a smooth crest on a grid of ``step`` holds it. A crest of curvature k stays within d
+    of its top over ``2 sqrt(2 d / k)`` samples: its widths at :data:`CREST_DEPTH` and 4 times
+    that many steps below differ by that width at the first depth (a flat top of length L
+    adds L to both), and the run at the top may last half that (one step, not CREST_DEPTH),
+    times :data:`CREST_MARGIN`. False when the record does not fall that far on both
+    sides."""
+    widths = []
+    for depth in (CREST_DEPTH, 4 * CREST_DEPTH):
+        below = np.abs(x - value) >= depth * step
+        left = np.flatnonzero(below[:start])
+        right = np.flatnonzero(below[stop:])
+        if not (left.size and right.size):
+            return False
+        widths.append((stop + int(right[0])) - int(left[-1]))
+    return stop - start <= CREST_MARGIN * 0.5 * (widths[1] - widths[0]) + 2
 
 
 def check_samples_per_cycle(frequency: float, fs: float, func: str,

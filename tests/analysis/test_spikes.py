@@ -13,6 +13,7 @@ import pytest
 
 from fsi_lab.dsp.identify import identify
 from fsi_lab.dsp.spikes import find_dropouts, find_spikes, without_dropouts, without_spikes
+from fsi_lab.errors import AnalysisError
 from validation.cases import WET_C_F, WET_C_I, WET_F, WET_MASS, Case, Mode, clean_record, trial
 
 
@@ -224,3 +225,23 @@ def test_bursts_of_broadband_noise_end_the_decay_and_are_named():
             assert burst, found.notes
             first = float(burst[0].split(" at ")[1].split(" s")[0].split(",")[0])
             assert 1.0 - 0.25 / WET_F <= first <= 1.0
+
+
+def test_a_coarse_converter_is_not_taken_for_clipping():
+    """A slow mode sampled fast by a coarse converter holds each crest's value over the samples
+    it spends within one step of it: an 8 Hz decay at 10 kHz on a grid of 0.3 % and 1 % of its
+    largest value (noise 0.1 %, below a step) was refused as clipped ("the maximum is held flat
+    over 18 samples in 2 places"). It is identified (C_i within 2 %, C_f within 5 %), while the
+    same record cut at 90 % of its largest value before the converter is still refused."""
+    case = decay(10000.0, noise=0.001, duration=3.0, frequency=8.0, c_f=6.3)
+    x = trial(case, 2)
+    top = float(np.max(np.abs(x)))
+    for step in (0.003, 0.01):
+        grid = step * top
+        found = identify(np.round(x / grid) * grid, case.fs)
+        a, beta = found.modes[0].quadratic.params
+        assert 2 * WET_MASS * a == pytest.approx(WET_C_I, rel=0.02)
+        assert WET_MASS * beta == pytest.approx(6.3, rel=0.05)
+        cut = np.round(np.clip(x, -0.9 * top, 0.9 * top) / grid) * grid
+        with pytest.raises(AnalysisError, match="looks clipped"):
+            identify(cut, case.fs)
