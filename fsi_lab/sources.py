@@ -245,7 +245,7 @@ def check_source(data: Any, func: str, *, min_samples: int = 16, name: str = "si
         raise fail(func, f"{name} contains {bad} NaN or infinite samples (first at index "
                          f"{first}); expected finite values - remove or interpolate them")
     if not allow_constant and hi - lo <= 1e-12 * max(abs(lo), abs(hi), 1e-300):
-        raise fail(func, f"{name} is constant (every sample is {lo:g}); expected an "
+        raise fail(func, f"{name} is constant (every sample is {lo + 0.0:g}); expected an "
                          "oscillating record")
     if check_clipping:
         where = _clipping(data, n, lo, hi)

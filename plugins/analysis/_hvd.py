@@ -58,9 +58,16 @@ def relative_signal(context: AnalysisContext, mode: str, plugin: str = "hvd"
     if order == 0:
         base = np.asarray(ref.data, dtype=np.float64)
     else:
-        with guarded(plugin, context):
-            base = integrate(ref.data, ch.sample_rate, order=order,
-                             highpass=0.5 * lowest_peak(context, plugin))
+        highpass = 0.5 * lowest_peak(context, plugin)
+        try:
+            base = integrate(ref.data, ch.sample_rate, order=order, highpass=highpass)
+        except AnalysisError as exc:
+            # (the reference's fault, not the channel's: a clipped or silent accelerometer)
+            raise AnalysisError(
+                f"{where(plugin, context)}: the base acceleration reference {ref_name!r} "
+                f"cannot be integrated to subtract the base motion: {exc}; "
+                "--set analysis.hvd.relative=no analyses the channel's absolute motion "
+                "instead") from None
     # The channels may start at different times (a vibrometer's signal delay makes its t0
     # negative): take the base motion at the channel's own sample times.
     shift = float(ch.t0) - float(ref.t0)

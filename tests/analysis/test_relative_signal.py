@@ -24,3 +24,27 @@ def test_base_motion_is_aligned_on_t0():
     inner = slice(4000, -4000)
     error = np.max(np.abs(data[inner] - relative[inner])) / 0.05
     assert error < 0.01, error
+
+
+def test_a_base_that_cannot_be_integrated_is_named_as_the_reference():
+    """A base accelerometer clipped flat (or unplugged: all zeros) is the reference's fault:
+    the error names the reference channel and the way out, not only the channel analysed."""
+    import pytest
+
+    from fsi_lab.errors import AnalysisError
+
+    fs = 5000.0
+    t = np.arange(20000) / fs
+    tip_data = 0.05 * np.exp(-2.0 * t) * np.sin(2 * np.pi * 17.0 * t)
+    for base_data, fault in ((np.clip(3.0 * np.sin(2 * np.pi * 30.0 * t), -2.5, 2.5),
+                              "looks clipped"),
+                             (-0.0 * t, "is constant (every sample is 0)")):
+        tip = ChannelData("tip", tip_data, fs, "velocity", "m/s")
+        ref = ChannelData("base_acc", base_data, fs, "acceleration", "m/s^2")
+        context = AnalysisContext(channel=tip, channels={"tip": tip, "base_acc": ref},
+                                  results={}, reference="base_acc")
+        with pytest.raises(AnalysisError) as caught:
+            relative_signal(context, "auto")
+        text = str(caught.value)
+        assert "the base acceleration reference 'base_acc' cannot be integrated" in text, text
+        assert fault in text and "--set analysis.hvd.relative=no" in text, text
