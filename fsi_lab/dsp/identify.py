@@ -139,8 +139,13 @@ SPLIT_BAND = 8.0
 #: signal): the record's content above the split band, RMS over blocks of BURST_BLOCK periods
 #: of the dominant oscillation (at least BURST_SAMPLES samples), rising BURST_RISE times above
 #: both its lowest since the decay became free and the white noise's share there
-#: (:func:`_burst_start`). Decays end where one starts.
+#: (:func:`_burst_start`): decays end where one starts; no decay starts inside one that
+#: outgrows the oscillation (:func:`_bursts`).
 BURST_BLOCK, BURST_SAMPLES, BURST_RISE = 0.25, 32, 5.0
+#: ... after its first BURST_KEPT cycles: bursts within them are left in (brief ones, a
+#: vibrometer's speckle, matter little beside the largest cycles, and a decay cut there
+#: would keep too few cycles for its laws).
+BURST_KEPT = 10
 #: ... and rising above this share of the record's largest value (a noise-free record's
 #: content there is the processing's residue, which rises and falls at random).
 BURST_LEVEL = 1e-3
@@ -624,8 +629,9 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
             if bursts is not None:          # (no free decay starts inside a burst)
                 bursts.append(free)
             continue
-        if burst_rms is not None and (burst := _burst_start(burst_rms, width, free, stop,
-                                                           burst_floor)) is not None:
+        if burst_rms is not None and (burst := _burst_start(
+                burst_rms, width, free + int(BURST_KEPT * fs / f_dom), stop,
+                burst_floor)) is not None:
             stop = burst
             if bursts is not None:
                 bursts.append(burst)
@@ -656,15 +662,15 @@ def _bursts(high: np.ndarray, low: np.ndarray, floor: float) -> np.ndarray:
     return loud
 
 
-def _burst_start(rms: np.ndarray, width: int, free: int, stop: int, floor: float
+def _burst_start(rms: np.ndarray, width: int, after: int, stop: int, floor: float
                  ) -> int | None:
-    """First sample of the first burst of broadband noise in a decay (``free`` to ``stop``,
-    samples), or None: the first block (``width`` samples, RMS ``rms`` of the record's content
-    above its split band) after the one holding ``free`` whose RMS exceeds :data:`BURST_RISE`
+    """First sample of the first burst of broadband noise in a decay from sample ``after`` to
+    ``stop``, or None: the first block (``width`` samples, RMS ``rms`` of the record's content
+    above its split band) after the one holding ``after`` whose RMS exceeds :data:`BURST_RISE`
     times the lowest before it since then and ``floor`` (that many times the white noise's
     share). The excitation's own broadband content and higher modes only fall after the decay
     is free; a knock or a vibrometer losing its signal rises out of them."""
-    first, last = free // width + 1, min(rms.size, stop // width)
+    first, last = after // width + 1, min(rms.size, stop // width)
     if last - first < 2:
         return None
     seen = np.minimum.accumulate(rms[first:last])
