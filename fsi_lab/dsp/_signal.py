@@ -82,6 +82,12 @@ def as_record(x: Any, func: str, *, min_samples: int = 16, name: str = "signal",
     return arr
 
 
+def true_runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First and one-past-last indices of each run of consecutive True in a boolean array."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.view(np.int8), [0]))))
+    return edges[0::2], edges[1::2]
+
+
 def clipping(x: np.ndarray) -> str | None:
     """Describe flat tops at the record's extreme values, or return None if there are none.
 
@@ -100,15 +106,14 @@ def clipping(x: np.ndarray) -> str | None:
         at = x == value
         if at.sum() < 3:
             continue
-        # Run lengths of consecutive True.
-        edges = np.flatnonzero(np.diff(np.concatenate(([0], at.view(np.int8), [0]))))
-        lengths = edges[1::2] - edges[0::2]
+        starts, stops = true_runs(at)
+        lengths = stops - starts
         long = lengths >= 3
         flat = lengths[long]
         if flat.size >= 2 or (flat.size and flat.max() > long_run):
             step = _grid_step(x) if step is None else step
             if step and all(_crest_hold(x, int(a), int(b), float(value), step)
-                            for a, b in zip(edges[0::2][long], edges[1::2][long])):
+                            for a, b in zip(starts[long], stops[long])):
                 continue
             return (f"the {label} {value:g} is held flat over {int(flat.sum())} samples in "
                     f"{flat.size} place(s)")

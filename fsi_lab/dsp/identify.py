@@ -89,7 +89,7 @@ import numpy as np
 import scipy.stats as sstats
 from scipy.signal import butter, hilbert, sosfiltfilt
 
-from fsi_lab.dsp._signal import _band_limited, as_record, check_rate, fail, smooth_step
+from fsi_lab.dsp._signal import _band_limited, as_record, check_rate, fail, smooth_step, true_runs
 from fsi_lab.dsp.bands import ModeBands, reduce_rate, reduction_factor, split
 from fsi_lab.dsp.decays import decay_segments, first_decay_peak, quiet_times
 from fsi_lab.dsp.instantaneous import HalfCycles, half_cycles
@@ -560,9 +560,9 @@ def _windows(x: np.ndarray, fs: float, f_dom: float, sigma: float,
     # Bursts of broadband noise: blocks whose content above the split band exceeds the
     # white noise's share there by BURST_RISE and the oscillation's below it.
     burst_rms, quiet = None, smooth
-    if smooth is not x and n >= 2 * max(BURST_SAMPLES, int(BURST_BLOCK * fs / f_dom)):
-        width = max(BURST_SAMPLES, int(BURST_BLOCK * fs / f_dom))
-        count = n // width
+    width = max(BURST_SAMPLES, int(BURST_BLOCK * fs / f_dom))
+    count = n // width
+    if smooth is not x and count >= 2:
         burst_rms = np.sqrt(np.mean(((x - smooth)[:count * width]).reshape(count, width) ** 2,
                                     axis=1))
         burst_floor = max(BURST_RISE * sigma * math.sqrt(max(0.0, 1.0 - 1.25 * cutoff
@@ -654,8 +654,7 @@ def _bursts(high: np.ndarray, low: np.ndarray, floor: float) -> np.ndarray:
     oscillation is no larger than before (an impact also outgrows the oscillation in its
     block, a hammer's on an accelerometer, but a decay starts after it)."""
     loud = (high > floor) & (high > low)
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], loud.view(np.int8), [0]))))
-    for first, stop in zip(edges[0::2], edges[1::2]):
+    for first, stop in zip(*true_runs(loud)):
         before = low[first - 1] if first else 0.0
         if np.any(low[stop:stop + 2] > 2.0 * before):
             loud[first:stop] = False

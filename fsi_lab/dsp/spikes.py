@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import maximum_filter1d, median_filter
 
-from fsi_lab.dsp._signal import as_record
+from fsi_lab.dsp._signal import as_record, true_runs
 
 #: A spike's difference from its neighbours' cubic, in units of the local typical difference
 #: (robust standard deviation). White noise reaches 8 standard deviations once in 1e15
@@ -209,10 +209,9 @@ def find_dropouts(x: Any) -> np.ndarray:
     """
     y = as_record(x, "find_dropouts", min_samples=64, check_clipping=False,
                   allow_constant=True)
-    same = np.diff(y) == 0.0
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], same.view(np.int8), [0]))))
+    starts, stops = true_runs(np.diff(y) == 0.0)
     # (a run of k equal differences is k + 1 equal samples; a run at either end is none)
-    starts, stops = edges[0::2], edges[1::2] + 1
+    stops = stops + 1
     keep = (stops - starts >= DROPOUT_MIN) & (starts > 0) & (stops < y.size)
     starts, stops = starts[keep], stops[keep]
     steps = np.abs(np.diff(y))
