@@ -29,4 +29,7 @@ joint_fit
 modal_fit
     A mode fitted to an FRF peak through the Welch estimate's leakage, with a jackknife
     interval.
+crest
+    The in-phase third harmonic of a decay's largest half cycles: a measuring chain that
+    reads them low.
 """

@@ -73,8 +73,9 @@ number. The steps:
    later starts, beyond what the extrema left out explain, widens their intervals
    (:func:`_start_sensitivity`); the law fitted to the larger and the smaller half of the
    cycles must agree (:func:`_one_law`); the quadratic law's fluid term must grow with the
-   square of the velocity, not another power (:func:`_law_power`). Each check that fails is
-   a warning.
+   square of the velocity, not another power (:func:`_law_power`); the largest half cycles
+   must carry no in-phase third harmonic beyond their stiffness's (:func:`_crest`: a chain
+   that compresses them flattens their crests). Each check that fails is a warning.
 """
 
 from __future__ import annotations
@@ -91,6 +92,8 @@ from scipy.signal import butter, hilbert, sosfiltfilt
 
 from fsi_lab.dsp._signal import _band_limited, as_record, check_rate, fail, smooth_step, true_runs
 from fsi_lab.dsp.bands import ModeBands, reduce_rate, reduction_factor, split
+from fsi_lab.dsp.crest import TOP_SHARE as CREST_SHARE
+from fsi_lab.dsp.crest import half_cycle_harmonics, pooled_crest
 from fsi_lab.dsp.decays import decay_segments, first_decay_peak, quiet_times
 from fsi_lab.dsp.instantaneous import HalfCycles, half_cycles
 from fsi_lab.dsp.joint_fit import DecayStart, JointFit, JointMode, fit_decays_jointly
@@ -264,6 +267,14 @@ POWER_CHANGE = 0.05
 #: decoder or amplifier near the end of its range) gives a power of 1.92 +- 0.05 and a
 #: damping ratio within 3 % of the quadratic law's, while C_f reads 6 to 9 % low.
 POWER_Z = 3.0
+#: Flattened crests (step 8e) are warned of when their in-phase third harmonic lies below
+#: -CREST_MIN of the fundamental (a chain reading the largest cycle about 1 % low; a
+#: compression of 5 to 10 % at the record's peak gives -0.5 to -1.8 %, noise or a close mode
+#: on records read straight within +-0.3 %) ...
+CREST_MIN = 0.003
+#: ... by more than this many standard errors (the one-sided level of a normal's, 0.6 %, taken
+#: on Student's t with the half cycles' degrees of freedom: 3.3 for 9 half cycles).
+CREST_Z = 2.5
 #: Moves of the coefficients beyond this many standard errors widen their intervals.
 DRIFT_Z = 2.5
 #: The larger and the smaller half's laws (step 8b) are warned of as not one law beyond this
@@ -2529,6 +2540,70 @@ def _law_power(mode: _Mode) -> dict[str, float]:
             "fluid_power_change": test.change}
 
 
+def _crest(mode: _Mode, modes: list[_Mode], windows: list[tuple[int, int, int]],
+           bands: ModeBands, record: np.ndarray, fs: float, follow: str) -> dict[str, float]:
+    """Step 8e: the in-phase third harmonic of the mode's largest half cycles
+    (:func:`.crest.half_cycle_harmonics`, over the extrema its laws were fitted to), against
+    the same measure of the fitted model of the record put through the same steps: the model
+    holds what damping (a quadratic law adds a little in phase too), the stiffness and the
+    band filters' smear of the first crossings give, and no measuring chain. Each decay is
+    measured on the record less the other modes' bands, its half cycles between its band's
+    crossings. Returns ``crest_ratio`` (the record's ratio less the model's), ``crest_se``
+    and ``crest_count``; empty when too few half cycles stand out."""
+    reach = [bands.reach(k) for k in range(bands.count)]
+    found: list[np.ndarray] = []
+    model_found: list[np.ndarray] = []
+    # Half cycles far below the largest weigh nothing in the harmonic (it grows as the
+    # amplitude cubed): each decay is measured down to half the share the pooling keeps.
+    top = max(float(np.max(np.abs(d["values"]))) for d in mode.decays)
+    for w, window in enumerate(windows):
+        here = [(d, large[-1]) for _, d in _decays_in(mode, w)
+                if (large := np.flatnonzero(np.abs(d["values"]) >= 0.5 * CREST_SHARE * top)).size]
+        if not here:
+            continue
+        start, _, stop = window
+        data = record[start:stop]
+        model = _model_record(modes, window, fs, follow, follow, w,
+                              MODEL_LIMIT * float(np.max(np.abs(data))), reach)
+        for signal, out in ((data, found), (model, model_found)):
+            parts = split(signal, fs, bands)
+            own = signal - (parts.sum(axis=0) - parts[mode.band])
+            crossings = half_cycles(parts[mode.band], fs, mode.frequency).crossings
+            for d, last in here:
+                t0, t1 = d["times"][0] - start / fs, d["times"][last] - start / fs
+                out.append(half_cycle_harmonics(own, fs, crossings[(crossings >= t0)
+                                                                   & (crossings <= t1)]))
+    measured, reference = pooled_crest(found, follow), pooled_crest(model_found, follow)
+    if measured is None or reference is None:
+        return {}
+    return {"crest_ratio": measured.measured - reference.measured,
+            "crest_se": measured.measured_stderr, "crest_noise_se": measured.noise_stderr,
+            "crest_count": float(measured.half_cycles)}
+
+
+def crest_warning(ratio: float, se: float, noise_se: float, count: float) -> list[str]:
+    """The warning on flattened crests (step 8e) when the in-phase third harmonic ``ratio``
+    is below -:data:`CREST_MIN` and more than :data:`CREST_Z` standard errors below 0 (at the
+    one-sided level of CREST_Z normal standard errors): the larger of ``se``, from the
+    ``count`` half cycles' scatter (on Student's t with ``count`` - 1 degrees of freedom),
+    and ``noise_se``, from the record's noise (normal); else none."""
+    if se >= noise_se:
+        limit = float(sstats.t.isf(sstats.norm.sf(CREST_Z), max(int(count) - 1, 1)))
+    else:
+        se, limit = noise_se, CREST_Z
+    z = -ratio / max(se, 1e-300)
+    if not (ratio < -CREST_MIN and z > limit):
+        return []
+    low, high = ratio - 1.96 * se, ratio + 1.96 * se
+    return [f"the largest cycles' crests are flattened: their third harmonic in phase with "
+            f"the mode is {100 * ratio:.2f} % of it (95 %: {100 * low:.2f} to "
+            f"{100 * high:.2f} %, {z:.1f} standard errors from 0), which neither damping nor "
+            "the stiffness the backbone shows makes. A measuring chain that reads the largest "
+            f"cycles low (here by about {300 * -ratio:.0f} %: a vibrometer's decoder or an "
+            "amplifier near the end of its range) does, and C_f then reads low, by several "
+            "times that: keep the signal well inside the range"]
+
+
 def fluid_power_warning(power: float, low: float, high: float, change: float) -> list[str]:
     """The warning on a fluid term's power (step 8d) when the quadratic law's 2 lies outside
     its 95 % interval ``low`` to ``high`` and a law with ``power`` changes the damping ratio
@@ -2760,6 +2835,9 @@ def _warnings(m: ModeIdentification) -> list[str]:
     if "fluid_power" in m.start_drift and "gamma" not in cmp.fits[cmp.preferred].names:
         out.extend(fluid_power_warning(*(m.start_drift[f"fluid_power{part}"]
                                          for part in ("", "_low", "_high", "_change"))))
+    if "crest_ratio" in m.start_drift:
+        out.extend(crest_warning(*(m.start_drift[f"crest_{part}"]
+                                   for part in ("ratio", "se", "noise_se", "count"))))
     # A mode fitted jointly to the record's samples (step 6a) uses no smeared extremum.
     if m.correction > CORRECTION_WARNING and "joint_modes" not in m.start_drift:
         out.append(f"the band filters smear this mode's first cycles by up to "
@@ -3120,6 +3198,8 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         if mode.wander is not None:
             mode.drift.update(zip(("frequency_wander", "frequency_low", "frequency_high"),
                                   mode.wander))
+        if quantity != "acceleration":
+            mode.drift.update(_crest(mode, modes, windows, bands, record, fs, follow))
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])

@@ -157,6 +157,10 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
         entry["fluid_power"] = mode.start_drift["fluid_power"]
         entry["fluid_power_ci95"] = [mode.start_drift["fluid_power_low"],
                                      mode.start_drift["fluid_power_high"]]
+    if "crest_ratio" in mode.start_drift:
+        entry["crest_harmonic"] = mode.start_drift["crest_ratio"]
+        entry["crest_harmonic_se"] = max(mode.start_drift["crest_se"],
+                                         mode.start_drift["crest_noise_se"])
     if "gamma" in mode.laws.fits[mode.laws.preferred].names:
         friction = laws[mode.laws.preferred]
         entry["friction_force_per_length"] = friction["friction_force_per_length"]

@@ -101,6 +101,10 @@ def test_default_chain_on_a_two_mode_velocity_record():
     # The fluid term's power is quadratic's, within its interval (which is not a point).
     low, high = eq["fluid_power_ci95"]
     assert low < eq["fluid_power"] < high and low <= 2.0 <= high and high - low > 0.01
+    # Read straight, the crests carry no third harmonic beyond the model's (within 3 of its
+    # standard errors, and under the warning's 0.3 %).
+    assert abs(eq["crest_harmonic"]) < max(3.0 * eq["crest_harmonic_se"], 0.003)
+    assert 0.0 < eq["crest_harmonic_se"] < 0.003
     assert comps[1]["frequency_hz"] == pytest.approx(32.0, rel=0.01)
     # The weak 32 Hz mode is linear: quadratic damping is not resolved there, and says so.
     assert comps[1]["equivalent_damping"]["preferred_law"] == "viscous"
