@@ -2595,13 +2595,13 @@ def crest_warning(ratio: float, se: float, noise_se: float, count: float) -> lis
     if not (ratio < -CREST_MIN and z > limit):
         return []
     low, high = ratio - 1.96 * se, ratio + 1.96 * se
-    return [f"the largest cycles' crests are flattened: their third harmonic in phase with "
-            f"the mode is {100 * ratio:.2f} % of it (95 %: {100 * low:.2f} to "
-            f"{100 * high:.2f} %, {z:.1f} standard errors from 0), which neither damping nor "
-            "the stiffness the backbone shows makes. A measuring chain that reads the largest "
-            f"cycles low (here by about {300 * -ratio:.0f} %: a vibrometer's decoder or an "
-            "amplifier near the end of its range) does, and C_f then reads low, by several "
-            "times that: keep the signal well inside the range"]
+    return [f"the largest cycles' crests are flattened: they carry a third harmonic in phase "
+            f"with the mode of {100 * ratio:.2f} % of it beyond what the fitted damping and "
+            f"stiffness make (95 %: {100 * low:.2f} to {100 * high:.2f} %, {z:.1f} standard "
+            "errors from 0). A measuring chain that reads the largest cycles low (here by "
+            f"about {300 * -ratio:.0f} %: a vibrometer's decoder or an amplifier near the end "
+            "of its range) makes it, and C_f then reads low, by several times that: keep the "
+            "signal well inside the range"]
 
 
 def fluid_power_warning(power: float, low: float, high: float, change: float) -> list[str]:
