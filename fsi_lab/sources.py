@@ -257,32 +257,58 @@ def check_source(data: Any, func: str, *, min_samples: int = 16, name: str = "si
 
 def _clipping(data: Any, n: int, lo: float, hi: float) -> str | None:
     """:func:`fsi_lab.dsp._signal.clipping` of a source (whose extremes are ``lo`` and
-    ``hi``), a chunk at a time: runs of the extreme value are carried across chunks."""
+    ``hi``), a chunk at a time: runs of the extreme value are carried across chunks, and those
+    that call it clipped are read again with the record around them, to tell a crest held by a
+    coarse converter's grid from a clipped one."""
+    from fsi_lab.dsp._signal import flat_message
+
     long_run = max(8, n // 1000)
     for label, value in (("maximum", hi), ("minimum", lo)):
-        count, carry, runs = 0, 0, []
-        for _, chunk in chunks(data):
-            at = chunk == value
-            count += int(at.sum())
-            if not at.any():
-                if carry:
-                    runs.append(carry)
-                carry = 0
-                continue
-            edges = np.flatnonzero(np.diff(np.concatenate(([0], at.view(np.int8), [0]))))
-            lengths = list(edges[1::2] - edges[0::2])
-            if at[0] and carry:
-                lengths[0] += carry
-            elif carry:
-                runs.append(carry)
-            carry = lengths.pop() if at[-1] else 0
-            runs.extend(lengths)
-        if carry:
-            runs.append(carry)
-        if count < 3:
+        runs = _runs_at(data, n, value)
+        if sum(b - a for a, b in runs) < 3:
             continue
-        flat = np.array([r for r in runs if r >= 3], dtype=np.int64)
-        if flat.size >= 2 or (flat.size and flat.max() > long_run):
-            return (f"the {label} {value:g} is held flat over {int(flat.sum())} samples in "
-                    f"{flat.size} place(s)")
+        flagged = [(a, b) for a, b in runs if b - a >= 3]
+        flat = np.array([b - a for a, b in flagged], dtype=np.int64)
+        if not (flat.size >= 2 or (flat.size and flat.max() > long_run)):
+            continue
+        if all(_held_on_grid(data, n, a, b, value) for a, b in flagged):
+            continue
+        return flat_message(label, value, flat)
     return None
+
+
+def _runs_at(data: Any, n: int, value: float) -> list[tuple[int, int]]:
+    """``(first, one past the last)`` sample of each run of ``value`` in a source, read a
+    chunk at a time (a run across chunks counted once)."""
+    from fsi_lab.dsp._signal import true_runs
+
+    runs: list[tuple[int, int]] = []
+    open_at = -1                         # the first sample of a run reaching a chunk's end
+    for start, chunk in chunks(data):
+        firsts, lasts = true_runs(chunk == value)
+        if open_at >= 0 and not (firsts.size and firsts[0] == 0):
+            runs.append((open_at, start))
+            open_at = -1
+        for a, b in zip(firsts.tolist(), lasts.tolist()):
+            first = open_at if a == 0 and open_at >= 0 else start + a
+            open_at = -1
+            if b == chunk.size:
+                open_at = first
+            else:
+                runs.append((first, start + b))
+    if open_at >= 0:
+        runs.append((open_at, n))
+    return runs
+
+
+def _held_on_grid(data: Any, n: int, a: int, b: int, value: float) -> bool:
+    """:func:`fsi_lab.dsp._signal.held_on_grid` for the run ``[a, b)`` of a source, read with
+    the record around it: eight times the run each side (a crest held over one grid step
+    falls 16 steps below within four times that), and at least 4096 samples (four samples
+    to each of the grid's levels the window crosses, on a grid of 0.05 % of its range)."""
+    from fsi_lab.dsp._signal import held_on_grid
+
+    reach = max(4096, 8 * (b - a))
+    lo, hi = max(0, a - reach), min(n, b + reach)
+    window = np.asarray(data[lo:hi], dtype=np.float64)
+    return held_on_grid(window, a - lo, b - lo, value)

@@ -115,9 +115,24 @@ def clipping(x: np.ndarray) -> str | None:
             if step and all(_crest_hold(x, int(a), int(b), float(value), step)
                             for a, b in zip(starts[long], stops[long])):
                 continue
-            return (f"the {label} {value:g} is held flat over {int(flat.sum())} samples in "
-                    f"{flat.size} place(s)")
+            return flat_message(label, float(value), flat)
     return None
+
+
+def flat_message(label: str, value: float, flat: np.ndarray) -> str:
+    """:func:`clipping`'s description of the runs ``flat`` (their lengths, samples) at the
+    record's ``label`` ("maximum" or "minimum") ``value``."""
+    return (f"the {label} {value:g} is held flat over {int(flat.sum())} samples in "
+            f"{flat.size} place(s)")
+
+
+def held_on_grid(x: np.ndarray, start: int, stop: int, value: float) -> bool:
+    """Whether the run ``[start, stop)`` of samples equal to the extreme ``value`` is a crest
+    held by the converter grid ``x`` lies on (:func:`_crest_hold`), not clipping; ``x`` holds
+    the run and enough of the record around it to fall 16 grid steps below it on each side.
+    False when ``x`` lies on no grid."""
+    step = _grid_step(x)
+    return bool(step) and _crest_hold(x, start, stop, value, step)
 
 
 #: :func:`_crest_hold` measures a crest's width where the record falls CREST_DEPTH and 4 times

@@ -253,3 +253,36 @@ def test_a_coarse_converter_is_not_taken_for_clipping():
         cut = np.round(np.clip(x, -0.9 * top, 0.9 * top) / grid) * grid
         with pytest.raises(AnalysisError, match="looks clipped"):
             identify(cut, case.fs)
+
+
+@pytest.mark.parametrize("chunk", [997, 1 << 12])
+def test_a_long_record_on_a_coarse_grid_is_not_taken_for_clipping_either(monkeypatch, chunk):
+    """The same records through the chunked checks of long records (FRF's, on records read a
+    slice at a time; chunks of 997 and 4096 samples, so that runs cross their ends): the decay
+    on grids of 0.3 % and 1 % passes, cut at 90 % it is refused as before (the chunked check
+    refused both: it had no converter grid)."""
+    from fsi_lab import sources
+
+    monkeypatch.setattr(sources, "CHUNK", chunk)
+    x = trial(decay(10000.0, noise=0.001, duration=3.0, frequency=8.0, c_f=6.3), 2)
+    top = float(np.max(np.abs(x)))
+    for step in (0.003, 0.01):
+        grid = step * top
+        assert sources.check_source(np.round(x / grid) * grid, "frf") == x.size
+        cut = np.round(np.clip(x, -0.9 * top, 0.9 * top) / grid) * grid
+        with pytest.raises(AnalysisError, match="looks clipped: the m"):
+            sources.check_source(cut, "frf")
+
+
+def test_runs_are_found_across_chunk_ends(monkeypatch):
+    """Runs of a record's extreme value read a chunk at a time are those of the whole record,
+    for runs that start, end or lie within a chunk's end (200 random records, chunks of 7)."""
+    from fsi_lab import sources
+    from fsi_lab.dsp._signal import true_runs
+
+    monkeypatch.setattr(sources, "CHUNK", 7)
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        x = (rng.random(int(rng.integers(1, 60))) < 0.6).astype(float)
+        firsts, lasts = true_runs(x == 1.0)
+        assert sources._runs_at(x, x.size, 1.0) == list(zip(firsts.tolist(), lasts.tolist()))
