@@ -106,9 +106,9 @@ COMPRESSED = [
 @pytest.mark.parametrize("case, compression", COMPRESSED, ids=[c.name for c, _ in COMPRESSED])
 def test_identify_warns_of_a_chain_that_reads_the_largest_cycles_low(case, compression):
     """Each record, four seeds: read through the chain, at least two warn of flattened crests
-    (measured over eight: 8, 6 and 6 of 8; the 85 Hz mode at 2 kHz has 12 samples per half
-    cycle, and two of its eight records still read C_f 10 % low unwarned); read straight,
-    none does. Fails before step 8e (no such warning)."""
+    (measured over eight: 8, 5 and 6 of 8; the 85 Hz mode at 2 kHz has 12 samples per half
+    cycle, and two of its eight records still read C_f 10 % low unwarned, one of the 6.8 Hz
+    mode's 8 % low); read straight, none does. Fails before step 8e (no such warning)."""
     flattened = 0
     for seed in range(4):
         straight = identify(trial(case, seed), case.fs).modes[0]
