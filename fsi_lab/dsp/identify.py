@@ -273,7 +273,7 @@ POWER_Z = 3.0
 #: on records read straight within +-0.3 %) ...
 CREST_MIN = 0.003
 #: ... by more than this many standard errors (the one-sided level of a normal's, 0.6 %, taken
-#: on Student's t with the half cycles' degrees of freedom: 3.3 for 9 half cycles).
+#: on Student's t with the half cycles' degrees of freedom: 3.2 for 9 half cycles).
 CREST_Z = 2.5
 #: Moves of the coefficients beyond this many standard errors widen their intervals.
 DRIFT_Z = 2.5
