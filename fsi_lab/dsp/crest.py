@@ -65,11 +65,9 @@ class CrestHarmonic:
         stiffness share's).
     measured
         The ratio before the stiffness's share is taken off.
-    measured_stderr
-        Its standard error (the half cycles' scatter about the ``A^2`` law alone).
     noise_stderr
-        Its standard error were the record's noise white, at the level the half cycles'
-        residuals show (a floor for ``measured_stderr``, which a few half cycles estimate
+        ``measured``'s standard error were the record's noise white, at the level the half
+        cycles' residuals show (a floor for the scatter's, which a few half cycles estimate
         roughly).
     stiffness
         That share: ``rho`` times the relative frequency shift at the largest half cycle.
@@ -82,7 +80,6 @@ class CrestHarmonic:
     ratio: float
     stderr: float
     measured: float
-    measured_stderr: float
     noise_stderr: float
     stiffness: float
     half_cycles: int
@@ -90,15 +87,13 @@ class CrestHarmonic:
 
 
 def _half_cycle(x: np.ndarray, fs: float, t0: float, t1: float, rate: float,
-                offset: float | None, bend: float = 0.0) -> tuple[float, ...] | None:
+                offset: float | None, bend: float = 0.0) -> tuple[float, ...]:
     """Fundamental, in-phase third harmonic, offset, residual sum of squares, its degrees of
     freedom and the harmonic's variance per unit noise variance of the half cycle between
     crossings ``t0`` and ``t1`` (s), its envelope's logarithm falling at ``rate`` (1/s) and
     curving by ``bend`` (1/s^2; a quadratic damping's rate falls with the amplitude: its edges
     stand higher than an exponential's, which reads as a flattened crest), the offset fitted
-    (None: the last three then NaN) or given; None when it has too few samples."""
-    if _samples(fs, t0, t1, x.size) < MIN_SAMPLES:
-        return None
+    (None: the last three then NaN) or given."""
     i0 = max(int(math.ceil(t0 * fs)), 0)
     i1 = min(int(math.floor(t1 * fs)), x.size - 1)
     t = np.arange(i0, i1 + 1) / fs
@@ -132,17 +127,15 @@ def _samples(fs: float, t0: float, t1: float, size: int) -> int:
 
 
 def _log_slopes(fundamental: np.ndarray, mid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rate (1/s) and curvature (1/s^2) of the envelope's logarithm at each half cycle, from
-    its neighbours' fundamentals (second-order differences, one-sided at the ends)."""
-    log = np.log(np.abs(fundamental))
-    order = 2 if mid.size >= 3 else 1
-    rate = -np.gradient(log, mid, edge_order=order)
-    bend = -np.gradient(rate, mid, edge_order=order) if mid.size >= 3 else np.zeros_like(mid)
-    return rate, bend
+    """Rate (1/s) and curvature (1/s^2) of the envelope's logarithm at each of three or more
+    half cycles, from its neighbours' fundamentals (second-order differences, one-sided at
+    the ends)."""
+    rate = -np.gradient(np.log(np.abs(fundamental)), mid, edge_order=2)
+    return rate, -np.gradient(rate, mid, edge_order=2)
 
 
-def _slope(u: np.ndarray, y: np.ndarray, intercept: bool) -> tuple[float, float, float, int]:
-    """Least squares ``y = [b +] s u``: (s, its standard error, b or 0, degrees of freedom)."""
+def _slope(u: np.ndarray, y: np.ndarray, intercept: bool) -> tuple[float, float, float]:
+    """Least squares ``y = [b +] s u``: (s, its standard error, b or 0)."""
     cols = [np.ones_like(u), u] if intercept else [u]
     basis = np.stack(cols, 1)
     coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
@@ -150,7 +143,7 @@ def _slope(u: np.ndarray, y: np.ndarray, intercept: bool) -> tuple[float, float,
     resid = y - basis @ coef
     cov = np.linalg.pinv(basis.T @ basis) * float(resid @ resid) / max(dof, 1)
     return float(coef[-1]), math.sqrt(max(float(cov[-1, -1]), 0.0)), \
-        float(coef[0]) if intercept else 0.0, dof
+        float(coef[0]) if intercept else 0.0
 
 
 def half_cycle_harmonics(x: np.ndarray, fs: float, crossings: np.ndarray) -> np.ndarray:
@@ -275,17 +268,16 @@ def pooled_crest(rows: Sequence[np.ndarray], quantity: str = "velocity"
         return None
     a1, a3, freq = h[:, 1], h[:, 2], h[:, 3]
     square = (a1 / top) ** 2
-    measured, measured_se, _, _ = _slope(a1 * square, a3, intercept=False)
     u = a1 * square
+    measured, measured_se, _ = _slope(u, a3, intercept=False)
     noise_var = float(np.sum(h[:, 4]) / max(float(np.sum(h[:, 5])), 1.0))
     noise_se = math.sqrt(noise_var * float(np.sum(u * u * h[:, 6]))) / float(np.sum(u * u))
-    shift, shift_se, f_lin, _ = _slope(square, freq, intercept=True)
+    shift, shift_se, f_lin = _slope(square, freq, intercept=True)
     rho = STIFFNESS_HARMONIC[quantity]
     stiffness = rho * shift / f_lin
     stderr = math.hypot(measured_se, rho * shift_se / f_lin)
     return CrestHarmonic(ratio=measured - stiffness, stderr=stderr, measured=measured,
-                         measured_stderr=measured_se, noise_stderr=noise_se,
-                         stiffness=stiffness,
+                         noise_stderr=noise_se, stiffness=stiffness,
                          half_cycles=int(h.shape[0]), amplitude=top)
 
 
