@@ -14,8 +14,8 @@ The beam's own mechanisms make little of it:
   first order; a quadratic law's decay adds an in-phase share of second order (-0.2 % at a
   damping ratio of 0.1);
 - a cubic stiffness ``k3 x^3`` adds an in-phase third harmonic of ``rho dw/w`` of the cycle,
-  ``rho`` = 1/12 for a displacement, -1/4 for a velocity (harmonic balance, to first order in
-  the shift ``dw/w`` its backbone shows).
+  ``rho`` = 1/12 for a displacement, -1/4 for a velocity, 3/4 for an acceleration (harmonic
+  balance, to first order in the shift ``dw/w`` its backbone shows).
 
 :func:`half_cycle_harmonics` fits each half cycle between two zero crossings of the mode with
 the crest-centred cosines ``cos psi, cos 3 psi`` beside an odd term, an offset (a slow drift)
@@ -23,7 +23,8 @@ and a stretch (a crossing moved by noise or a filter), under an envelope with th
 curvature of its neighbours' fall; :func:`pooled_crest` takes the in-phase ratio as growing as
 the square of the amplitude over the decays' larger half cycles and takes the stiffness's
 share off, found from the same crossings' half periods. :func:`.identify.identify` measures
-the fitted model of the record the same way and warns of what the record holds beyond it.
+the fitted model of the record the same way and warns of what the record holds beyond it,
+half cycle by half cycle (``pooled_crest(..., reference=...)``).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ MIN_SAMPLES = 8
 MIN_HALF_CYCLES = 6
 #: The in-phase third harmonic of a cubic stiffness, over the relative frequency shift, by the
 #: quantity measured (harmonic balance; each derivative multiplies the harmonic by -3).
-STIFFNESS_HARMONIC = {"displacement": 1.0 / 12.0, "velocity": -0.25}
+STIFFNESS_HARMONIC = {"displacement": 1.0 / 12.0, "velocity": -0.25, "acceleration": 0.75}
 #: Columns of :func:`half_cycle_harmonics`' rows.
 ROW_WIDTH = 7
 
@@ -202,7 +203,8 @@ def crest_harmonic(x: Any, fs: float, crossings: Sequence[Any], *,
     Parameters
     ----------
     x
-        Samples of one mode (velocity, U/s, or displacement, U), at ``fs``: another mode's
+        Samples of one mode (velocity, U/s, displacement, U, or acceleration, U/s^2), at
+        ``fs``: another mode's
         oscillation projects onto the half cycles (take its band off first, as
         :func:`.identify.identify` does).
     fs
@@ -211,7 +213,7 @@ def crest_harmonic(x: Any, fs: float, crossings: Sequence[Any], *,
         One array per free decay: the mode's zero-crossing times, s from ``x``'s first sample,
         increasing (those of its band signal: a chain's compression does not move them).
     quantity
-        ``"velocity"`` or ``"displacement"``: sets the stiffness's share.
+        ``"velocity"``, ``"displacement"`` or ``"acceleration"``: sets the stiffness's share.
 
     Returns
     -------
@@ -252,12 +254,23 @@ def crest_harmonic(x: Any, fs: float, crossings: Sequence[Any], *,
                         quantity)
 
 
-def pooled_crest(rows: Sequence[np.ndarray], quantity: str = "velocity"
-                 ) -> CrestHarmonic | None:
+def pooled_crest(rows: Sequence[np.ndarray], quantity: str = "velocity",
+                 reference: Sequence[np.ndarray] | None = None) -> CrestHarmonic | None:
     """:func:`crest_harmonic` from the rows of :func:`half_cycle_harmonics` of each decay:
     the half cycles above :data:`TOP_SHARE` of the largest, the in-phase ratio growing as the
     amplitude squared, the stiffness's share from their half periods. None when fewer than
-    :data:`MIN_HALF_CYCLES` are left."""
+    :data:`MIN_HALF_CYCLES` are left.
+
+    With ``reference`` (rows of the same decays, in the same order, from a record that holds
+    everything but what is looked for: the fitted model of the record), each half cycle's
+    harmonic and frequency are taken less those of the reference's half cycle it falls on
+    (:func:`_excess`): what both hold (a damping law's in-phase share, a band filter's smear
+    of the first crossings, an acceleration's half periods, which its damping's phase moves
+    with the amplitude) then cancels half cycle by half cycle instead of on the average, and
+    the scatter left about the ``A^2`` law is the record's noise.
+    """
+    if reference is not None:
+        rows = [_excess(r, m) for r, m in zip(rows, reference)]
     rows = [r for r in rows if r.size]
     if not rows:
         return None
@@ -279,6 +292,29 @@ def pooled_crest(rows: Sequence[np.ndarray], quantity: str = "velocity"
     return CrestHarmonic(ratio=measured - stiffness, stderr=stderr, measured=measured,
                          noise_stderr=noise_se, stiffness=stiffness,
                          half_cycles=int(h.shape[0]), amplitude=top)
+
+
+def _excess(rows: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """``rows`` of one decay less ``reference``'s: each half cycle's third harmonic less its
+    fundamental times the harmonic ratio of the reference's half cycle nearest in time (within
+    a quarter of its half period, of the same sign), its frequency less that half cycle's plus
+    the reference's mean (a frequency still, for the stiffness's share); half cycles without
+    such a partner are left out."""
+    if not rows.size or not reference.size:
+        return np.empty((0, ROW_WIDTH))
+    order = np.argsort(reference[:, 0])
+    reference = reference[order]
+    j = np.clip(np.searchsorted(reference[:, 0], rows[:, 0]), 1, reference.shape[0] - 1)
+    j = np.where(np.abs(reference[j - 1, 0] - rows[:, 0]) < np.abs(reference[j, 0] - rows[:, 0]),
+                 j - 1, j) if reference.shape[0] > 1 else np.zeros(rows.shape[0], dtype=int)
+    partner = reference[j]
+    paired = (np.abs(partner[:, 0] - rows[:, 0]) < 0.125 / rows[:, 3]) \
+        & (np.sign(partner[:, 1]) == np.sign(rows[:, 1]))
+    out = rows[paired].copy()
+    partner = partner[paired]
+    out[:, 2] -= out[:, 1] * partner[:, 2] / partner[:, 1]
+    out[:, 3] += float(np.mean(reference[:, 3])) - partner[:, 3]
+    return out
 
 
 def _check_crossings(crossings: Sequence[Any]) -> None:

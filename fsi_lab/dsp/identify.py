@@ -2280,10 +2280,14 @@ def _natural_frequency(mode: _Mode) -> tuple[float, tuple[float, float], float]:
 
 
 def _part(decay: dict, sel: slice) -> dict:
-    """One decay with only the extrema ``sel`` (its per-extremum arrays sliced)."""
-    return {key: (val[sel] if key in ("times", "values", "amplitude", "scale")
+    """One decay with only the extrema ``sel`` (its per-extremum arrays sliced; its model's
+    anchor, which sits where the filters put the first extremum, moved with that extremum)."""
+    part = {key: (val[sel] if key in ("times", "values", "amplitude", "scale")
                   else val[:, sel] if key == "noise_dev" else val)
             for key, val in decay.items()}
+    if "anchor" in decay and part["times"].size:
+        part["anchor"] = decay["anchor"] + float(part["times"][0] - decay["times"][0])
+    return part
 
 
 def _drop_first(decays: list[dict], count: int) -> list[dict] | None:
@@ -2541,16 +2545,20 @@ def _law_power(mode: _Mode) -> dict[str, float]:
 
 
 def _crest(mode: _Mode, modes: list[_Mode], windows: list[tuple[int, int, int]],
-           bands: ModeBands, record: np.ndarray, fs: float, follow: str) -> dict[str, float]:
+           bands: ModeBands, record: np.ndarray, fs: float, follow: str, quantity: str
+           ) -> dict[str, float]:
     """Step 8e: the in-phase third harmonic of the mode's largest half cycles
     (:func:`.crest.half_cycle_harmonics`, over the extrema its laws were fitted to), against
     the same measure of the fitted model of the record put through the same steps: the model
     holds what damping (a quadratic law adds a little in phase too), the stiffness and the
     band filters' smear of the first crossings give, and no measuring chain. Each decay is
     measured on the record less the other modes' bands, its half cycles between its band's
-    crossings. Returns ``crest_ratio`` (the record's ratio less the model's, each less the
-    stiffness's share its half periods show), ``crest_se``, ``crest_noise_se`` and
-    ``crest_count``; empty when too few half cycles stand out."""
+    crossings, in the record's ``quantity`` (an accelerometer's chain flattens the
+    acceleration's crests: they are measured there, not on its integral, where the harmonic is
+    a third as large). Returns ``crest_ratio`` (the record's half cycles less the model's, half
+    cycle by half cycle, less the stiffness's share the difference of their half periods
+    shows: :func:`.crest.pooled_crest`), ``crest_se``, ``crest_noise_se`` and ``crest_count``;
+    empty when too few half cycles stand out."""
     reach = [bands.reach(k) for k in range(bands.count)]
     found: list[np.ndarray] = []
     model_found: list[np.ndarray] = []
@@ -2564,7 +2572,7 @@ def _crest(mode: _Mode, modes: list[_Mode], windows: list[tuple[int, int, int]],
             continue
         start, _, stop = window
         data = record[start:stop]
-        model = _model_record(modes, window, fs, follow, follow, w,
+        model = _model_record(modes, window, fs, follow, quantity, w,
                               MODEL_LIMIT * float(np.max(np.abs(data))), reach)
         for signal, out in ((data, found), (model, model_found)):
             parts = split(signal, fs, bands)
@@ -2576,12 +2584,13 @@ def _crest(mode: _Mode, modes: list[_Mode], windows: list[tuple[int, int, int]],
                 t0, t1 = d["times"][0] - start / fs, d["times"][last] - start / fs
                 out.append(half_cycle_harmonics(own, fs, crossings[(crossings >= t0)
                                                                    & (crossings <= t1)]))
-    measured, reference = pooled_crest(found, follow), pooled_crest(model_found, follow)
-    if measured is None or reference is None:
+    # The record's half cycles less the model's, each less the stiffness's share the
+    # difference of their half periods shows: a stiffness too small for the model to keep (a
+    # 3 % hardening) still shows in the record's crests.
+    measured = pooled_crest(found, quantity, reference=model_found)
+    if measured is None:
         return {}
-    # Each less its stiffness's share from its own half periods: a stiffness too small for
-    # the model to keep (a 3 % hardening) still shows in the record's crests.
-    return {"crest_ratio": measured.ratio - reference.ratio,
+    return {"crest_ratio": measured.ratio,
             "crest_se": measured.stderr, "crest_noise_se": measured.noise_stderr,
             "crest_count": float(measured.half_cycles)}
 
@@ -3203,8 +3212,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         if mode.wander is not None:
             mode.drift.update(zip(("frequency_wander", "frequency_low", "frequency_high"),
                                   mode.wander))
-        if quantity != "acceleration":
-            mode.drift.update(_crest(mode, modes, windows, bands, record, fs, follow))
+        mode.drift.update(_crest(mode, modes, windows, bands, record, fs, follow, quantity))
         bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])
