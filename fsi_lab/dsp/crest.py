@@ -204,9 +204,8 @@ def crest_harmonic(x: Any, fs: float, crossings: Sequence[Any], *,
     ----------
     x
         Samples of one mode (velocity, U/s, displacement, U, or acceleration, U/s^2), at
-        ``fs``: another mode's
-        oscillation projects onto the half cycles (take its band off first, as
-        :func:`.identify.identify` does).
+        ``fs``: another mode's oscillation projects onto the half cycles (take its band off
+        first, as :func:`.identify.identify` does).
     fs
         Sample rate, Hz.
     crossings
@@ -297,19 +296,17 @@ def pooled_crest(rows: Sequence[np.ndarray], quantity: str = "velocity",
 def _excess(rows: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """``rows`` of one decay less ``reference``'s: each half cycle's third harmonic less its
     fundamental times the harmonic ratio of the reference's half cycle nearest in time (within
-    a quarter of its half period, of the same sign), its frequency less that half cycle's plus
-    the reference's mean (a frequency still, for the stiffness's share); half cycles without
-    such a partner are left out."""
+    a quarter of its half period), its frequency less that half cycle's plus the reference's
+    mean (a frequency still, for the stiffness's share); half cycles without such a partner
+    are left out."""
     if not rows.size or not reference.size:
         return np.empty((0, ROW_WIDTH))
-    order = np.argsort(reference[:, 0])
-    reference = reference[order]
-    j = np.clip(np.searchsorted(reference[:, 0], rows[:, 0]), 1, reference.shape[0] - 1)
-    j = np.where(np.abs(reference[j - 1, 0] - rows[:, 0]) < np.abs(reference[j, 0] - rows[:, 0]),
-                 j - 1, j) if reference.shape[0] > 1 else np.zeros(rows.shape[0], dtype=int)
-    partner = reference[j]
+    partner = reference[np.argmin(np.abs(reference[None, :, 0] - rows[:, None, 0]), axis=1)]
+    # (of the same sign and within a factor of two: a reference that left the decay out,
+    # a fit gone astray, pairs with nothing)
+    share = partner[:, 1] / rows[:, 1]
     paired = (np.abs(partner[:, 0] - rows[:, 0]) < 0.125 / rows[:, 3]) \
-        & (np.sign(partner[:, 1]) == np.sign(rows[:, 1]))
+        & (share > 0.5) & (share < 2.0)
     out = rows[paired].copy()
     partner = partner[paired]
     out[:, 2] -= out[:, 1] * partner[:, 2] / partner[:, 1]
