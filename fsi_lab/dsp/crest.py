@@ -135,10 +135,15 @@ def _log_slopes(fundamental: np.ndarray, mid: np.ndarray) -> tuple[np.ndarray, n
     return rate, -np.gradient(rate, mid, edge_order=2)
 
 
-def _slope(u: np.ndarray, y: np.ndarray, intercept: bool) -> tuple[float, float, float]:
-    """Least squares ``y = [b +] s u``: (s, its standard error, b or 0)."""
+def _slope(u: np.ndarray, y: np.ndarray, intercept: bool,
+           weight: np.ndarray | None = None) -> tuple[float, float, float]:
+    """Least squares ``y = [b +] s u``, each point weighted by ``weight`` (the inverse of its
+    variance, up to a factor): (s, its standard error, b or 0)."""
     cols = [np.ones_like(u), u] if intercept else [u]
     basis = np.stack(cols, 1)
+    if weight is not None:
+        root = np.sqrt(weight)
+        basis, y = basis * root[:, None], y * root
     coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
     dof = y.size - basis.shape[1]
     resid = y - basis @ coef
@@ -257,8 +262,8 @@ def pooled_crest(rows: Sequence[np.ndarray], quantity: str = "velocity",
                  reference: Sequence[np.ndarray] | None = None) -> CrestHarmonic | None:
     """:func:`crest_harmonic` from the rows of :func:`half_cycle_harmonics` of each decay:
     the half cycles above :data:`TOP_SHARE` of the largest, the in-phase ratio growing as the
-    amplitude squared, the stiffness's share from their half periods. None when fewer than
-    :data:`MIN_HALF_CYCLES` are left.
+    amplitude squared, the stiffness's share from their half periods (weighted as the square
+    of the amplitude). None when fewer than :data:`MIN_HALF_CYCLES` are left.
 
     With ``reference`` (rows of the same decays, in the same order, from a record that holds
     everything but what is looked for: the fitted model of the record), each half cycle's
@@ -284,7 +289,9 @@ def pooled_crest(rows: Sequence[np.ndarray], quantity: str = "velocity",
     measured, measured_se, _ = _slope(u, a3, intercept=False)
     noise_var = float(np.sum(h[:, 4]) / max(float(np.sum(h[:, 5])), 1.0))
     noise_se = math.sqrt(noise_var * float(np.sum(u * u * h[:, 6]))) / float(np.sum(u * u))
-    shift, shift_se, f_lin = _slope(square, freq, intercept=True)
+    # (a half period's crossings move with the noise over the half cycle's slope: its
+    # frequency's variance grows as 1 / A^2)
+    shift, shift_se, f_lin = _slope(square, freq, intercept=True, weight=square)
     rho = STIFFNESS_HARMONIC[quantity]
     stiffness = rho * shift / f_lin
     stderr = math.hypot(measured_se, rho * shift_se / f_lin)
