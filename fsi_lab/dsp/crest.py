@@ -268,10 +268,12 @@ def pooled_crest(rows: Sequence[np.ndarray], quantity: str = "velocity",
     With ``reference`` (rows of the same decays, in the same order, from a record that holds
     everything but what is looked for: the fitted model of the record), each half cycle's
     harmonic and frequency are taken less those of the reference's half cycle it falls on
-    (:func:`_excess`): what both hold (a damping law's in-phase share, a band filter's smear
-    of the first crossings, an acceleration's half periods, which its damping's phase moves
-    with the amplitude) then cancels half cycle by half cycle instead of on the average, and
-    the scatter left about the ``A^2`` law is the record's noise.
+    (the nearest in time, within a quarter of a half period, of the same sign and within a
+    factor of two; half cycles without one are left out): what both hold (a damping law's
+    in-phase share, a band filter's smear of the first crossings, an acceleration's half
+    periods, which its damping's phase moves with the amplitude) then cancels half cycle by
+    half cycle instead of on the average, and the scatter left about the ``A^2`` law is the
+    record's noise.
     """
     if reference is not None:
         rows = [_excess(r, m) for r, m in zip(rows, reference)]
@@ -303,9 +305,9 @@ def pooled_crest(rows: Sequence[np.ndarray], quantity: str = "velocity",
 def _excess(rows: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """``rows`` of one decay less ``reference``'s: each half cycle's third harmonic less its
     fundamental times the harmonic ratio of the reference's half cycle nearest in time (within
-    a quarter of its half period), its frequency less that half cycle's plus the reference's
-    mean (a frequency still, for the stiffness's share); half cycles without such a partner
-    are left out."""
+    a quarter of its half period, of the same sign and within a factor of two), its frequency
+    less that half cycle's plus the reference's mean (a frequency still, for the stiffness's
+    share); half cycles without such a partner are left out."""
     if not rows.size or not reference.size:
         return np.empty((0, ROW_WIDTH))
     partner = reference[np.argmin(np.abs(reference[None, :, 0] - rows[:, None, 0]), axis=1)]
