@@ -215,8 +215,7 @@ def test_an_accelerometer_chain_that_reads_the_largest_cycles_low_is_seen():
     the acceleration itself (the stiffness's share there is 3/4 of the shift): 2 of seeds 0 to
     3 are warned (z -4.1 and -4.6; the others -1.3 and -1.6: on an acceleration a
     stiffness's share is three times a velocity's, and its half periods' noise weighs three
-    times as much), none read straight. Before, an
-    acceleration channel had no crest test."""
+    times as much), none read straight. Before, an acceleration channel had no crest test."""
     case, _ = COMPRESSED[1]
     acceleration = np.gradient(clean_record(case), 1.0 / case.fs, edge_order=2)
     peak = float(np.max(np.abs(acceleration)))
