@@ -450,7 +450,8 @@ class ModeIdentification:
     decays
         The extrema of each free decay that holds the mode.
     backbone
-        Frequency against displacement amplitude.
+        Frequency against displacement amplitude, over every cycle measured (the first ones
+        :attr:`start_drift` leaves out of the fits included).
     laws
         Fits of the candidate damping laws, ranked.
     alpha
@@ -3260,6 +3261,9 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     # they hold.
     harmonics = {id(m): h for m in modes if (h := _harmonic_of(m, modes)) is not None}
     for mode in modes:
+        # The backbone holds every cycle measured: the start search below leaves the first
+        # extrema out of the damping law's fit, not out of the frequency against amplitude.
+        bb = _backbone(mode, follow)
         mode.drift = _stable_start(mode, follow, laws)
         if mode.joint is None:
             mode.drift.update(_one_law(mode, follow))
@@ -3282,7 +3286,6 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         crest_modes = [m for m in modes if harmonics.get(id(m), (None,))[0] is not mode]
         mode.drift.update(_crest(mode, crest_modes, windows, bands, record, fs, follow,
                                  quantity))
-        bb = _backbone(mode, follow)
         f0, f0_ci, fd = _natural_frequency(mode)
         comparison = compare_laws([mode.fits[law] for law in laws])
         # A joint fit's residual is judged on the record's samples (JOINT_RESIDUAL), not on

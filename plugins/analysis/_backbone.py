@@ -11,6 +11,7 @@ from fsi_lab.contract import AnalysisContext
 from fsi_lab.dsp._signal import fail
 from fsi_lab.dsp.backbone import Backbone
 from fsi_lab.dsp.decays import smooth_per_decay
+from fsi_lab.dsp.identify import ModeIdentification
 from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
 from fsi_lab.plugins.analysis._chain import (
     Component,
@@ -20,7 +21,7 @@ from fsi_lab.plugins.analysis._chain import (
     per_component,
     velocity_components,
 )
-from fsi_lab.plugins.analysis.results import Backbones
+from fsi_lab.plugins.analysis.results import Backbones, Components
 
 
 def decay_backbone(inst: Instantaneous, c: Component, smooth: int = 0,
@@ -30,15 +31,35 @@ def decay_backbone(inst: Instantaneous, c: Component, smooth: int = 0,
     period at each end) and, with ``decay_only``, outside its free decays; ``smooth`` is the
     moving average (points each side) applied within each decay. Times are from the channel's
     first sample."""
-    freq, amp = inst.frequency, inst.amplitude
-    times = inst.frequency_times
-    if smooth:
-        period = 1.0 / float(np.median(freq))
+    return _kept_points(inst.frequency_times, inst.amplitude, inst.frequency, c, smooth,
+                        decay_only)
+
+
+def identified_backbone(mode: ModeIdentification, c: Component, smooth: int = 0,
+                        decay_only: bool = True, velocity: bool = False) -> Backbone:
+    """Backbone of a component of the ``bands`` decomposition as its mode's identification
+    measured it (:attr:`fsi_lab.dsp.identify.ModeIdentification.backbone`): the band's
+    crossings and extrema in each free decay, corrected for the band filter's smear of the
+    first cycles, with displacement amplitudes (m), or with ``velocity`` velocity amplitudes
+    (m/s, for a mode identified on a velocity). Read off the band signal itself, the largest
+    cycles of a Duffing decay lay up to 1 % off harmonic balance. The points are kept as
+    :func:`decay_backbone` keeps them."""
+    bb = mode.backbone
+    amplitude = bb.amplitude * (2.0 * np.pi * bb.frequency) if velocity else bb.amplitude
+    return _kept_points(bb.times, amplitude, bb.frequency, c, smooth, decay_only)
+
+
+def _kept_points(times: np.ndarray, amp: np.ndarray, freq: np.ndarray, c: Component,
+                 smooth: int, decay_only: bool) -> Backbone:
+    """The backbone of points at ``times`` (s from the component's start) less those
+    :func:`decay_backbone` leaves out, smoothed within each decay."""
+    period = 1.0 / float(np.median(freq)) if freq.size else 0.0
+    if smooth and freq.size:
         _, split = decay_labels(times, c, period, amp, decay_only)
         regions = split.regions(times) if split is not None else np.zeros(times.size)
         freq = smooth_per_decay(freq, regions, smooth)
         amp = np.exp(smooth_per_decay(np.log(np.maximum(amp, 1e-300)), regions, smooth))
-    period = 1.0 / float(np.median(freq))
+        period = 1.0 / float(np.median(freq))
     labels, decays = decay_labels(times, c, period, amp, decay_only)
     keep = labels >= 0
     if keep.sum() < 2:
@@ -49,13 +70,26 @@ def decay_backbone(inst: Instantaneous, c: Component, smooth: int = 0,
 
 
 def trusted_backbone(c: Component, params: dict[str, Any], plugin: str,
-                     context: AnalysisContext) -> Backbone:
-    """Backbone of one component as the ``backbone`` plugin gives it (:func:`decay_backbone`)."""
+                     context: AnalysisContext, velocity: bool = False) -> Backbone:
+    """Backbone of one component as the ``backbone`` plugin gives it: for a component of the
+    ``bands`` decomposition with the instantaneous analysis at its defaults (no
+    ``min_amplitude``, offset ``cycles``), its mode's (:func:`identified_backbone`: velocity
+    amplitudes with ``velocity``); otherwise the zero crossings and extrema of the component
+    (:func:`decay_backbone`)."""
+    decay_only = params.get("decay_only", True)
+    found = context.result(Components)
+    ident = found.identification if found is not None else None
+    if ident is not None and params["min_amplitude"] is None and params["offset"] == "cycles" \
+            and c.index < len(ident.modes) \
+            and (not velocity or ident.modes[c.index].quantity == "velocity"):
+        with guarded(plugin, context):
+            return identified_backbone(ident.modes[c.index], c, params["smooth_points"],
+                                       decay_only, velocity)
     with guarded(plugin, context):
         inst = instantaneous(c.signal, c.sample_rate, offset=params["offset"], smooth=0,
                              min_amplitude=params["min_amplitude"], noise_floor=c.noise_floor,
                              frequency_hint=c.frequency)
-        return decay_backbone(inst, c, params["smooth_points"], params.get("decay_only", True))
+        return decay_backbone(inst, c, params["smooth_points"], decay_only)
 
 
 def run(context: AnalysisContext, params: dict[str, Any]) -> Backbones:
@@ -68,7 +102,8 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> Backbones:
     if vel is not None:
         for c in vel:
             try:
-                vdone[c.index] = trusted_backbone(c, params, "backbone", context)
+                vdone[c.index] = trusted_backbone(c, params, "backbone", context,
+                                                  velocity=True)
             except Exception:  # noqa: BLE001 - the velocity backbone is optional
                 pass
     return Backbones(displacement=done, velocity=vdone, t0s={c.index: c.t0 for c in disp},

@@ -23,9 +23,11 @@ velocity at the measuring point goes through the same processing as the measurem
    with the model component of nearest mean frequency (within 25 %);
 4. per pair: the HVD envelopes and instantaneous frequencies, then - on the displacement
    components (``integrate``'s for the measurement when it ran, integrated the same way for
-   the model) - the zero-crossing backbone and damping curve as the ``backbone`` and
-   ``damping`` plugins compute them (:func:`component_curves`), with the same parameters on
-   both sides.
+   the model) - the zero-crossing backbone and damping curve of each component signal
+   (:func:`component_curves`), with the same parameters on both sides. The model's components
+   are cut from its output by the measurement's own filters, and measured on both sides alike
+   their smear of the first cycles cancels; the ``backbone`` plugin reports a ``bands``
+   component's backbone from its identification instead, the smear taken out.
 
 C_i and C_f are this plugin's ``c_i`` / ``c_f`` when given, else the values the chain's
 ``equivalent-damping`` identified (in the modal coordinate of Eq. 20 when the run has a
@@ -274,11 +276,12 @@ def _pick_damping(context: AnalysisContext, params: dict[str, Any], freqs: dict[
 
 
 def component_curves(c: Any, smooth: int, method: str) -> tuple[Any, Any]:
-    """Backbone and damping curve of one displacement component, as the ``backbone`` and
-    ``damping`` plugins compute them (:func:`._backbone.decay_backbone`,
-    :func:`._damping.decay_peaks` with their defaults and ``smooth`` / ``method``), from a single
-    zero-crossing analysis: untrusted record ends and the points outside the free decays left
-    out. Times are from the channel's first sample."""
+    """Backbone and damping curve of one displacement component's signal, as the ``damping``
+    plugin computes its curve and the ``backbone`` plugin the backbone of a component that is
+    not a ``bands`` one (:func:`._backbone.decay_backbone`, :func:`._damping.decay_peaks` with
+    their defaults and ``smooth`` / ``method``), from a single zero-crossing analysis:
+    untrusted record ends and the points outside the free decays left out. Times are from the
+    channel's first sample."""
     from fsi_lab.dsp.damping import damping_from_peaks
     from fsi_lab.dsp.instantaneous import instantaneous
     from fsi_lab.plugins.analysis._backbone import decay_backbone

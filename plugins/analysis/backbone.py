@@ -26,7 +26,8 @@ PLUGIN = AnalysisPlugin(
     provides=Backbones,
     help="Backbone curves: zero-crossing frequency against displacement amplitude (m) and "
          "against velocity amplitude (m/s), per component; the untrusted record ends are left "
-         "out.",
+         "out. A component of hvd's bands has its identification's crossings and extrema, "
+         "corrected for the band filter's smear (min_amplitude and offset apply to the others).",
 )
 
 
