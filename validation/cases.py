@@ -181,6 +181,17 @@ def _mode_velocity(mode: Mode, case: Case) -> np.ndarray:
     return v
 
 
+def harmonic_balance_hz(mode: Mode, mass: float, amplitude: np.ndarray) -> np.ndarray:
+    """The backbone of a viscously damped mode by harmonic balance, Hz, at displacement
+    amplitudes ``amplitude`` (m): ``sqrt(w0^2 + 3 alpha A^2 / 4 - a^2) / (2 pi)``, with ``a =
+    c_i / (2 m)`` its decay rate (1/s) for the mass per length ``mass`` (kg/m). Within 0.25 % of
+    the exact (elliptic) backbone up to ``3 alpha A^2 / (4 w0^2) = 0.5``."""
+    w0 = 2.0 * math.pi * mode.frequency
+    a = mode.c_i / (2.0 * mass)
+    a2 = np.asarray(amplitude, dtype=float) ** 2
+    return np.sqrt(w0 * w0 + 0.75 * mode.alpha * a2 - a * a) / (2.0 * math.pi)
+
+
 @functools.lru_cache(maxsize=64)
 def clean_record(case: Case) -> np.ndarray:
     """The case's noise-free velocity record, m/s (cached: every trial adds its own noise); a

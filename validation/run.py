@@ -4,7 +4,9 @@ For each case, ``trials`` noisy realisations are identified by :func:`fsi_lab.ds
 (the mode nearest the truth's frequency) and by the peer: the plain envelope-law fit on raw
 peaks (the extrema of the record from its largest on, the closed form of the averaged law
 ``dA/dt = -a A - b A^2`` fitted by least squares, t-intervals). Reported per quantity: bias and
-RMS error (% of the truth) and the coverage of the 95 % intervals.
+RMS error (% of the truth) and the coverage of the 95 % intervals. For a mode with a cubic
+stiffness, the displacement backbone that the analysis chain reports is measured against
+harmonic balance as well (:func:`chain_backbone`, :meth:`Row.backbone_bias`).
 """
 
 from __future__ import annotations
@@ -16,7 +18,12 @@ import numpy as np
 import scipy.optimize as sopt
 import scipy.stats as sstats
 
-from validation.cases import Case, trial
+from validation.cases import Case, harmonic_balance_hz, trial
+
+#: Amplitude bands (shares of the release's displacement) the backbone's bias is taken over.
+BACKBONE_BANDS = (0.0, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0)
+#: Fewest backbone points (over the trials) for a band's bias to be taken.
+BACKBONE_POINTS = 20
 
 
 @dataclass
@@ -32,6 +39,11 @@ class Estimate:
     law: str = ""
     warned: bool = False
     refused: str = ""
+    #: The chain's displacement backbone, for a mode with a cubic stiffness: each point's
+    #: amplitude as a share of the release's displacement, and its frequency's error from
+    #: harmonic balance (%).
+    backbone_share: np.ndarray | None = None
+    backbone_error: np.ndarray | None = None
 
 
 def fsi_lab_estimate(case: Case, x: np.ndarray) -> Estimate:
@@ -126,6 +138,33 @@ def peer_estimate(case: Case, x: np.ndarray) -> Estimate:
                     c_f=m * k * b, c_f_ci=(m * k * (b - q * se_b), m * k * (b + q * se_b)))
 
 
+def chain_backbone(case: Case, x: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The displacement backbone (amplitudes m, frequencies Hz) of the case's first mode in the
+    velocity record ``x`` as ``fsi-lab analyze`` reports it (the chain's ``hvd`` and
+    ``backbone`` at their defaults), or None when the chain gives none near its frequency."""
+    from fsi_lab.chain import run_chain
+    from fsi_lab.contract import ChannelData
+    from fsi_lab.params import validate
+    from validation.bench import _registry
+
+    registry = _registry()
+    chain = ["hvd", "backbone"]
+    params = {name: validate(registry.get("analysis", name).params, {}, f"analysis.{name}")
+              for name in chain}
+    channel = ChannelData("tip_velocity", x, case.fs, "velocity", "m/s")
+    _, summary = run_chain({"tip_velocity": channel}, {"chain": chain}, params, registry)
+    comps = [c for c in summary["tip_velocity"].get("components", [])
+             if "backbone" in c and c.get("frequency_hz")]
+    truth = case.truth.frequency
+    if not comps:
+        return None
+    comp = min(comps, key=lambda c: abs(math.log(c["frequency_hz"] / truth)))
+    if abs(comp["frequency_hz"] / truth - 1.0) > 0.2:
+        return None
+    return (np.asarray(comp["backbone"]["amplitude"], dtype=float),
+            np.asarray(comp["backbone"]["frequency_hz"], dtype=float))
+
+
 def run_trial(args: tuple[Case, int]) -> tuple[Estimate, Estimate]:
     case, seed = args
     x = trial(case, seed)
@@ -133,7 +172,13 @@ def run_trial(args: tuple[Case, int]) -> tuple[Estimate, Estimate]:
         from validation.bench import bench_estimate
 
         return bench_estimate(case, x), peer_estimate(case, x[0])
-    return fsi_lab_estimate(case, x), peer_estimate(case, x)
+    ours = fsi_lab_estimate(case, x)
+    if case.truth.alpha and not ours.refused and (bb := chain_backbone(case, x)) is not None:
+        amplitude, frequency = bb
+        ours.backbone_share = amplitude / case.truth.x0
+        ours.backbone_error = 100.0 * (frequency / harmonic_balance_hz(case.truth, case.mass,
+                                                                      amplitude) - 1.0)
+    return ours, peer_estimate(case, x)
 
 
 @dataclass
@@ -158,6 +203,23 @@ class Row:
         return {"bias": 100 * float(np.nanmean(rel)),
                 "rms": 100 * float(np.sqrt(np.nanmean(rel ** 2))),
                 "coverage": float(np.nanmean((lows <= truth) & (truth <= highs)))}
+
+    def backbone_bias(self) -> float:
+        """The backbone's largest bias from harmonic balance, %: the mean error of its points
+        (pooled over the trials) in each amplitude band (:data:`BACKBONE_BANDS`, of at least
+        :data:`BACKBONE_POINTS` points), the largest in size; NaN without a backbone."""
+        got = [e for e in self.ours if e.backbone_error is not None]
+        if not got:
+            return math.nan
+        share = np.concatenate([e.backbone_share for e in got])
+        error = np.concatenate([e.backbone_error for e in got])
+        worst = math.nan
+        for lo, hi in zip(BACKBONE_BANDS[:-1], BACKBONE_BANDS[1:]):
+            inside = (share >= lo) & (share < hi if hi < BACKBONE_BANDS[-1] else share <= hi)
+            if inside.sum() >= BACKBONE_POINTS:
+                mean = float(np.mean(error[inside]))
+                worst = mean if math.isnan(worst) or abs(mean) > abs(worst) else worst
+        return worst
 
 
 def evaluate(cases: list[Case], trials: int, workers: int = 2,
