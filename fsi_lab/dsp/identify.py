@@ -450,8 +450,7 @@ class ModeIdentification:
     decays
         The extrema of each free decay that holds the mode.
     backbone
-        Frequency against displacement amplitude, over every cycle measured (the first ones
-        :attr:`start_drift` leaves out of the fits included).
+        Frequency against displacement amplitude, over :attr:`measured_decays`.
     laws
         Fits of the candidate damping laws, ranked.
     alpha
@@ -494,6 +493,9 @@ class ModeIdentification:
         explains) and ``joint_widening_a``, ``joint_widening_beta``.
     warnings
         Sentences on how far to trust the numbers; empty when every check passed.
+    measured_decays
+        The extrema of each free decay as measured and corrected, the first ones
+        :attr:`start_drift` leaves out of the fits included (:attr:`decays` less them).
     """
 
     index: int
@@ -511,6 +513,7 @@ class ModeIdentification:
     correction: float
     start_drift: dict[str, float] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    measured_decays: list[DecayExtrema] = field(default_factory=list)
 
     @property
     def quadratic(self) -> LawFit:
@@ -2283,6 +2286,15 @@ def _backbone(mode: _Mode, quantity: str) -> Backbone:
                     np.concatenate(decay))
 
 
+def _decay_extrema(d: dict, windows: list[tuple[int, int, int]]) -> DecayExtrema:
+    """The public record of one decay's extrema (``d``, a decay of a mode's ``decays``) in the
+    analysed ``windows``."""
+    inside = (d["crossings"] >= d["times"][0]) & (d["crossings"] <= d["times"][-1])
+    return DecayExtrema(window=(windows[d["w"]][0], windows[d["w"]][2]), times=d["times"],
+                        values=d["values"], amplitude=d["amplitude"],
+                        crossings=d["crossings"][inside], scale=d.get("scale"))
+
+
 def _natural_frequency(mode: _Mode) -> tuple[float, tuple[float, float], float]:
     """Small-amplitude natural frequency (Hz) with its interval and the damped one (Hz)."""
     q = float(sstats.t.ppf(0.5 + 0.5 * LEVEL, mode.w0_dof))
@@ -3261,9 +3273,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     # they hold.
     harmonics = {id(m): h for m in modes if (h := _harmonic_of(m, modes)) is not None}
     for mode in modes:
-        # The backbone holds every cycle measured: the start search below leaves the first
-        # extrema out of the damping law's fit, not out of the frequency against amplitude.
+        # The backbone and the extrema measured hold every cycle: the start search below
+        # leaves the first extrema out of the damping law's fit, not out of the curves.
         bb = _backbone(mode, follow)
+        measured = [_decay_extrema(d, full_windows) for d in mode.decays]
         mode.drift = _stable_start(mode, follow, laws)
         if mode.joint is None:
             mode.drift.update(_one_law(mode, follow))
@@ -3292,18 +3305,13 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         # the band extrema it does not use.
         mode.drift["residual_rho"] = (_residual_correlation(mode, comparison)
                                       if mode.joint is None else math.nan)
-        decays = [DecayExtrema(window=(full_windows[d["w"]][0], full_windows[d["w"]][2]),
-                               times=d["times"], values=d["values"], amplitude=d["amplitude"],
-                               crossings=d["crossings"][(d["crossings"] >= d["times"][0])
-                                                        & (d["crossings"] <= d["times"][-1])],
-                               scale=d.get("scale"))
-                  for d in mode.decays]
+        decays = [_decay_extrema(d, full_windows) for d in mode.decays]
         flat = bands.flat(mode.band)
         results.append(ModeIdentification(
             index=0, frequency_hz=f0, frequency_ci=f0_ci, damped_frequency_hz=fd,
             spectral_peak_hz=mode.frequency, band_hz=flat, quantity=follow, decays=decays,
             backbone=bb, laws=comparison, alpha=mode.alpha, noise_floor=mode.floor,
-            correction=mode.correction, start_drift=mode.drift))
+            correction=mode.correction, start_drift=mode.drift, measured_decays=measured))
     # By decreasing height of the mode's peak in the free decays' spectrum (of the record's
     # own quantity): the mode that carries the record first, as the spectrum shows it. Not by
     # the extrema kept: their number follows the frequency, and the start search (step 8)

@@ -10,7 +10,7 @@ import numpy as np
 from fsi_lab.contract import AnalysisContext
 from fsi_lab.dsp._signal import fail
 from fsi_lab.dsp.backbone import Backbone
-from fsi_lab.dsp.decays import smooth_per_decay
+from fsi_lab.dsp.decays import FreeDecays, smooth_per_decay
 from fsi_lab.dsp.identify import ModeIdentification
 from fsi_lab.dsp.instantaneous import Instantaneous, instantaneous
 from fsi_lab.plugins.analysis._chain import (
@@ -18,10 +18,12 @@ from fsi_lab.plugins.analysis._chain import (
     decay_labels,
     displacement_components,
     guarded,
+    identified_decays,
+    identified_mode,
     per_component,
     velocity_components,
 )
-from fsi_lab.plugins.analysis.results import Backbones, Components
+from fsi_lab.plugins.analysis.results import Backbones
 
 
 def decay_backbone(inst: Instantaneous, c: Component, smooth: int = 0,
@@ -31,60 +33,61 @@ def decay_backbone(inst: Instantaneous, c: Component, smooth: int = 0,
     period at each end) and, with ``decay_only``, outside its free decays; ``smooth`` is the
     moving average (points each side) applied within each decay. Times are from the channel's
     first sample."""
-    return _kept_points(inst.frequency_times, inst.amplitude, inst.frequency, c, smooth,
-                        decay_only)
-
-
-def identified_backbone(mode: ModeIdentification, c: Component, smooth: int = 0,
-                        decay_only: bool = True, velocity: bool = False) -> Backbone:
-    """Backbone of a component of the ``bands`` decomposition as its mode's identification
-    measured it (:attr:`fsi_lab.dsp.identify.ModeIdentification.backbone`): the band's
-    crossings and extrema in each free decay, corrected for the band filter's smear of the
-    first cycles, with displacement amplitudes (m), or with ``velocity`` velocity amplitudes
-    (m/s, for a mode identified on a velocity). Read off the band signal itself, the largest
-    cycles of a Duffing decay lay up to 1 % off harmonic balance. The points are kept as
-    :func:`decay_backbone` keeps them."""
-    bb = mode.backbone
-    amplitude = bb.amplitude * (2.0 * np.pi * bb.frequency) if velocity else bb.amplitude
-    return _kept_points(bb.times, amplitude, bb.frequency, c, smooth, decay_only)
-
-
-def _kept_points(times: np.ndarray, amp: np.ndarray, freq: np.ndarray, c: Component,
-                 smooth: int, decay_only: bool) -> Backbone:
-    """The backbone of points at ``times`` (s from the component's start) less those
-    :func:`decay_backbone` leaves out, smoothed within each decay."""
-    period = 1.0 / float(np.median(freq)) if freq.size else 0.0
-    if smooth and freq.size:
+    freq, amp = inst.frequency, inst.amplitude
+    times = inst.frequency_times
+    if smooth:
+        period = 1.0 / float(np.median(freq))
         _, split = decay_labels(times, c, period, amp, decay_only)
         regions = split.regions(times) if split is not None else np.zeros(times.size)
         freq = smooth_per_decay(freq, regions, smooth)
         amp = np.exp(smooth_per_decay(np.log(np.maximum(amp, 1e-300)), regions, smooth))
-        period = 1.0 / float(np.median(freq))
+    period = 1.0 / float(np.median(freq))
     labels, decays = decay_labels(times, c, period, amp, decay_only)
+    return _backbone_of(times, amp, freq, labels, decays, c.t0)
+
+
+def identified_backbone(mode: ModeIdentification, c: Component, smooth: int = 0,
+                        velocity: bool = False) -> Backbone:
+    """Backbone of a component of the ``bands`` decomposition as its mode's identification
+    measured it (:attr:`fsi_lab.dsp.identify.ModeIdentification.backbone`): the band's
+    crossings and extrema in each free decay (:func:`._chain.identified_decays`), corrected for
+    the band filter's smear of the first cycles, from the first, with displacement amplitudes
+    (m), or with ``velocity`` velocity amplitudes (m/s, for a mode identified on a velocity).
+    Read off the band signal itself, the largest cycles of a Duffing decay lay up to 1 % off
+    harmonic balance. ``smooth`` as for :func:`decay_backbone`."""
+    bb = mode.backbone
+    freq = bb.frequency
+    amp = bb.amplitude * (2.0 * np.pi * freq) if velocity else bb.amplitude
+    labels, decays = identified_decays(mode, c, bb.times, amp)
+    if smooth:
+        regions = decays.regions(bb.times)
+        freq = smooth_per_decay(freq, regions, smooth)
+        amp = np.exp(smooth_per_decay(np.log(np.maximum(amp, 1e-300)), regions, smooth))
+    return _backbone_of(bb.times, amp, freq, labels, decays, c.t0)
+
+
+def _backbone_of(times: np.ndarray, amp: np.ndarray, freq: np.ndarray, labels: np.ndarray,
+                 decays: FreeDecays | None, t0: float) -> Backbone:
+    """The backbone of the points with a decay (``labels >= 0``), times moved by ``t0`` (s)."""
     keep = labels >= 0
     if keep.sum() < 2:
         raise fail("backbone", f"only {int(keep.sum())} period(s) away from the untrusted "
                                "record ends and inside a free decay; need at least 2 - a "
                                "longer record")
-    return Backbone(times[keep] + c.t0, amp[keep], freq[keep], labels[keep], decays)
+    return Backbone(times[keep] + t0, amp[keep], freq[keep], labels[keep], decays)
 
 
 def trusted_backbone(c: Component, params: dict[str, Any], plugin: str,
                      context: AnalysisContext, velocity: bool = False) -> Backbone:
-    """Backbone of one component as the ``backbone`` plugin gives it: for a component of the
-    ``bands`` decomposition with the instantaneous analysis at its defaults (no
-    ``min_amplitude``, offset ``cycles``), its mode's (:func:`identified_backbone`: velocity
-    amplitudes with ``velocity``); otherwise the zero crossings and extrema of the component
-    (:func:`decay_backbone`)."""
+    """Backbone of one component as the ``backbone`` plugin gives it: its mode's when the
+    identification has it (:func:`._chain.identified_mode`; :func:`identified_backbone`,
+    velocity amplitudes with ``velocity``), otherwise the zero crossings and extrema of the
+    component (:func:`decay_backbone`)."""
     decay_only = params.get("decay_only", True)
-    found = context.result(Components)
-    ident = found.identification if found is not None else None
-    if ident is not None and params["min_amplitude"] is None and params["offset"] == "cycles" \
-            and c.index < len(ident.modes) \
-            and (not velocity or ident.modes[c.index].quantity == "velocity"):
+    mode = identified_mode(context, c, params)
+    if mode is not None and (not velocity or mode.quantity == "velocity"):
         with guarded(plugin, context):
-            return identified_backbone(ident.modes[c.index], c, params["smooth_points"],
-                                       decay_only, velocity)
+            return identified_backbone(mode, c, params["smooth_points"], velocity)
     with guarded(plugin, context):
         inst = instantaneous(c.signal, c.sample_rate, offset=params["offset"], smooth=0,
                              min_amplitude=params["min_amplitude"], noise_floor=c.noise_floor,

@@ -44,6 +44,7 @@ import numpy as np
 from fsi_lab.contract import AnalysisContext, RecordSpectrum, record_spectrum
 from fsi_lab.dsp.components import BandComponents
 from fsi_lab.dsp.decays import FreeDecays, split_decays
+from fsi_lab.dsp.identify import ModeIdentification
 from fsi_lab.dsp.spectrum import SpectralPeaks, find_peaks_interpolated, free_decay_peaks
 from fsi_lab.errors import AnalysisError
 from fsi_lab.plugins.analysis.results import (  # noqa: F401 - the plugins import them from here
@@ -250,6 +251,62 @@ def _band_components(res: BandComponents, ch: Any, order: int) -> list[Component
         out.append(Component(k, res.components[k], quantity, unit, res.sample_rate,
                              res.edge_mask[k], floor, 0.0, 0.0, f_k))
     return out
+
+
+def identified_mode(context: AnalysisContext, c: Component, params: dict[str, Any]
+                    ) -> ModeIdentification | None:
+    """The identification of the mode of ``c``, a component of the ``bands`` decomposition,
+    when its backbone and damping curve are taken from it: the zero-crossing analysis at its
+    defaults in ``params`` (no ``min_amplitude``, offset ``cycles``, ``decay_only``). Else
+    None: the curves are measured on the component's signal."""
+    found = context.result(Components)
+    ident = found.identification if found is not None else None
+    if ident is None or params.get("min_amplitude") is not None \
+            or params.get("offset", "cycles") != "cycles" \
+            or not params.get("decay_only", True) or not 0 <= c.index < len(ident.modes):
+        return None
+    return ident.modes[c.index]
+
+
+def identified_decays(mode: ModeIdentification, c: Component, times: np.ndarray,
+                      amplitude: np.ndarray) -> tuple[np.ndarray, FreeDecays]:
+    """Free decay of each of an identified mode's points (``times``, s from the component's
+    start, with their ``amplitude``) and the free decays, as :func:`decay_labels` gives them
+    for a component's own points: each free decay identify measured
+    (:attr:`fsi_lab.dsp.identify.ModeIdentification.measured_decays`) split again where its
+    extrema rise as after a new excitation (identify splits where the record's swings rise twice
+    over: a smaller impulse into a decay still ringing shows in a mode's band alone), but with
+    no margin at the record's ends: identify's extrema are corrected for the band filter's
+    smear there."""
+    spans = sorted((float(d.times[0]), float(d.times[-1])) for d in mode.measured_decays
+                   if d.times.size)
+    labels = np.full(times.size, -1, dtype=np.int64)
+    later = 4.0 / c.frequency if c.frequency else 0.0
+    guard = max(2.0 * later, 1.0 / c.frequency if c.frequency else 0.0)
+    parts, count = [], 0
+    for lo, hi in spans:
+        inside = np.flatnonzero((times >= lo) & (times <= hi))
+        if inside.size < 2:
+            continue
+        split = split_decays(times[inside], amplitude[inside], later_settle=later,
+                             first_build_up=False, guard=guard)
+        own = split.labels(times[inside])
+        labels[inside] = np.where(own >= 0, own + count, -1)
+        count += split.count
+        parts.append((split, hi))
+    bounds, region, first = [], [], 0
+    for k, (split, hi) in enumerate(parts):
+        bounds += split.bounds.tolist() + ([hi] if k < len(parts) - 1 else [])
+        region += (split.region + first).tolist()
+        first += split.bounds.size + 1
+
+    def joined(name: str) -> np.ndarray:
+        return np.concatenate([getattr(split, name) for split, _ in parts]) if parts \
+            else np.empty(0)
+
+    return labels, FreeDecays(peaks=joined("peaks"), starts=joined("starts"),
+                              ends=joined("ends"), bounds=np.array(bounds, dtype=np.float64),
+                              region=np.array(region, dtype=np.int64))
 
 
 def displacement_components(context: AnalysisContext, plugin: str) -> list[Component]:

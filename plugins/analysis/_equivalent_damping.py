@@ -307,7 +307,7 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> DampingCoefficients
     def work(c):
         with guarded(plugin, context):
             if params["method"] == "envelope":
-                t, a, f, decay, decays = trusted_peaks(c, defaults)
+                t, a, f, decay, decays = trusted_peaks(c, defaults, context)
                 curve = damping_from_peaks(t, a, f, method="envelope-fit", decay=decay)
                 p = curve.params
                 scale = scale_for(c.index, float(np.mean(curve.frequency)))
@@ -321,7 +321,7 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> DampingCoefficients
                         "c_f_ci95": list(ci_f), "points": int(t.size),
                         **decay_summary(decays, c.t0),
                         "amplitude": curve.amplitude / scale, "c_q": cq}
-            curve = prior_curves.get(c.index) or curve_for(c, defaults)
+            curve = prior_curves.get(c.index) or curve_for(c, defaults, context)
             scale = scale_for(c.index, float(np.mean(curve.frequency)))
             res = equivalent_damping(curve.amplitude, curve.zeta, curve.frequency, mass,
                                      modal_scale=scale, confidence=params["confidence"],

@@ -27,7 +27,8 @@ PLUGIN = AnalysisPlugin(
     help="Backbone curves: zero-crossing frequency against displacement amplitude (m) and "
          "against velocity amplitude (m/s), per component; the untrusted record ends are left "
          "out. A component of hvd's bands has its identification's crossings and extrema, "
-         "corrected for the band filter's smear (min_amplitude and offset apply to the others).",
+         "corrected for the band filter's smear (min_amplitude, offset and decay_only apply to "
+         "the others).",
 )
 
 

@@ -33,7 +33,9 @@ PLUGIN = AnalysisPlugin(
     uses=(Components, Integrated),
     provides=DampingCurves,
     help="Damping ratio against displacement amplitude (m) per component, from the refined "
-         "extrema; the untrusted record ends are left out.",
+         "extrema; the untrusted record ends are left out. A component of hvd's bands has its "
+         "identification's extrema, corrected for the band filter's smear (min_amplitude, "
+         "offset and decay_only apply to the others).",
 )
 
 

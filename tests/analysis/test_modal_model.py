@@ -227,28 +227,23 @@ def test_identified_damping_is_taken_from_equivalent_damping():
     assert s["modal_model"]["c_source"] == "equivalent-damping component 0 (mode 2)"
     assert (mm["c_i"], mm["c_f"]) == (ed["c_i"], ed["c_f"])
     assert "backbone" in c0 and "damping" in c0              # merged by index
-    # the measured side went through exactly what the damping plugin did
+    # the measured side is measured on the band signals as the model's side is; the backbone
+    # and damping plugins take a bands component's curves from its identification, the band
+    # filter's smear corrected: they follow each other at the same amplitudes (the band
+    # signal's first damping ratios alternate by 10 % or more about the corrected ones)
     mm_sets = groups["tip/modal-model"]["datasets"]
-    for mine, theirs in (("damping_amplitude_measured", ("damping", "amplitude")),
-                         ("damping_zeta_measured", ("damping", "zeta"))):
-        row = groups[f"tip/{theirs[0]}"]["datasets"][theirs[1]][0]
-        np.testing.assert_array_equal(mm_sets[mine][0][np.isfinite(mm_sets[mine][0])],
-                                      row[np.isfinite(row)], err_msg=mine)
-    # and its backbone is the band signal's (measured as the model's is), which the backbone
-    # plugin's, taken from the identification with the band filter's smear corrected, follows
-    # within 0.5 % of frequency at the same amplitude
-    amp = mm_sets["backbone_amplitude_measured"][0]
-    freq = mm_sets["backbone_frequency_measured"][0]
-    ok = np.isfinite(amp) & np.isfinite(freq)
-    bb = groups["tip/backbone"]["datasets"]
-    drawn = np.isfinite(bb["amplitude"][0])
-    plugin_a, plugin_f = bb["amplitude"][0][drawn], bb["frequency"][0][drawn]
-    order = np.argsort(plugin_a)
-    plugin_a, plugin_f = plugin_a[order], plugin_f[order]
-    inside = ok & (amp >= plugin_a[0]) & (amp <= plugin_a[-1])
-    assert inside.sum() > 20
-    plugin_f = np.interp(amp[inside], plugin_a, plugin_f)
-    assert np.median(np.abs(freq[inside] / plugin_f - 1)) < 5e-3
+    for mine, theirs, tolerance in (("backbone", "backbone", 5e-3), ("damping", "damping", 0.05)):
+        quantity = "frequency" if mine == "backbone" else "zeta"
+        amp, value = (mm_sets[f"{mine}_{k}_measured"][0] for k in ("amplitude", quantity))
+        curve = groups[f"tip/{theirs}"]["datasets"]
+        drawn = np.isfinite(curve["amplitude"][0])
+        plugin_a, plugin_v = curve["amplitude"][0][drawn], curve[quantity][0][drawn]
+        order = np.argsort(plugin_a)
+        inside = np.isfinite(amp) & np.isfinite(value) & (amp >= plugin_a.min()) \
+            & (amp <= plugin_a.max())
+        assert inside.sum() > 20, mine
+        expected = np.interp(amp[inside], plugin_a[order], plugin_v[order])
+        assert np.median(np.abs(value[inside] / expected - 1)) < tolerance, mine
     # the identification is close to the truth, so the model is close to the measurement
     assert ed["c_i"] == pytest.approx(PAPER_WET_C_I, rel=0.05)
     assert mm["envelope_rms_error"] < 0.05, mm
