@@ -88,19 +88,21 @@ def test_a_backbone_off_harmonic_balance_by_more_than_the_target_is_missed():
     assert np.isnan(row([estimate() for _ in range(40)]).backbone_bias())
 
 
-@pytest.mark.parametrize("name", ["Duffing hardening", "Duffing softening"])
+@pytest.mark.parametrize("name", ["Duffing hardening (viscous)", "Duffing softening",
+                                  "Duffing hardening, quadratic damping"])
 def test_the_chains_backbone_of_a_released_duffing_decay_is_within_the_target(name):
     """The displacement backbone ``fsi-lab analyze`` reports for the matrix's Duffing rows (a
-    17 Hz mode released from 1 mm, its frequency 14 % higher or 6 % lower there): on the clean
-    record every point above a tenth of the release within 0.5 % of harmonic balance (HB is
-    within 0.15 % of the exact backbone there), and over four noisy trials (1 %) the bias of
-    every amplitude band within the target. Read off the band signals, the first points lay
-    up to 1.0 % off on the clean records and the softening row's top band 0.65 % off."""
+    17 Hz mode released from 1 mm, its frequency 14 % higher or 6 % lower there; viscous, or
+    with the wet beam's fluid damping): on the clean record every point above a tenth of the
+    release within 0.5 % of harmonic balance (HB is within 0.15 % of the exact backbone
+    there), and over four noisy trials (1 %) the bias of every amplitude band within the
+    target. Read off the band signals, the first points lay up to 1.0 % off on the clean
+    records and the softening row's top band 0.65 % off."""
     case = next(c for c in other_cases() if c.name.startswith(name))
     amplitude, frequency = chain_backbone(case, clean_record(case))
     error = 100.0 * (frequency / harmonic_balance_hz(case.truth, case.mass, amplitude) - 1.0)
     large = amplitude > 0.1 * case.truth.x0
-    assert amplitude.max() > 0.75 * case.truth.x0
+    assert amplitude.max() > 0.4 * case.truth.x0
     assert np.max(np.abs(error[large])) < 0.5, error[large]
     ours = [run_trial((case, seed))[0] for seed in range(4)]
     bias = Row(case, ours, []).backbone_bias()
