@@ -168,6 +168,23 @@ def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, 
     return entry
 
 
+def _off_the_law(entry: dict[str, Any], law: dict[str, Any], method: str) -> str:
+    """A sentence when the C_i or C_f of ``method`` (``entry``) lies outside the 95 % interval
+    of the damping-law fit to the same mode's extrema (``law``, :func:`_law_entry`), else ""."""
+    off = [name for name, key in (("C_i", "c_i"), ("C_f", "c_f"))
+           if not law[f"{key}_ci95"][0] <= entry[key] <= law[f"{key}_ci95"][1]]
+    if not off:
+        return ""
+    words = " and ".join(f"{name} = {entry[key]:.4g} (the law fit's: {law[key]:.4g}, 95 %: "
+                         f"{law[f'{key}_ci95'][0]:.4g} to {law[f'{key}_ci95'][1]:.4g})"
+                         for name, key in (("C_i", "c_i"), ("C_f", "c_f")) if name in off)
+    return (f"the {method} method gives {words}, outside the interval of the damping law "
+            "fitted to the same extrema (method 'law', the one the validation matrix "
+            "holds to its targets): a fit to damping ratios measured over whole periods leans "
+            "where the damping changes within a period (a large fluid share), and its "
+            "interval takes them as independent")
+
+
 def _law_entry_of(fit: Any, delta_aicc: float, mass: float, scale: float, level: float,
                   preferred: bool, omega: float) -> dict[str, Any]:
     """One law's entry of ``laws``: its AICc gap, parameters and standard errors (measured
@@ -304,7 +321,24 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> DampingCoefficients
         scale, conventions[k] = amplitude_convention(context, params, f_hz)
         return scale
 
+    found = context.result(Components)
+    ident = found.identification if found is not None else None
+
     def work(c):
+        # A bands component has the damping-law fit too: the method's numbers are held to it.
+        entry = fitted(c)
+        if ident is not None and c.index < len(ident.modes):
+            mode = ident.modes[c.index]
+            scale, _ = amplitude_convention(context, params, mode.frequency_hz)
+            try:
+                law = _law_entry(mode, mass, scale, params["confidence"])
+            except AnalysisError:
+                return entry            # (a law fit that pins nothing down holds nothing)
+            if said := _off_the_law(entry, law, params["method"]):
+                entry["warnings"] = [said]
+        return entry
+
+    def fitted(c):
         with guarded(plugin, context):
             if params["method"] == "envelope":
                 t, a, f, decay, decays = trusted_peaks(c, defaults, context)

@@ -12,7 +12,7 @@ import pytest
 from test_analysis_plugins import run
 
 from fsi_lab.contract import ChannelData
-from validation.cases import clean_record, sdof_grid
+from validation.cases import clean_record, sdof_grid, trial
 
 
 def law_zeta(mode, mass: float, amplitude: np.ndarray, frequency: np.ndarray) -> np.ndarray:
@@ -38,3 +38,25 @@ def test_the_damping_curve_of_a_release_follows_the_law_from_its_first_period(x0
     large = amplitude > 0.1 * case.truth.x0
     assert large.sum() >= 6
     assert np.max(np.abs(error[large])) < 0.03, error[large]
+
+
+def test_the_papers_regression_is_held_to_the_law_fit_of_the_same_extrema():
+    """The paper's regression of C_q against amplitude on the 2 mm release (0.1 % noise): its
+    C_i reads about 4 % high with an interval of +-1 % (damping ratios over whole periods of a
+    decay whose damping halves within one); it carries a warning that names the law fit's
+    numbers, which the law method's own entry does not."""
+    case = next(c for c in sdof_grid() if c.name.endswith("0.1 %, 10000 Hz, 6 s, x0 2 mm"))
+    channel = ChannelData("tip", trial(case, 0), case.fs, "velocity", "m/s")
+    entries = {}
+    for method in ("regression", "law"):
+        _, summary = run({"tip": channel}, ("hvd", "damping", "equivalent-damping"),
+                         mass_per_length=case.mass,
+                         params={"equivalent-damping": {"method": method}})
+        entries[method] = summary["tip"]["components"][0]
+    regression = entries["regression"]["equivalent_damping"]
+    assert not regression["c_i_ci95"][0] <= case.truth.c_i <= regression["c_i_ci95"][1]
+    (said,) = regression["warnings"]
+    assert said.startswith("the regression method gives C_i = ")
+    law = entries["law"]["equivalent_damping"]
+    assert f"the law fit's: {law['c_i']:.4g}" in said
+    assert "warnings" not in law and not entries["law"]["warnings"]
