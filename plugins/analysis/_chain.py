@@ -274,10 +274,10 @@ def identified_decays(mode: ModeIdentification, c: Component, times: np.ndarray,
     start, with their ``amplitude``) and the free decays, as :func:`decay_labels` gives them
     for a component's own points: each free decay identify measured
     (:attr:`fsi_lab.dsp.identify.ModeIdentification.measured_decays`) split again where its
-    extrema rise as after a new excitation (identify splits where the record's swings rise twice
-    over: a smaller impulse into a decay still ringing shows in a mode's band alone), but with
-    no margin at the record's ends: identify's extrema are corrected for the band filter's
-    smear there."""
+    extrema rise as after a new excitation (identify splits the record where its largest
+    swings rise twice over; a small impulse into a decay still ringing can rise less there than
+    in the mode's extrema), but with no margin at the record's ends: identify's extrema are
+    corrected for the band filter's smear there."""
     spans = sorted((float(d.times[0]), float(d.times[-1])) for d in mode.measured_decays
                    if d.times.size)
     labels = np.full(times.size, -1, dtype=np.int64)

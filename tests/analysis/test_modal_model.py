@@ -232,18 +232,17 @@ def test_identified_damping_is_taken_from_equivalent_damping():
     # filter's smear corrected: they follow each other at the same amplitudes (the band
     # signal's first damping ratios alternate by 10 % or more about the corrected ones)
     mm_sets = groups["tip/modal-model"]["datasets"]
-    for mine, theirs, tolerance in (("backbone", "backbone", 5e-3), ("damping", "damping", 0.05)):
-        quantity = "frequency" if mine == "backbone" else "zeta"
-        amp, value = (mm_sets[f"{mine}_{k}_measured"][0] for k in ("amplitude", quantity))
-        curve = groups[f"tip/{theirs}"]["datasets"]
+    for name, quantity, tolerance in (("backbone", "frequency", 5e-3), ("damping", "zeta", 0.05)):
+        amp, value = (mm_sets[f"{name}_{k}_measured"][0] for k in ("amplitude", quantity))
+        curve = groups[f"tip/{name}"]["datasets"]
         drawn = np.isfinite(curve["amplitude"][0])
         plugin_a, plugin_v = curve["amplitude"][0][drawn], curve[quantity][0][drawn]
         order = np.argsort(plugin_a)
         inside = np.isfinite(amp) & np.isfinite(value) & (amp >= plugin_a.min()) \
             & (amp <= plugin_a.max())
-        assert inside.sum() > 20, mine
+        assert inside.sum() > 20, name
         expected = np.interp(amp[inside], plugin_a[order], plugin_v[order])
-        assert np.median(np.abs(value[inside] / expected - 1)) < tolerance, mine
+        assert np.median(np.abs(value[inside] / expected - 1)) < tolerance, name
     # the identification is close to the truth, so the model is close to the measurement
     assert ed["c_i"] == pytest.approx(PAPER_WET_C_I, rel=0.05)
     assert mm["envelope_rms_error"] < 0.05, mm
