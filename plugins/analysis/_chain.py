@@ -282,14 +282,13 @@ def identified_decays(mode: ModeIdentification, c: Component, times: np.ndarray,
                    if d.times.size)
     labels = np.full(times.size, -1, dtype=np.int64)
     later = 4.0 / c.frequency if c.frequency else 0.0
-    guard = max(2.0 * later, 1.0 / c.frequency if c.frequency else 0.0)
     parts, count = [], 0
     for lo, hi in spans:
         inside = np.flatnonzero((times >= lo) & (times <= hi))
         if inside.size < 2:
             continue
         split = split_decays(times[inside], amplitude[inside], later_settle=later,
-                             first_build_up=False, guard=guard)
+                             first_build_up=False, guard=2.0 * later)
         own = split.labels(times[inside])
         labels[inside] = np.where(own >= 0, own + count, -1)
         count += split.count

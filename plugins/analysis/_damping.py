@@ -44,9 +44,9 @@ def identified_peaks(mode: ModeIdentification, c: Component):
     displacement amplitudes (m) at the backbone's frequency there. Read off the band signal
     itself, a release's first damping ratios alternated 10 to 15 % about the truth, and the
     curve began a period after the release."""
-    decays = mode.measured_decays
-    times = np.concatenate([d.times for d in decays]) if decays else np.empty(0)
-    amp = np.concatenate([d.amplitude for d in decays]) if decays else np.empty(0)
+    measured = mode.measured_decays
+    times = np.concatenate([d.times for d in measured]) if measured else np.empty(0)
+    amp = np.concatenate([d.amplitude for d in measured]) if measured else np.empty(0)
     bb = mode.backbone
     freq = np.interp(times, bb.times, bb.frequency) if bb.times.size \
         else np.full(times.size, mode.damped_frequency_hz)
