@@ -1810,6 +1810,9 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
         # freely, one traded itself against the damping (C_f +84 %) for no better fit.
         average = max(1, int(2.0 * math.pi * fs / (JOINT_SAMPLES_PER_CYCLE
                                                    * max(m.w0 for m in group))))
+        # (a block mean holds the white noise of a sample over sqrt(average))
+        scale = max(sigma / math.sqrt(average),
+                    PRECISION * max(float(np.max(np.abs(target[a:b]))) for a, b in spans))
         fits = {}
         failure = ""
         for guess, free in (([dataclasses.replace(g, alpha=0.0) for g in guesses], False),
@@ -1817,7 +1820,8 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
             try:
                 fits[free] = fit_decays_jointly(target, fs, spans, guess, quantity=follow,
                                                 output=quantity, stiffness=free,
-                                                average=average)
+                                                average=average,
+                                                target_rms=JOINT_RESIDUAL * scale)
             except AnalysisError as exc:
                 failure = str(exc)
         if len(fits) == 2:
@@ -1829,9 +1833,6 @@ def _joint(modes: list[_Mode], windows: list[tuple[int, int, int]], bands: ModeB
             notes.append(f"the modes at {names} lie close together; fitting them together to "
                          f"the record's samples failed ({failure}): their band fits are kept")
             continue
-        # (a block mean holds the white noise of a sample over sqrt(average))
-        scale = max(sigma / math.sqrt(average),
-                    PRECISION * max(float(np.max(np.abs(target[a:b]))) for a, b in spans))
         ratio = found.residual_rms / scale
         usable = found.converged and ratio <= JOINT_RESIDUAL and all(
             np.all(np.isfinite(c)) for c in found.cov) and np.all(np.isfinite(found.w0))
