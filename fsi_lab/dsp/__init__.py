@@ -32,4 +32,7 @@ modal_fit
 crest
     The in-phase third harmonic of a decay's largest half cycles: a measuring chain that
     reads them low.
+coupling
+    A high-pass in the measuring chain (an AC coupling) read off a release at the start of a
+    velocity record.
 """

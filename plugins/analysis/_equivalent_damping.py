@@ -10,6 +10,7 @@ import numpy as np
 
 from fsi_lab.contract import AnalysisContext
 from fsi_lab.dsp.components import BandComponents
+from fsi_lab.dsp.coupling import release_shift
 from fsi_lab.dsp.damping import damping_decrement
 from fsi_lab.dsp.equivalent_damping import (
     equivalent_coefficient,
@@ -122,6 +123,52 @@ def _coordinate(context: AnalysisContext, params: dict[str, Any], f_hz: float
                               f"W_{found[1]}(x_meas) = {found[0]:.6g} (Eq. 15, int W^2 = L)")
         return 1.0, "measured (no beam model available for the modal conversion)"
     return 1.0, "measured (displacement amplitude at the measuring point)"
+
+
+#: A release whose mean displacement keeps less than this share of what it let go is read as
+#: seen through a high-pass (:func:`fsi_lab.dsp.coupling.release_shift`; a DC-coupled one keeps
+#: about all of it).
+RELEASE_KEPT = 0.5
+#: ... and the components whose C_f that high-pass would raise by more than this are warned.
+COUPLING_BIAS = 0.005
+
+
+def coupling_warnings(context: AnalysisContext, params: dict[str, Any]) -> dict[int, str]:
+    """Per component, a sentence when the channel's record starts with a release whose mean
+    displacement returns to where it started, as behind a high-pass in the measuring chain
+    (:mod:`fsi_lab.dsp.coupling`), and that high-pass would raise the component's C_f by more
+    than :data:`COUPLING_BIAS`. None is looked for when the chain's high-pass is given
+    (``highpass_hz``), the channel is not a velocity, or the components are of the motion
+    relative to a base (whose integration has a high-pass of its own)."""
+    found = context.result(Components)
+    ident = found.identification if found is not None else None
+    ch = context.channel
+    if ident is None or not ident.modes or params.get("highpass_hz") is not None \
+            or found.relative_to or ch.quantity != "velocity":
+        return {}
+    lowest = min(m.frequency_hz for m in ident.modes)
+    shift = release_shift(np.asarray(ch.data, dtype=np.float64), float(ch.sample_rate), lowest,
+                          max(float(ident.noise_rms), 1e-300))
+    if shift is None or shift.ratio >= RELEASE_KEPT:
+        return {}
+    out = {}
+    for k, mode in enumerate(ident.modes):
+        gain = shift.gain(mode.frequency_hz)
+        if 1.0 / gain - 1.0 <= COUPLING_BIAS:
+            continue
+        out[k] = (
+            f"the record's mean displacement returns to where it was before the release at "
+            f"{shift.start / float(ch.sample_rate) + float(ch.t0):.4g} s (it keeps "
+            f"{100 * shift.ratio:.0f} % of the displacement the release let go, where a "
+            "DC-coupled record keeps all of it): a high-pass in the measuring chain does this "
+            "(an AC-coupled channel, a sensor's or decoder's high-pass), here with a corner of "
+            f"about {shift.corner_hz:.2g} Hz (first order), which reads this mode's amplitudes "
+            f"up to {100 * (1 - gain):.1f} % low and C_f up to {100 * (1 / gain - 1):.1f} % high "
+            "(C_i and the frequency are hardly affected); if the channel is AC-coupled, give "
+            "its corner (--set analysis.equivalent-damping.highpass_hz=HZ, and highpass_order) "
+            "and C_f is corrected; an excitation that leaves no net impulse, rather than a "
+            "release, moves the mean as little")
+    return out
 
 
 def _law_entry(mode: Any, mass: float, scale: float, level: float) -> dict[str, Any]:
@@ -265,14 +312,17 @@ def _run_law(context: AnalysisContext, params: dict[str, Any], mass: float, mass
         return {**entry, "amplitude": amplitude, "c_q": c_q}
 
     done, errors = per_component(plugin, context, comps, work)
-    return _result(done, errors, conventions, len(comps), mass, mass_source, params)
+    return _result(done, errors, conventions, len(comps), mass, mass_source, params,
+                   coupling=coupling_warnings(context, params))
 
 
 def _result(done: dict[int, dict], errors: dict[int, str], conventions: dict[int, str],
             count: int, mass: float, mass_source: str, params: dict[str, Any],
-            warning: str | None = None) -> DampingCoefficients:
+            warning: str | None = None, coupling: dict[int, str] | None = None
+            ) -> DampingCoefficients:
     """The plugin's result from per-component entries (the summary's items, with ``amplitude``
-    and ``c_q`` arrays for the datasets)."""
+    and ``c_q`` arrays for the datasets); ``coupling``: per component, a warning of a
+    high-pass in the measuring chain (:func:`coupling_warnings`)."""
     fits = {k: CoefficientFit(c_i=float(r["c_i"]), c_f=float(r["c_f"]),
                               amplitude=np.asarray(r["amplitude"], dtype=np.float64),
                               c_q=np.asarray(r["c_q"], dtype=np.float64),
@@ -282,7 +332,9 @@ def _result(done: dict[int, dict], errors: dict[int, str], conventions: dict[int
     return DampingCoefficients(fits=fits, mass_per_length=mass, mass_source=mass_source,
                                method=params["method"], weighting=params["weighting"],
                                confidence=params["confidence"], conventions=conventions,
-                               count=count, warning=warning, errors=errors)
+                               count=count, warning=warning, errors=errors,
+                               component_warnings={k: [w] for k, w in (coupling or {}).items()
+                                                   if k in fits})
 
 
 def run(context: AnalysisContext, params: dict[str, Any]) -> DampingCoefficients:
@@ -365,4 +417,5 @@ def run(context: AnalysisContext, params: dict[str, Any]) -> DampingCoefficients
                     "damping_method": curve.method}
 
     done, errors = per_component(plugin, context, disp, work)
-    return _result(done, errors, conventions, len(disp), mass, mass_source, params, fallback)
+    return _result(done, errors, conventions, len(disp), mass, mass_source, params, fallback,
+                   coupling=coupling_warnings(context, params))

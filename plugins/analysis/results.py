@@ -568,6 +568,9 @@ class DampingCoefficients(Result):
         Said of every component (the method fell back to another), or None.
     errors
         Components without coefficients, with the reason.
+    component_warnings
+        Sentences said of one component's coefficients (a high-pass in the measuring chain
+        seen in the record), by index.
     """
 
     kind = "damping-coefficients"
@@ -582,6 +585,7 @@ class DampingCoefficients(Result):
     count: int
     warning: str | None = None
     errors: dict[int, str] = field(default_factory=dict)
+    component_warnings: dict[int, list[str]] = field(default_factory=dict)
 
     def record(self) -> AnalysisResult:
         done = self.fits
@@ -590,7 +594,9 @@ class DampingCoefficients(Result):
             summary = fit.summary()
             summary.update(mass_per_length=self.mass_per_length, method=self.method,
                            amplitude_convention=self.conventions.get(k, "measured"))
-            entries.append({"index": k, "equivalent_damping": summary})
+            entries.append({"index": k, "equivalent_damping": summary,
+                            **({"warnings": list(self.component_warnings[k])}
+                               if self.component_warnings.get(k) else {})})
         err_entries, err_attrs = error_entries(self.errors, "equivalent_damping")
         attrs = {"mass_per_length": self.mass_per_length,
                  "mass_per_length_source": self.mass_source, "method": self.method,
