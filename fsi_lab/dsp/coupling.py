@@ -41,6 +41,9 @@ RELEASE_RISE = 0.125
 #: damping and a high-pass lead it by; a pulse as long as half a period and more, which drives
 #: the motion through its first swing, puts it later).
 RELEASE_PEAK = 0.28
+#: ... and identify's first free decay starts within this many periods of it (a burst of
+#: forcing that starts like a release is still forced much later).
+RELEASE_FORCED = 3.0
 #: ... and the velocity where the motion starts is below this share of that extremum.
 RELEASE_START = 0.25
 #: ... and the integrated velocity's mean over the first period lies at least this share of
@@ -52,10 +55,19 @@ RELEASE_SIDE = 0.2
 #: Below this ``ratio`` the time constant is read from the first period instead (the noise
 #: in the shift's measure then weighs more than the relaxation left in it).
 RATIO_RESOLVED = 0.05
-#: Share of the record at its end whose mean gives the velocity offset, when it is quiet.
+#: Share of the record at its end whose mean (over whole periods) gives the velocity offset,
+#: when it is quiet.
 TAIL_SHARE = 0.1
-#: A tail is quiet when its standard deviation is below this share of the first extremum.
-QUIET_TAIL = 0.02
+#: A tail is quiet when its standard deviation is below this share of the first extremum (a
+#: decay's remainder of that size, averaged over whole periods, moves the offset by at most
+#: a tenth of it over the number of periods).
+QUIET_TAIL = 0.1
+#: The mean displacement after :data:`SHIFT_PERIODS` is measured over spans of this many
+#: periods (at most :data:`LEVEL_SPANS` of them); a release is no measure when their means
+#: spread over more than :data:`LEVEL_WANDER` of its swing.
+SPAN_PERIODS = 4
+LEVEL_SPANS = 10
+LEVEL_WANDER = 0.3
 #: Noise multiples above which the motion is taken to have started.
 START_LEVEL = 5.0
 #: A record's first period is still when its standard deviation is under this many times
@@ -125,8 +137,8 @@ def _corner(share: float, span: tuple[float, float], frequency: float) -> float:
     return frequency / (2.0 * math.pi * math.sqrt(low * high))
 
 
-def release_shift(v: np.ndarray, fs: float, frequency: float, noise: float
-                  ) -> ReleaseShift | None:
+def release_shift(v: np.ndarray, fs: float, frequency: float, noise: float,
+                  free: int | None = None) -> ReleaseShift | None:
     """Measure how far a velocity record's mean displacement stays from a release at its start.
 
     Parameters
@@ -139,13 +151,18 @@ def release_shift(v: np.ndarray, fs: float, frequency: float, noise: float
         The lowest mode's frequency, Hz: the period the release is judged on.
     noise
         The record's white noise RMS, U/s: the level above which the motion has started.
+    free
+        Sample index where the record's first free decay starts (as
+        :func:`fsi_lab.dsp.identify.identify` finds it), or None: a motion still forced more
+        than :data:`RELEASE_FORCED` periods after it started is no release.
 
     Returns
     -------
     ReleaseShift or None
         None when the record does not start with a release followed by
-        :data:`SHIFT_PERIODS` periods, or its velocity offset cannot be measured (no still
-        period before the release, no quiet tail).
+        :data:`SHIFT_PERIODS` periods, its velocity offset cannot be measured (no still
+        period before the release, no quiet tail), or its mean displacement wanders after the
+        release (a drift, not a step that relaxes).
 
     Raises
     ------
@@ -155,20 +172,22 @@ def release_shift(v: np.ndarray, fs: float, frequency: float, noise: float
 
     Examples
     --------
-    A 3 Hz decay released at the record's start, through a 2 Hz first-order high-pass:
+    A 5 Hz decay released at the record's start, as recorded and through a 1 Hz first-order
+    high-pass (an AC coupling that reads its amplitudes 2 % low):
 
     >>> import numpy as np, scipy.signal
     >>> from fsi_lab.dsp.coupling import release_shift
     >>> from fsi_lab.dsp.laws import simulate_decay
-    >>> fs, w0 = 2000.0, 2 * np.pi * 3.0
+    >>> fs, w0 = 2000.0, 2 * np.pi * 5.0
     >>> t = np.arange(int(20 * fs)) / fs
-    >>> v = simulate_decay("quadratic", [0.4, 0.0], w0, 1e-3, 0.0, t,
+    >>> v = simulate_decay("quadratic", [0.3, 50.0], w0, 1e-3, 0.0, t,
     ...                    quantity="displacement", output="velocity")
-    >>> print(round(release_shift(v, fs, 3.0, 1e-7).ratio, 2))
-    0.95
-    >>> b, a = scipy.signal.butter(1, 2.0, "highpass", fs=fs)
-    >>> print(round(release_shift(scipy.signal.lfilter(b, a, v), fs, 3.0, 1e-7).ratio, 2))
-    0.0
+    >>> print(round(release_shift(v, fs, 5.0, 1e-7).ratio, 2))
+    1.05
+    >>> b, a = scipy.signal.butter(1, 1.0, "highpass", fs=fs)
+    >>> found = release_shift(scipy.signal.lfilter(b, a, v), fs, 5.0, 1e-7)
+    >>> print(f"{found.ratio:.2f}, corner {found.corner_hz:.2f} Hz, gain {found.gain(5.0):.3f}")
+    0.02, corner 1.03 Hz, gain 0.979
     """
     func = "release_shift"
     fs = check_rate(fs, func)
@@ -195,12 +214,14 @@ def release_shift(v: np.ndarray, fs: float, frequency: float, noise: float
     peak = int(np.argmax(np.abs(first)))
     top = float(abs(first[peak]))
     if not RELEASE_RISE * period <= peak <= RELEASE_PEAK * period \
-            or abs(float(first[0])) > RELEASE_START * top:
+            or abs(float(first[0])) > RELEASE_START * top \
+            or (free is not None and free - start > RELEASE_FORCED * period):
         return None
     if still:
         offset = float(np.mean(v[:start]))
     else:
-        tail = v[-max(period, int(TAIL_SHARE * v.size)):]
+        # (whole periods of the lowest mode: what is left of the decay there averages out)
+        tail = v[-max(1, int(TAIL_SHARE * v.size) // period) * period:]
         if tail.size + end > v.size or float(np.std(tail)) > QUIET_TAIL * top:
             return None
         offset = float(np.mean(tail))
@@ -218,6 +239,15 @@ def release_shift(v: np.ndarray, fs: float, frequency: float, noise: float
     a, b = (int(round(p * period)) for p in SHIFT_PERIODS)
     shift = float(np.mean(moved[a:b]))
     ratio = abs(shift) / swing
+    # After the release has relaxed (DC-coupled: at once; behind a high-pass that matters,
+    # within a few periods) the mean stays put; a mean that wanders, as under a drift of
+    # the velocity's offset, measures nothing.
+    span = SPAN_PERIODS * period
+    later = np.cumsum(v[start:start + b + LEVEL_SPANS * span] - offset)[b:] / fs
+    if later.size >= 2 * span:
+        means = later[:later.size // span * span].reshape(-1, span).mean(axis=1)
+        if float(np.ptp(means)) > LEVEL_WANDER * swing:
+            return None
     corner = _corner(ratio, SHIFT_PERIODS, frequency) if ratio >= RATIO_RESOLVED \
         else _corner(first_share, (0.0, 1.0), frequency)
     return ReleaseShift(start=start, displacement=swing, shift=shift, ratio=ratio,

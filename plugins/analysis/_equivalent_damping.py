@@ -148,7 +148,7 @@ def coupling_warnings(context: AnalysisContext, params: dict[str, Any]) -> dict[
         return {}
     lowest = min(m.frequency_hz for m in ident.modes)
     shift = release_shift(np.asarray(ch.data, dtype=np.float64), float(ch.sample_rate), lowest,
-                          max(float(ident.noise_rms), 1e-300))
+                          max(float(ident.noise_rms), 1e-300), free=ident.free_windows[0][1])
     if shift is None or shift.ratio >= RELEASE_KEPT:
         return {}
     out = {}

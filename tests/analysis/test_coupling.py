@@ -88,6 +88,25 @@ def test_a_pulse_from_rest_is_no_release(width):
     assert release_shift(_noisy(v, 0.003), fs, f, 0.003 * float(np.max(np.abs(v)))) is None
 
 
+def test_a_wandering_mean_or_a_forced_start_gives_no_measure():
+    """A release recorded from its start beside a slow wander of the velocity's offset (0.3
+    Hz, 5 % of the peak: its displacement outgrows the release's, and read as a relaxation it
+    would be a 0.44 Hz high-pass) gives no measure, nor a release whose first free decay
+    (identify's) starts more than three periods after the motion did; without the wander,
+    and with the free decay a period in, the same release is measured."""
+    frequency = 7.5
+    v = _release(frequency, 20.0)
+    peak = float(np.max(np.abs(v)))
+    t = np.arange(v.size) / FS
+    noise = 0.005 * peak
+    plain = _noisy(v, 0.005, seed=2)
+    found = release_shift(plain, FS, frequency, noise, free=int(FS / frequency))
+    assert found is not None and found.ratio > 0.9
+    wander = plain + 0.05 * peak * np.sin(2 * np.pi * 0.3 * t)
+    assert release_shift(wander, FS, frequency, noise) is None
+    assert release_shift(plain, FS, frequency, noise, free=int(4 * FS / frequency)) is None
+
+
 def test_bad_input_is_refused_naming_what_is_expected():
     v = _release(5.0, 2.0)
     with pytest.raises(AnalysisError, match="release_shift: frequency"):
