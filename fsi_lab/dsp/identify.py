@@ -234,6 +234,17 @@ FIRST_FLOOR = 3.0
 POOR_PRECISION = 0.15
 #: A cubic stiffness is fitted only when it moves the frequency by this share or more.
 STIFFNESS_SHIFT = 2e-3
+#: The natural frequency is held to the backbone measured at the decays' smallest amplitudes
+#: (this share of the crossings, in at least BACKBONE_FOOT_BLOCKS blocks of
+#: BACKBONE_FOOT_BLOCK): a difference beyond BACKBONE_FOOT_Z standard errors and the
+#: validation's 0.2 % target is warned.
+BACKBONE_FOOT_SHARE, BACKBONE_FOOT_BLOCKS, BACKBONE_FOOT_BLOCK, BACKBONE_FOOT_Z = 0.5, 4, 8, 3.0
+FREQUENCY_TARGET = 0.002
+#: ... and its step's value lies this many standard errors from 0: 5 alone, 2 when the
+#: measured half periods themselves move with amplitude that way, beyond 5 of theirs, by
+#: STIFFNESS_SEEN or more (the damping moves a damped frequency too, by up to 2 % at a
+#: damping ratio of 10 %).
+STIFFNESS_Z, STIFFNESS_Z_SEEN, STIFFNESS_SEEN = 5.0, 2.0, 0.04
 #: Dropouts filled (:func:`_dropouts_filled`): those up to this many periods of the record's
 #: dominant oscillation (a longer gap is beyond prediction).
 DROPOUT_PERIODS = 1.0
@@ -486,7 +497,11 @@ class ModeIdentification:
         that share (:func:`_extrema_scatter`);
         ``frequency_wander``, ``frequency_low``, ``frequency_high``: when the early, middle
         and late cycles' frequencies disagree, the factor the frequency's standard error was
-        widened by and the lowest and highest of them, Hz (:func:`_frequency_wander`). A
+        widened by and the lowest and highest of them, Hz (:func:`_frequency_wander`);
+        ``foot_difference``, ``foot_se``, ``foot_amplitude``, ``foot_frequency``: the
+        backbone measured at the decays' smallest amplitudes against the fitted model's
+        there, relative, its standard error, the largest amplitude among them and their
+        mean frequency, Hz (:func:`_backbone_foot`). A
         mode fitted with its close neighbours to the record's samples (:func:`_take_joint`)
         has instead ``joint_modes``, ``joint_residual`` (the fit's residual over the white noise),
         ``joint_r2`` (the share of the record's variance over the fitted spans that the fit
@@ -2164,7 +2179,7 @@ def _frequency_step(mode: _Mode, quantity: str, seed: bool = False) -> None:
         # ... and only when the measured frequencies themselves move that way with amplitude
         # (a model with a misfitting damping law can ask for a stiffness the data do not show)
         halves = [h for h in (_half_periods(d) for _, d in pairs) if h is not None]
-        visible, seeded = False, 0.0
+        visible, seeded, seen = False, 0.0, 0.0
         if halves:
             p_data = np.concatenate([h[0] for h in halves])
             amp = np.concatenate([h[2] for h in halves])
@@ -2175,7 +2190,12 @@ def _frequency_step(mode: _Mode, quantity: str, seed: bool = False) -> None:
                 visible = resolved and seen * shift > 0 and abs(seen) >= 0.5 * abs(shift)
                 if resolved and abs(seen) >= STIFFNESS_SHIFT:
                     seeded = seen * mode.w0 ** 2 / (0.375 * float(np.max(x_amp)) ** 2)
-        if abs(alpha_new) <= 5.0 * se_alpha or abs(shift) < STIFFNESS_SHIFT or not visible:
+        # (visible: the half periods' own stiffening is resolved and agrees; where it is
+        # large, the step's crossings, whitened and widened for their correlation, may
+        # resolve it less: on a 10 % softening decay 4.5 standard errors, and the stiffness
+        # left out read the linear frequency 2 % low)
+        z = STIFFNESS_Z_SEEN if visible and abs(seen) >= STIFFNESS_SEEN else STIFFNESS_Z
+        if abs(alpha_new) <= z * se_alpha or abs(shift) < STIFFNESS_SHIFT or not visible:
             # The model's stiffness left out: the frequency's step is taken with its removal's
             # effect on the crossings (to first order) taken off them.
             r = r + jac[:, 1] * (mode.alpha * top)
@@ -2285,6 +2305,32 @@ def _backbone(mode: _Mode, quantity: str) -> Backbone:
         return Backbone(empty, empty, empty, np.empty(0, dtype=np.int64))
     return Backbone(np.concatenate(times), np.concatenate(freq), np.concatenate(amp),
                     np.concatenate(decay))
+
+
+def _backbone_foot(bb: Backbone, w0: float, alpha: float, damped: float
+                   ) -> tuple[float, float, float, float] | None:
+    """The measured backbone's frequencies at the decays' smallest amplitudes (the lowest
+    :data:`BACKBONE_FOOT_SHARE` of its crossings) against the fitted model's there (the
+    linear angular frequency ``w0``, rad/s, with the cubic stiffness ``alpha`` by harmonic
+    balance, times ``damped``: the damped over the undamped frequency): their mean relative
+    difference, its standard error, the largest amplitude among them (m, or the record's
+    unit) and their mean frequency (Hz); None with fewer than :data:`BACKBONE_FOOT_BLOCKS`
+    blocks of them."""
+    n = int(BACKBONE_FOOT_SHARE * bb.amplitude.size)
+    if n < BACKBONE_FOOT_BLOCKS * BACKBONE_FOOT_BLOCK:
+        return None
+    # In time order (one decay's end after another's): a crossing's error enters two
+    # frequencies two apart with opposite signs, so their mean's error is that of the first
+    # and last crossings; the standard error from the scatter of block means, not of points.
+    low = np.sort(np.argsort(bb.amplitude, kind="stable")[:n])
+    amp, freq = bb.amplitude[low], bb.frequency[low]
+    model = (w0 / (2.0 * math.pi)) * damped * np.sqrt(
+        np.maximum(1.0 + 0.75 * alpha * amp ** 2 / w0 ** 2, 1e-12))
+    diff = freq / model - 1.0
+    blocks = diff[:n // BACKBONE_FOOT_BLOCK * BACKBONE_FOOT_BLOCK].reshape(
+        -1, BACKBONE_FOOT_BLOCK).mean(axis=1)
+    se = float(np.std(blocks, ddof=1)) / math.sqrt(blocks.size)
+    return float(np.mean(diff)), se, float(np.max(amp)), float(np.mean(freq))
 
 
 def _decay_extrema(d: dict, windows: list[tuple[int, int, int]]) -> DecayExtrema:
@@ -2854,6 +2900,17 @@ def _warnings(m: ModeIdentification) -> list[str]:
     off = _off_peak(m)
     if off:
         out.append(off)
+    foot = m.start_drift.get("foot_difference")
+    if foot is not None and abs(foot) > max(FREQUENCY_TARGET,
+                                            BACKBONE_FOOT_Z * m.start_drift["foot_se"]):
+        out.append(f"the natural frequency ({m.frequency_hz:.5g} Hz, the fitted model's at zero "
+                   f"amplitude) and the backbone measured at the decays' smallest amplitudes "
+                   f"({m.start_drift['foot_frequency']:.5g} Hz on average, amplitudes up to "
+                   f"{m.start_drift['foot_amplitude']:.3g}) differ by {100 * foot:+.2f} % "
+                   "against the model there, beyond their noise: the fitted stiffness does not "
+                   "describe the backbone over its whole range (a strong softening or "
+                   "hardening, a stiffness that is not cubic); read the small-amplitude "
+                   "frequency off the backbone's low end")
     wander = m.start_drift.get("frequency_wander")
     if wander is not None:
         low, high = m.start_drift["frequency_low"], m.start_drift["frequency_high"]
@@ -3301,6 +3358,10 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
         mode.drift.update(_crest(mode, crest_modes, windows, bands, record, fs, follow,
                                  quantity))
         f0, f0_ci, fd = _natural_frequency(mode)
+        foot = _backbone_foot(bb, mode.w0, mode.alpha, fd / f0)
+        if foot is not None:
+            mode.drift.update(zip(("foot_difference", "foot_se", "foot_amplitude",
+                                   "foot_frequency"), foot))
         comparison = compare_laws([mode.fits[law] for law in laws])
         # A joint fit's residual is judged on the record's samples (JOINT_RESIDUAL), not on
         # the band extrema it does not use.
