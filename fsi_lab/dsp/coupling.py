@@ -18,7 +18,7 @@ extremum a quarter period later or a little less, the first swing starting at on
 pulse from rest starts it at its middle, and moves the mean by nothing on any channel) and a
 velocity offset that can be measured where the record is still (before the release) or quiet
 (after the decay). Behind a high-pass whose corner is close to the mode's frequency (time
-constant under a quarter period) a release's first swing starts at its middle too: that
+constant under a fifth of a period) a release's first swing starts near its middle too: that
 release cannot be told from a pulse, and is not flagged. An excitation that leaves no net
 impulse can look like a release behind a high-pass; the warning built on it says so.
 """
@@ -59,8 +59,8 @@ RATIO_RESOLVED = 0.05
 #: when it is quiet.
 TAIL_SHARE = 0.1
 #: A tail is quiet when its standard deviation is below this share of the first extremum (a
-#: decay's remainder of that size, averaged over whole periods, moves the offset by at most
-#: a tenth of it over the number of periods).
+#: decay's remainder of amplitude A, averaged over N whole periods, moves the offset by about
+#: A / (pi N) at most).
 QUIET_TAIL = 0.1
 #: The mean displacement after :data:`SHIFT_PERIODS` is measured over spans of this many
 #: periods (at most :data:`LEVEL_SPANS` of them); a release is no measure when their means

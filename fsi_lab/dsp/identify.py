@@ -242,8 +242,8 @@ BACKBONE_FOOT_SHARE, BACKBONE_FOOT_BLOCKS, BACKBONE_FOOT_BLOCK, BACKBONE_FOOT_Z 
 FREQUENCY_TARGET = 0.002
 #: ... and its step's value lies this many standard errors from 0: 5 alone, 2 when the
 #: measured half periods themselves move with amplitude that way, beyond 5 of theirs, by
-#: STIFFNESS_SEEN or more (the damping moves a damped frequency too, by up to 2 % at a
-#: damping ratio of 10 %).
+#: STIFFNESS_SEEN or more (heavy damping moves a damped frequency with amplitude too: 2.2 %
+#: over a 5 Hz decay with 9.5 % linear damping and the wet C_f, no stiffness in it).
 STIFFNESS_Z, STIFFNESS_Z_SEEN, STIFFNESS_SEEN = 5.0, 2.0, 0.04
 #: Dropouts filled (:func:`_dropouts_filled`): those up to this many periods of the record's
 #: dominant oscillation (a longer gap is beyond prediction).
@@ -2906,7 +2906,8 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.append(f"the natural frequency ({m.frequency_hz:.5g} Hz, the fitted model's at zero "
                    f"amplitude) and the backbone measured at the decays' smallest amplitudes "
                    f"({m.start_drift['foot_frequency']:.5g} Hz on average, amplitudes up to "
-                   f"{m.start_drift['foot_amplitude']:.3g}) differ by {100 * foot:+.2f} % "
+                   f"{m.start_drift['foot_amplitude']:.3g} in the record's unit of "
+                   f"displacement) differ by {100 * foot:+.2f} % "
                    "against the model there, beyond their noise: the fitted stiffness does not "
                    "describe the backbone over its whole range (a strong softening or "
                    "hardening, a stiffness that is not cubic); read the small-amplitude "
