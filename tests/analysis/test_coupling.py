@@ -64,7 +64,7 @@ def test_a_release_behind_a_high_pass_gives_back_its_corner(frequency, corner):
 
 def test_a_release_at_the_record_s_start_takes_its_offset_from_the_quiet_tail():
     """Recorded from the release on (no still part): the offset comes from the record's end,
-    where the decay has fallen under 2 % of its first extremum; a record that ends before
+    where the decay has fallen under a tenth of its first extremum; a record that ends before
     that gives no measure."""
     v = _highpassed(_release(5.0, 30.0), 1.0)
     noise = 0.003 * float(np.max(np.abs(v)))
