@@ -225,8 +225,11 @@ def release_shift(v: np.ndarray, fs: float, frequency: float, noise: float,
         if tail.size + end > v.size or float(np.std(tail)) > QUIET_TAIL * top:
             return None
         offset = float(np.mean(tail))
-    moved = np.cumsum(v[start:end] - offset) / fs
-    moved = np.concatenate(([0.0], moved[:-1]))          # the integral from the release on
+    # The integral from the release on, over the shift's periods and the spans after them.
+    a, b = (int(round(p * period)) for p in SHIFT_PERIODS)
+    span = SPAN_PERIODS * period
+    integral = np.cumsum(v[start:start + b + LEVEL_SPANS * span] - offset) / fs
+    moved = np.concatenate(([0.0], integral[:end - start - 1]))
     swing = 0.5 * float(np.ptp(moved[:period]))
     if swing <= 0.0:
         return None
@@ -236,14 +239,12 @@ def release_shift(v: np.ndarray, fs: float, frequency: float, noise: float,
     first_share = abs(float(np.mean(moved[:period]))) / swing
     if first_share < RELEASE_SIDE:
         return None
-    a, b = (int(round(p * period)) for p in SHIFT_PERIODS)
     shift = float(np.mean(moved[a:b]))
     ratio = abs(shift) / swing
     # After the release has relaxed (DC-coupled: at once; behind a high-pass that matters,
     # within a few periods) the mean stays put; a mean that wanders, as under a drift of
     # the velocity's offset, measures nothing.
-    span = SPAN_PERIODS * period
-    later = np.cumsum(v[start:start + b + LEVEL_SPANS * span] - offset)[b:] / fs
+    later = integral[b:]
     if later.size >= 2 * span:
         means = later[:later.size // span * span].reshape(-1, span).mean(axis=1)
         if float(np.ptp(means)) > LEVEL_WANDER * swing:
