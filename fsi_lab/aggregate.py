@@ -33,7 +33,7 @@ import numpy as np
 from fsi_lab import accuracy as method_accuracy
 from fsi_lab.aggregate_extract import ExtractTask, ModeExtract, RunExtract, extract_run
 from fsi_lab.errors import FsiLabError
-from fsi_lab.summary import fluid_power_words, interval_words
+from fsi_lab.summary import coefficient_words, fluid_power_words
 
 #: Modes of different runs closer than this (relative) to a group's median natural frequency
 #: are the same mode.
@@ -480,9 +480,7 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
                        f"{1e3 * entry['amplitude_range_m'][0]:.3g} to "
                        f"{1e3 * entry['amplitude_range_m'][1]:.3g} mm")
         if "c_i" in entry:
-            lines.append(f"{indent}  C_i = {entry['c_i']:.4g} kg/(m s) "
-                         f"{interval_words(entry['c_i_ci95'])}, C_f = {entry['c_f']:.4g} kg/m^2 "
-                         f"{interval_words(entry['c_f_ci95'])}, preferred law: "
+            lines.append(f"{indent}  {coefficient_words(entry)}, preferred law: "
                          f"{entry['preferred_law']}{_power(entry)}{_widening(entry)}")
             if entry.get("pooled_by") == "weighted mean":
                 lines.append(f"{indent}  (the runs' own C_i and C_f averaged with their "
@@ -504,9 +502,8 @@ def format_aggregate(agg: dict[str, Any], indent: str = "") -> str:
                          "values vs the median half-width of their own 95 % intervals): "
                          + "; ".join(parts))
         for run in entry["per_run"]:
-            lines.append(f"{indent}    {run['label']}: {run['frequency_hz']:.4f} Hz, C_i = "
-                         f"{run['c_i']:.4g} kg/(m s) {interval_words(run['c_i_ci95'])}, C_f = "
-                         f"{run['c_f']:.4g} kg/m^2 {interval_words(run['c_f_ci95'])}, amplitude "
+            lines.append(f"{indent}    {run['label']}: {run['frequency_hz']:.4f} Hz, "
+                         f"{coefficient_words(run)}, amplitude "
                          f"{1e3 * run['amplitude_range_m'][0]:.3g} to "
                          f"{1e3 * run['amplitude_range_m'][1]:.3g} mm")
     return "\n".join(lines)

@@ -32,6 +32,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
+from fsi_lab.dsp._signal import true_runs
 from fsi_lab.dsp.envelope import ABOVE, REL_FLOOR, block_envelope
 from fsi_lab.errors import AnalysisError
 from fsi_lab.tails import BLOCK_S
@@ -136,8 +137,7 @@ def noise_floor(envelope: np.ndarray) -> float:
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """``[start, stop)`` of the runs of True in ``mask``."""
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.view(np.int8), [0]))))
-    return [(int(a), int(b)) for a, b in zip(edges[0::2], edges[1::2])]
+    return [(int(a), int(b)) for a, b in zip(*true_runs(mask))]
 
 
 def plan_segments(channels: Iterable[tuple[Any, float]], budget: int) -> SegmentPlan:

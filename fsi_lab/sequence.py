@@ -45,7 +45,7 @@ from fsi_lab.registry import Registry
 from fsi_lab.runfile import read_analysis_summary, read_run, utc_now
 from fsi_lab.seqfile import SEQUENCE_FILE, SequenceRecord, compact_results, holder, load_record
 from fsi_lab.signals import INTERRUPTED, RunSignals, SignalNote
-from fsi_lab.summary import interval_words, nothing_identified
+from fsi_lab.summary import coefficient_words, nothing_identified
 
 #: Exit code of ``fsi-lab sequence`` for each final status.
 EXIT_FOR_STATUS = {"completed": 0, "failed": 1, "interrupted": 130, "running": 1}
@@ -670,9 +670,7 @@ def _component_lines(channel: str, c: dict[str, Any]) -> list[str]:
     if c.get("c_i") is None or c.get("c_f") is None:
         text += ": C_i and C_f not identified"
     else:
-        text += (f": C_i = {c['c_i']:.4g} kg/(m s) {interval_words(c.get('c_i_ci95'))}, "
-                 f"C_f = {c['c_f']:.4g} kg/m^2 {interval_words(c.get('c_f_ci95'))}"
-                 ).replace(" ,", ",").rstrip()
+        text += f": {coefficient_words(c)}"
     warnings = c.get("warnings") or []
     if warnings:
         text += f" [{len(warnings)} warning{'s' if len(warnings) > 1 else ''}]"

@@ -66,6 +66,16 @@ def interval_words(bounds: Any) -> str:
     return f"(95 %: {bounds[0]:.4g} to {bounds[1]:.4g})"
 
 
+def coefficient_words(entry: dict[str, Any]) -> str:
+    """``C_i = 0.6509 kg/(m s) (95 %: 0.65 to 0.6517), C_f = 32.69 kg/m^2 (95 %: ...)``: the
+    damping coefficients of a JSON entry holding ``c_i``, ``c_f`` and, where known, their
+    ``c_i_ci95`` and ``c_f_ci95``."""
+    return ", ".join(
+        " ".join(part for part in (f"{label} = {entry[key]:.4g} {unit}",
+                                   interval_words(entry.get(f"{key}_ci95"))) if part)
+        for key, label, unit in (("c_i", "C_i", "kg/(m s)"), ("c_f", "C_f", "kg/m^2")))
+
+
 def fluid_power_words(power: float, ci95: Any = None) -> str:
     """``, fluid term as |v|^2.01 (95 %: 1.94 to 2.08)``: the power of the velocity a fluid
     term grows with (2 for the quadratic law), and its interval when ``ci95`` holds two

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import median_filter
 
-from fsi_lab.dsp._signal import as_record, check_rate, fail
+from fsi_lab.dsp._signal import as_record, check_rate, fail, true_runs
 from fsi_lab.dsp.modal_fit import (
     DEFAULT_GROUPS,
     MIN_GROUPS,
@@ -50,8 +50,7 @@ EXCITED_BINS = 9
 def _stretches(f: np.ndarray, inside: np.ndarray) -> str:
     """The stretches of ``f`` (Hz) where ``inside`` holds, in words ("from a to b Hz and
     from c to d Hz", the first three)."""
-    edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(np.int8), 0]))
-    spans = [f"from {f[lo]:.4g} to {f[hi - 1]:.4g} Hz" for lo, hi in zip(edges[::2], edges[1::2])]
+    spans = [f"from {f[lo]:.4g} to {f[hi - 1]:.4g} Hz" for lo, hi in zip(*true_runs(inside))]
     more = f" and {len(spans) - 3} more" if len(spans) > 3 else ""
     return " and ".join(spans[:3]) + more
 

@@ -18,7 +18,7 @@ from fsi_lab.plugins.analysis.results import (
     Integrated,
 )
 from fsi_lab.presentation import SummaryText
-from fsi_lab.summary import fluid_power_words, interval_words
+from fsi_lab.summary import coefficient_words, fluid_power_words, interval_words
 
 METHODS = ("law", "regression", "envelope")
 
@@ -89,9 +89,7 @@ def fsi_lab_summary_lines(component):
     eq = component.get("equivalent_damping")
     if not isinstance(eq, dict) or eq.get("c_i") is None:
         return SummaryText(keys=("equivalent_damping",))
-    text = (f": C_i = {eq['c_i']:.4g} kg/(m s) {interval_words(eq.get('c_i_ci95'))}, "
-            f"C_f = {eq['c_f']:.4g} kg/m^2 {interval_words(eq.get('c_f_ci95'))}, "
-            f"R^2 = {eq['r2']:.3f}")
+    text = f": {coefficient_words(eq)}, R^2 = {eq['r2']:.3f}"
     if eq.get("preferred_law"):
         text += f", preferred law: {eq['preferred_law']}"
     if eq.get("fluid_power") is not None:
