@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 import resource
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -45,21 +45,75 @@ class AnalyseTask:
 #: Why an analysis that identified nothing was not stored (``not_stored`` in its summary).
 KEPT = ("this analysis is not stored: the file keeps the analysis stored in it before, which "
         "identified modes (fsi-lab show prints it)")
+#: ... and one whose C_i and C_f failed where the stored one's were identified.
+KEPT_COEFFICIENTS = ("this analysis is not stored: the file keeps the analysis stored in it "
+                     "before, which identified C_i and C_f there (fsi-lab show prints it)")
 
 
-def earlier_identification(path: Path, registry) -> bool:
-    """Whether the analysis stored in run file ``path`` identified something: a new analysis
-    that identifies nothing does not replace it (a damaged record, an override that asks for
-    what the record cannot give must not destroy results already written)."""
+def stored_identification(path: Path, registry) -> dict[str, Any] | None:
+    """The summary of the analysis stored in run file ``path`` when it identified something,
+    else None: a new analysis that identifies nothing does not replace it (a damaged record,
+    an override that asks for what the record cannot give must not destroy results already
+    written)."""
     from fsi_lab.runfile import read_analysis_summary
     from fsi_lab.summary import nothing_identified
 
     try:
         earlier = read_analysis_summary(path)
     except InputFileError:  # a damaged /analysis is replaced
-        return False
-    return bool(earlier) and nothing_identified(earlier, registry) is None \
-        and any(info.get("components") for info in (earlier.get("channels") or {}).values())
+        return None
+    if earlier and nothing_identified(earlier, registry) is None \
+            and any(info.get("components") for info in (earlier.get("channels") or {}).values()):
+        return earlier
+    return None
+
+
+def with_coefficients(summary: dict[str, Any]) -> list[str]:
+    """The channels of an analysis ``summary`` with C_i and C_f for a component."""
+    return [name for name, info in (summary.get("channels") or {}).items()
+            if any((c.get("equivalent_damping") or {}).get("c_i") is not None
+                   for c in info.get("components") or [] if isinstance(c, dict))]
+
+
+def coefficients_lost(earlier: dict[str, Any], summary: dict[str, Any], registry) -> str | None:
+    """Why the analysis ``summary`` fails to give C_i and C_f on a channel whose components
+    had them in the ``earlier`` (stored) one, or None: the analysis that provides them is
+    among the channel's ``errors`` now (a parameter it needs missing, an override it cannot
+    work with). That analysis is not stored, as one that identifies nothing is not."""
+    from fsi_lab.summary import provides
+
+    reasons = []
+    for name in with_coefficients(earlier):
+        now = (summary.get("channels") or {}).get(name) or {}
+        failed = [error for error in now.get("errors", [])
+                  if error.get("plugin")
+                  and provides(registry, error["plugin"], "damping-coefficients")]
+        if failed:
+            reasons.append(f"channel {name}: {failed[0]['message']}")
+    if not reasons:
+        return None
+    return "C_i and C_f were not identified where the stored analysis had them: " \
+        + "; ".join(reasons)
+
+
+def stored_mass_per_length(path: Path) -> float | None:
+    """The ``--mass-per-length`` (kg/m) the analysis stored in run file ``path`` was computed
+    with, or None (none given, never analysed, or unreadable)."""
+    from fsi_lab.runfile import read_analysis_overrides
+
+    try:
+        overrides = read_analysis_overrides(path)
+    except InputFileError:
+        return None
+    for text in overrides:
+        key, _, value = text.partition("=")
+        if key == "--mass-per-length":
+            try:
+                mass = float(value)
+            except ValueError:
+                return None
+            return mass if mass > 0 else None
+    return None
 
 
 def analysed_with(task: AnalyseTask) -> tuple[str, ...]:
@@ -138,10 +192,22 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     require_mass_per_length(task.mass_per_length)
     require_no_specimen(run, profile, task.mass_per_length)
     require_something_to_analyse(run, profile)
-    earlier = earlier_identification(Path(task.path), registry)
+    if task.mass_per_length is None and profile.specimen is None:
+        mass = stored_mass_per_length(Path(task.path))
+        if mass is not None:
+            task = replace(task, mass_per_length=mass)
+            if bus is not None:
+                bus.log("INFO", f"{task.path}: mu + M = {mass:g} kg/m, the --mass-per-length "
+                                "the analysis stored in the file was given (give "
+                                "--mass-per-length to change it)")
+    earlier = stored_identification(Path(task.path), registry)
+
+    def lost(summary: dict[str, Any]) -> str | None:
+        return coefficients_lost(earlier, summary, registry) if earlier else None
 
     def keep_earlier(summary: dict[str, Any]) -> bool:
-        return earlier and nothing_identified(summary, registry) is not None
+        return earlier is not None and (nothing_identified(summary, registry) is not None
+                                        or lost(summary) is not None)
 
     summary = analyse_and_store(Path(task.path), run.channels, profile.analysis,
                                 profile.analysis_params, registry, profile.specimen,
@@ -149,7 +215,15 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
                                 tuple(filter(None, [cut_short(run)])),
                                 analysed_with(task))
     if keep_earlier(summary):
-        summary["not_stored"] = KEPT
+        summary["not_stored"] = KEPT if nothing_identified(summary, registry) else \
+            KEPT_COEFFICIENTS
+    elif earlier is not None and bus is not None:
+        dropped = sorted(set(with_coefficients(earlier)) - set(with_coefficients(summary)))
+        if dropped:
+            bus.log("WARNING", f"{task.path}: the analysis stored before, with C_i and C_f on "
+                               f"channel {', '.join(dropped)}, is replaced by this one, "
+                               "which has none there (its chain gives none: run fsi-lab "
+                               "analyze again with the chain that gave them to get them back)")
     quantities = {name: channel.quantity for name, channel in run.channels.items()}
-    return {"summary": summary, "refused": uncalibrated(summary, quantities),
+    return {"summary": summary, "refused": uncalibrated(summary, quantities) or lost(summary),
             "worker": {"pid": os.getpid(), "peak_rss_mib": peak_rss_mib()}}

@@ -211,7 +211,7 @@ def nothing_identified(summary: dict[str, Any], registry) -> str | None:
         # (an error of no analysis: the channel itself is missing from the run)
         refused = [error for error in info.get("errors", [])
                    if error.get("plugin") is None
-                   or _provides(registry, error.get("plugin"), "components")]
+                   or provides(registry, error.get("plugin"), "components")]
         if not refused:
             return None
         reasons.append(f"channel {name}: {refused[0]['message']}")
@@ -236,7 +236,8 @@ def uncalibrated(summary: dict[str, Any], quantities: dict[str, str]) -> str | N
     return "; ".join(reasons) + voltage_hint("voltage") if reasons else None
 
 
-def _provides(registry, analysis: Any, kind: str) -> bool:
+def provides(registry, analysis: Any, kind: str) -> bool:
+    """Whether the installed analysis named ``analysis`` provides results of ``kind``."""
     try:
         return registry.get("analysis", analysis).provides == kind
     except FsiLabError:  # an analysis no longer installed provides nothing

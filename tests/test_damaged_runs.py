@@ -268,6 +268,41 @@ def test_a_reanalysis_that_identifies_nothing_keeps_the_earlier_analysis(tmp_pat
     assert path.read_bytes() == before
 
 
+def test_a_reanalysis_keeps_the_mass_per_length_and_the_coefficients_it_cannot_give(tmp_path):
+    """Analysed again without --mass-per-length, a file keeps the mass its stored analysis was
+    given (C_i and C_f came out of the second analysis before, and it stored none); an
+    analysis whose C_i and C_f fail where the stored one had them is not stored (exit 2); a
+    chain that gives none replaces it, with a warning."""
+    from support import write_decay_run
+
+    from fsi_lab.runfile import read_analysis_summary
+
+    path = write_decay_run(tmp_path / "decay.h5")
+    code, out, err = run_main("analyze", str(path), "--mass-per-length", "0.1")
+    assert code == 0, err
+    good = read_analysis_summary(path)
+    (first,) = good["channels"]["tip"]["components"][:1]
+    code, out, err = run_main("analyze", str(path))
+    assert code == 0, err
+    assert "mu + M = 0.1 kg/m, the --mass-per-length the analysis stored in the file was " \
+        "given" in err, err
+    again = read_analysis_summary(path)["channels"]["tip"]["components"][0]
+    assert again["equivalent_damping"]["c_i"] == first["equivalent_damping"]["c_i"]
+    before = path.read_bytes()
+    code, out, err = run_main("analyze", str(path), "--set",
+                              "analysis.chain=spectrum,equivalent-damping")
+    assert code == 2, err
+    assert "C_i and C_f were not identified where the stored analysis had them: channel " \
+        "tip: " in err and "the file keeps the analysis stored in it before, which " \
+        "identified C_i and C_f there" in err, err
+    assert path.read_bytes() == before
+    code, out, err = run_main("analyze", str(path), "--set", "analysis.chain=spectrum")
+    assert code == 0, err
+    assert "the analysis stored before, with C_i and C_f on channel tip, is replaced by " \
+        "this one, which has none there" in err, err
+    assert not read_analysis_summary(path)["channels"]["tip"].get("components")
+
+
 @pytest.mark.parametrize("status, why", [
     ("aborted", "the run was aborted (Ctrl+C, SIGTERM or Abort)"),
     ("running", "the run never finished (its exit status is still 'running': the process "
