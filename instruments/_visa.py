@@ -33,6 +33,19 @@ _ERROR = re.compile(r'^[+-]?\d+\s*,\s*".*"$')
 BLOCK_PIECE = 1 << 22
 
 
+def _address_hint(address: str) -> str:
+    """What to check when ``address`` cannot be opened: the instrument, when the address is a
+    well-formed VISA resource name, else the form one takes."""
+    from pyvisa import rname
+
+    try:
+        rname.parse_resource_name(address)
+    except rname.InvalidResourceName:
+        return f"expected a VISA resource name such as {ADDRESS_EXAMPLES}"
+    return ("check that the instrument is switched on and connected, and that the address "
+            "(or serial port) is its own")
+
+
 def _socket_of(resource) -> socket.socket | None:
     """The TCP socket under a pyvisa-py SOCKET resource, if there is one."""
     try:
@@ -119,7 +132,7 @@ class VisaLink:
         except Exception as exc:  # noqa: BLE001 - pyvisa raises many kinds for a bad address
             raise InstrumentError(
                 f"{self.instrument} at {self.address}: cannot open the connection ({exc}); "
-                f"expected a VISA resource name such as {ADDRESS_EXAMPLES}") from None
+                f"{_address_hint(self.address)}") from None
         resource.timeout = int(timeout_s * 1000)
         resource.read_termination = "\n"
         resource.write_termination = "\n"

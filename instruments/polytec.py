@@ -87,10 +87,14 @@ class SerialLine:
                                                 parity="N", stopbits=1, timeout=timeout_s,
                                                 write_timeout=timeout_s)
         except _serial_errors() + (ValueError,) as exc:
+            # pyserial raises ValueError for a URL it cannot parse, its own error for a port
+            # it cannot open (absent, busy, not permitted)
+            hint = ("expected a device such as /dev/ttyUSB0 or COM3, or a pyserial URL such as "
+                    "rfc2217://host:port" if isinstance(exc, ValueError) else
+                    "check that the vibrometer is switched on and its cable plugged in, and "
+                    "that the port is its own and free")
             raise InstrumentError(
-                f"{NAME} at {port}: cannot open the serial port ({exc}); expected a device "
-                "such as /dev/ttyUSB0 or COM3, or a pyserial URL such as rfc2217://host:port"
-            ) from None
+                f"{NAME} at {port}: cannot open the serial port ({exc}); {hint}") from None
         self.serial.reset_input_buffer()
 
     def _error(self, line: str, what: str) -> InstrumentError:

@@ -137,3 +137,31 @@ def test_a_link_fault_on_any_instrument_fails_the_run_naming_it(tmp_path, target
     assert run.instruments["amplifier"]["final_state"].get("output_enabled") is not True
     data = run.channels["tip_velocity"].data
     assert 0 < data.size <= RECORD and np.all(np.isfinite(data))  # the data so far is kept
+
+
+def test_an_address_that_is_no_visa_resource_name_says_what_one_looks_like():
+    from benchkit import settings
+
+    from fsi_lab.instruments import shaker_amplifier
+
+    with pytest.raises(InstrumentError, match=r"shaker-amplifier at TCPIP0:127\.0\.0\.1: cannot "
+                                              r"open the connection .*; expected a VISA "
+                                              r"resource name such as TCPIP0::"):
+        shaker_amplifier.PLUGIN.open("TCPIP0:127.0.0.1", settings(shaker_amplifier,
+                                                                   timeout_s=0.5), {})
+
+
+def test_an_absent_serial_port_says_what_to_check_not_what_a_port_looks_like(tmp_path):
+    from benchkit import settings
+
+    from fsi_lab.instruments import polytec, shaker_amplifier
+
+    port = tmp_path / "ttyUSB9"                  # a well-formed device name, nothing there
+    with pytest.raises(InstrumentError, match=rf"polytec at {port}: cannot open the serial "
+                                              r"port \(.*\); check that the vibrometer is "
+                                              r"switched on and its cable plugged in"):
+        polytec.PLUGIN.open(str(port), settings(polytec, timeout_s=0.5), {})
+    with pytest.raises(InstrumentError, match=r"cannot open the connection \(.*\); check that "
+                                              r"the instrument is switched on and connected"):
+        shaker_amplifier.PLUGIN.open(f"ASRL{port}::INSTR", settings(shaker_amplifier,
+                                                                    timeout_s=0.5), {})
