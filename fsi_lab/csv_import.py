@@ -648,6 +648,16 @@ def _rate_from_time(path: Path, time: np.ndarray, lines: np.ndarray, rounding: n
     with np.errstate(over="ignore", invalid="ignore"):
         span = float(time[-1] - time[0])
     step = span / steps.size
+    if np.any(steps < 0):
+        # A column printed with too few digits repeats a time; only rows out of order (or
+        # records joined) make it go back, and read at a steady rate they would stay so.
+        back = int(np.argmax(steps < 0))
+        raise InputFileError(
+            f"{path}: the time column goes back from {time[back]:.9g} s to "
+            f"{time[back + 1]:.9g} s at line {lines[back + 1]}: its rows are out of order "
+            "(or records were joined); expected times that increase row by row. Sort the rows "
+            "by time, or import each record as a file of its own (--ignore-time would keep "
+            "the rows in the file's order)")
     if not np.all(steps > 0):
         raise InputFileError(f"{path}: the time column does not increase (line "
                              f"{lines[int(np.argmin(steps > 0)) + 1]}: printed with too few "

@@ -649,6 +649,10 @@ def test_the_units_examples_run_as_written():
      "(line 3: printed with too few digits for its step?); if the samples were taken at a "
      "steady rate, give the rate with --rate HZ --ignore-time (the time column is then left "
      "out)"),
+    # rows out of order are not a rounding: --ignore-time would keep them so
+    ("time [s],v [m/s]\n0.000,1\n0.002,2\n0.001,3\n0.003,4\n", "the time column goes back "
+     "from 0.002 s to 0.001 s at line 4: its rows are out of order (or records were joined); "
+     "expected times that increase row by row. Sort the rows by time"),
 ])
 def test_an_export_that_would_be_read_wrong_is_refused_saying_what_to_change(tmp_path, text,
                                                                              fragment):
