@@ -58,6 +58,8 @@ def model_summary(model: BeamModel) -> dict[str, Any]:
         "modes": model.modes,
         "mass_per_length": float(model.mass_per_length),
         "added_mass": float(model.added_mass),
+        "total_mass_per_length": float(model.mass_per_length + model.added_mass),
+        "drag_coefficient": float(model.drag_coefficient),
         "damping": {"c_i": model.damping.c_i, "c_f": model.damping.c_f,
                     "damping_ratios": [float(z) for z in model.damping_ratios],
                     "projection": model.damping.projection},

@@ -24,6 +24,13 @@ def test_model_json_reproduces_the_paper():
     assert wet["c_f_theory"] == pytest.approx(11.4, abs=0.05)
     assert len(wet["natural_frequencies_hz"]) == 2
     assert 16.5 < wet["natural_frequencies_hz"][1] < 17.5  # the second wet mode, near 17 Hz
+    # mu + M, the mass the equivalent-damping plugin takes from this specimen, printed too
+    assert wet["total_mass_per_length"] == pytest.approx(0.1346, abs=1e-4)
+    assert wet["total_mass_per_length"] == pytest.approx(
+        wet["mass_per_length"] * (1.0 + wet["added_mass_ratio"]), rel=1e-9)
+    text = cli("model", str(WET))
+    assert "mu + M = 0.1346 kg/m (beam 0.007344, added fluid mass 0.1273): the " \
+        "--mass-per-length of this beam's records" in text.stdout, text.stdout
 
 
 def test_simulate_writes_a_run_like_a_measured_one(tmp_path):
