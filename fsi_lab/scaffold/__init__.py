@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import shlex
 import sys
 from pathlib import Path
 
@@ -69,9 +70,13 @@ def run(args: argparse.Namespace) -> int:
     root = scaffold(args.kind, args.name, args.dir)
     package = "fsi_lab_" + args.name.replace("-", "_")
     print(f"wrote {root}/ (pyproject.toml, {package}/, tests/, README.md)")
+    # The Python that runs this fsi-lab: its plugins must be installed there (a bare pip may
+    # be another environment's, which would fetch fsi-lab from the package index).
+    python = shlex.quote(sys.executable)
     print("next:")
-    print(f"  pip install -e '{root}[test]'   # fsi-lab plugins then lists {args.name}")
-    print(f"  cd {root} && python -m pytest   # fsi-lab's conformance kit on it")
+    print(f"  {python} -m pip install -e '{root}[test]'   # fsi-lab plugins then lists "
+          f"{args.name}")
+    print(f"  cd {root} && {python} -m pytest   # fsi-lab's conformance kit on it")
     print(f"  edit {package}/ (its README says what to change)")
     return 0
 
