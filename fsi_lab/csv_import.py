@@ -40,6 +40,7 @@ from fsi_lab.units import (
     parse_sensitivity,
     parse_unit,
     to_si,
+    voltage_hint,
 )
 
 _HEADER = re.compile(r"^\s*(?P<name>[^\[\]()]+?)\s*(?:\[(?P<unit>[^\[\]]*)\]"
@@ -572,18 +573,33 @@ def _number(path: Path, line: int, column: Column, cell: str, text: str,
     try:
         value = float(text)
     except ValueError:
+        where = f"{path}: line {line}, column {column.number} ({column.written})"
+        if not text or text.upper() in _MISSING_MARKS:
+            _missing_value(where, cell)
         hint = (" (a decimal comma in a comma-separated file? separate the columns with "
                 "semicolons)" if commas and "," in cell else "")
-        raise InputFileError(
-            f"{path}: line {line}, column {column.number} ({column.written}): {cell!r} is not a "
-            f"number{hint}"
-        ) from None
+        raise InputFileError(f"{where}: {cell!r} is not a number{hint}") from None
+    if math.isnan(value):
+        _missing_value(f"{path}: line {line}, column {column.number} ({column.written})", cell)
     if not math.isfinite(value):
         raise InputFileError(
-            f"{path}: line {line}, column {column.number} ({column.written}): {cell!r}; expected a "
-            "finite number"
-        )
+            f"{path}: line {line}, column {column.number} ({column.written}): {cell!r} (an "
+            "overflow of the recorder?); expected a finite number")
     return value
+
+
+#: What spreadsheets and analysers write for a value they do not have (besides an empty cell
+#: and NaN, which read as missing too).
+_MISSING_MARKS = {"#NV", "#N/A", "#NA", "N/A", "NA", "--", "-", "?", "NULL", "NONE"}
+
+
+def _missing_value(where: str, cell: str) -> NoReturn:
+    """Refuse a cell that holds no value (empty, NaN, ``#N/A``: a sample the recorder lost)."""
+    written = "is empty" if not cell.strip() else f"holds {cell.strip()!r}"
+    raise InputFileError(
+        f"{where} {written}: a missing sample (the recorder lost it, or the export left it "
+        "out); expected a finite number in every cell: the analyses need every sample at its "
+        "place. Export the record again, or cut the file before or after the gap")
 
 
 def _kept_columns(path: Path, skip: Collection[int], width: int, line: int) -> list[int]:
@@ -819,6 +835,13 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     calibrations = _calibrations(path, columns, {_channel_name(k): v for k, v
                                                  in (sensitivities or {}).items()})
     _check_analysis_inputs(path, columns, reference, delays, calibrations)
+    volts = [c.name for c in columns
+             if QUANTITY_OF_UNIT.get(c.base) == "voltage" and c.name not in calibrations]
+    if volts and notes is not None:
+        notes.append(f"{path}: {', '.join(volts)} {'is' if len(volts) == 1 else 'are'} in volts "
+                     "without --sensitivity: kept in volts (a drive signal stays so; a "
+                     "sensor's gives frequencies, but not the motion it measures: C_i, C_f, "
+                     f"backbones){voltage_hint('voltage')}")
     times = [i for i, column in enumerate(columns) if column.is_time]
     if len(times) > 1:
         raise InputFileError(f"{path}: header columns {columns[times[0]].number} and "

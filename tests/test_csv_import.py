@@ -25,7 +25,12 @@ def test_import_with_rate(tmp_path):
     out = tmp_path / "rec.h5"
     data, proc = cli_json("import", str(csv_path), "--rate", "1000", "-o", str(out))
     assert proc.returncode == 0, proc.stderr
-    assert data == {"run": str(out), "notes": []}
+    # (the column in volts without a sensitivity is said to stay so)
+    assert data == {"run": str(out), "notes": [
+        f"{csv_path}: drive is in volts without --sensitivity: kept in volts (a drive signal "
+        "stays so; a sensor's gives frequencies, but not the motion it measures: C_i, C_f, "
+        "backbones); a column imported in volts becomes the motion it measures with its "
+        "sensor's sensitivity: fsi-lab import ... --sensitivity NAME=200mV/(mm/s)"]}
     run = read_run(out)
     assert run.attrs["kind"] == "imported" and run.attrs["exit_status"] == "completed"
     tip = run.channels["tip"]
@@ -67,7 +72,15 @@ def test_time_column_replaces_rate(tmp_path):
      "--rate -5: a sample rate of -5 Hz; expected 0.001 to 1e+09 Hz"),
     (["time [s]", "tip [m/s]"], [[0, 1], [0.1, 2], [0.25, 3]], [],
      "the time column is not uniformly sampled"),
-    (["tip [m/s]"], [[1], ["nan"]], ["--rate", "10"], "expected a finite number"),
+    (["tip [m/s]"], [[1], ["nan"]], ["--rate", "10"], "line 3, column 1 (tip) holds 'nan': a "
+     "missing sample (the recorder lost it, or the export left it out); expected a finite "
+     "number in every cell"),
+    (["tip [m/s]", "base [m/s^2]"], [[1, 2], [3, "#NV"], [2, 2]], ["--rate", "10"],
+     "line 3, column 2 (base) holds '#NV': a missing sample"),
+    (["tip [m/s]", "base [m/s^2]"], [[1, 2], ["", 3], [2, 2]], ["--rate", "10"],
+     "line 3, column 1 (tip) is empty: a missing sample"),
+    (["tip [m/s]"], [[1], ["inf"]], ["--rate", "10"], "'inf' (an overflow of the recorder?); "
+     "expected a finite number"),
     (["time [s]", "tip [m/s]", "index"], [[0, 1, 0], [0.1, 2, 1]], [],
      "header column 3 is 'index' (a sample number or index column? leave it out with --skip "
      "3, or export without it)"),
