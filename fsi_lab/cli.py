@@ -775,7 +775,9 @@ def cmd_profile_check(args) -> int:
     if args.json:
         _emit_json(result)
     else:
-        print(f"{args.profile}: valid")
+        print(f"{args.profile}: valid" if s["ok"] else
+              f"{args.profile}: its keys and values are valid, but its safety limits refuse "
+              "the run it describes")
         print(f"safety: peak drive {s['peak_drive_v']:.4g} V (max {s['max_drive_v']:g}), "
               f"gain {s['gain']:g} (max {s['max_gain']:g}), predicted stroke "
               f"{s['predicted_stroke_mm']:.3g} mm (max {s['max_stroke_mm']:g}): "

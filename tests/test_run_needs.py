@@ -122,6 +122,18 @@ def test_the_example_profiles_pass_the_check():
         assert stdout.startswith(f"{path}: valid\nsafety: ") and stdout.endswith(": ok\n")
 
 
+def test_a_profile_its_safety_limits_refuse_is_not_called_valid():
+    from support import PROFILES
+
+    path = PROFILES / "wet-beam-sim.toml"
+    code, stdout, stderr = run_main("profile", "check", str(path), "--set",
+                                    "bench.amplifier.gain=30")
+    assert code == 2, stderr
+    assert stdout.startswith(f"{path}: its keys and values are valid, but its safety limits "
+                             "refuse the run it describes\nsafety: "), stdout
+    assert ": REFUSED: amplifier gain 30 exceeds safety.max_gain" in stdout, stdout
+
+
 @pytest.mark.parametrize("duration, rate", [("1", "1e12"), ("1e9", "2000"), ("1e-9", "1000")])
 def test_simulate_refuses_a_record_it_cannot_hold(tmp_path, duration, rate):
     out = tmp_path / "sim.h5"
