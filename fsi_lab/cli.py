@@ -552,7 +552,8 @@ def cmd_import(args) -> int:
         sensitivities[name.strip()] = text.strip()
     notes: list[str] = []
     out = import_csv(args.csv, args.output, args.rate, args.reference, delays, sensitivities,
-                     args.decimal_mark, notes, args.ignore_time, args.skip)
+                     args.decimal_mark, notes, args.ignore_time, args.skip,
+                     args.header_line)
     for text in notes:
         print(f"[note] {text}", file=sys.stderr)
     if args.json:
@@ -976,6 +977,7 @@ def _counting(expected: str):
 
 #: ``--skip N``: a column number >= 1.
 _column_number = _counting("a column number (1 is the file's first column)")
+_line_number = _counting("a line number (1 is the file's first line)")
 #: ``--jobs N``: a number of worker processes >= 1.
 _jobs = _counting("a number of worker processes >= 1")
 
@@ -1144,6 +1146,9 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     p.add_argument("--skip", action="append", default=[], type=_column_number, metavar="N",
                    help="leave out the file's column N (from 1; e.g. a hammer's force or a "
                         "sample index); may be repeated")
+    p.add_argument("--header-line", type=_line_number, metavar="N",
+                   help="the header row is the file's line N (from 1): the lines above it (an "
+                        "export's notes on itself) are left out")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="RUN.h5")
     common(p)
     p.set_defaults(func=cmd_import)

@@ -178,7 +178,8 @@ def _later_header(path: Path, lines: list[str], refused: int) -> str:
             if _names_and_units(path, cells, following, number) is None:
                 continue
         above = f"line {refused}" if number == refused + 1 else f"lines {refused} to {number - 1}"
-        return f"; line {number} ({text.strip()!r}) is one: begin {above} with '#'"
+        return (f"; line {number} ({text.strip()!r}) is one: begin {above} with '#', or give "
+                f"--header-line {number}")
     return ""
 
 
@@ -370,9 +371,10 @@ class _Printing:
 
 
 def read_csv(path: str | Path, decimal_mark: str | None = None,
-             skip: Collection[int] = ()) -> Table:
+             skip: Collection[int] = (), header_line: int | None = None) -> Table:
     """The columns and values of a CSV file (:class:`Table`), without the columns numbered
-    ``skip`` (from 1: a hammer's force, a sample index).
+    ``skip`` (from 1: a hammer's force, a sample index); with ``header_line`` (from 1), the
+    header row is that line and the lines above it are left out (an export's notes on itself).
 
     The separator is found on the header row (:func:`_separator`); with semicolons or tabs, a
     comma in a value is its decimal mark, and a file that holds both a decimal comma and a
@@ -392,8 +394,18 @@ def read_csv(path: str | Path, decimal_mark: str | None = None,
     lines = text.replace("\r\r\n", "\n").splitlines()
     numbers: list[int] = []          # the file's line number of each line the reader took
 
+    first = header_line or 1
+    if first > len(lines):
+        raise InputFileError(f"--header-line {first}: {path} has {_plural(len(lines), 'line')}; "
+                             "expected the number of the line that holds its header row")
+    if header_line is not None and (_BLANK.fullmatch(lines[first - 1])
+                                    or lines[first - 1].lstrip().startswith("#")):
+        raise InputFileError(f"--header-line {first}: line {first} of {path} is "
+                             f"{'blank' if _BLANK.fullmatch(lines[first - 1]) else 'a comment'}; "
+                             "expected the line that holds its header row 'name [unit],...'")
+
     def table():
-        for number, line in enumerate(lines, start=1):
+        for number, line in enumerate(lines[first - 1:], start=first):
             if not _BLANK.fullmatch(line) and not line.lstrip().startswith("#"):
                 numbers.append(number)
                 yield line
@@ -417,7 +429,11 @@ def read_csv(path: str | Path, decimal_mark: str | None = None,
     separator = _separator(header)
     if _numbers_only(header, separator):
         # numpy's savetxt writes its header row as a comment ("# time [s],v [m/s]")
-        above = _commented_header(path, lines, numbers[0])
+        above = _commented_header(path, lines, numbers[0]) if header_line is None else None
+        if above is None and header_line is not None:
+            raise InputFileError(f"--header-line {header_line}: line {numbers[0]} of {path} "
+                                 "holds numbers, not a header row; expected the line that holds "
+                                 "its header row 'name [unit],...'")
         if above is None:
             cells = len(_cells(header, separator))
             raise InputFileError(
@@ -775,7 +791,8 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
                reference: str | None = None, delays: Mapping[str, float] | None = None,
                sensitivities: Mapping[str, str] | None = None,
                decimal_mark: str | None = None, notes: list[str] | None = None,
-               ignore_time: bool = False, skip: Collection[int] = ()) -> Path:
+               ignore_time: bool = False, skip: Collection[int] = (),
+               header_line: int | None = None) -> Path:
     """Write the CSV file ``path`` as the run file ``out``; returns ``out``.
 
     Parameters
@@ -813,10 +830,13 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
     skip
         Numbers (from 1) of the file's columns to leave out (a hammer's force, a sample
         index): they are not read; the run file's ``skipped_columns`` names them.
+    header_line
+        The file's line (from 1) that holds the header row; the lines above it (an export's
+        notes on itself) are left out. None: the first line that is not blank or a comment.
     """
     path, out = Path(path), Path(out)
     delays = dict(delays or {})
-    table = read_csv(path, decimal_mark, skip)
+    table = read_csv(path, decimal_mark, skip, header_line)
     columns, data, lines = table.columns, table.data, table.lines
     if table.encoding == SINGLE_BYTE and notes is not None:
         cells = [f"{c.written} [{c.unit}]" for c in columns]

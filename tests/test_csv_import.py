@@ -791,3 +791,25 @@ def test_lines_about_an_export_above_its_names_and_units_are_named(tmp_path, bet
     proc = cli("import", str(path), "-o", str(tmp_path / "lms.h5"))
     assert proc.returncode == 2
     assert "line 4 ('Time\\tv') is one: begin lines 1 to 3 with '#'" in proc.stderr
+    # the way out it names: the names and units rows read once their line is given
+    proc = cli("import", str(path), "-o", str(tmp_path / "lms.h5"), "--header-line", "4")
+    assert proc.returncode == 0, proc.stderr
+    tip = read_run(tmp_path / "lms.h5").channels["v"]
+    assert (tip.unit, tip.sample_rate) == ("m/s", 5120.0)
+    np.testing.assert_allclose(tip.data, [1.0, 2.0])
+
+
+@pytest.mark.parametrize("line, fragment", [
+    ("3", "--header-line 3: line 3 of {path} is blank; expected the line that holds its header "
+          "row"),
+    ("5", "--header-line 5: line 5 of {path} holds numbers, not a header row"),
+    ("9", "--header-line 9: {path} has 6 lines; expected the number of the line"),
+    ("0", "argument --header-line: '0'"),
+])
+def test_a_header_line_that_holds_no_header_row_is_refused(tmp_path, line, fragment):
+    path = tmp_path / "export.csv"
+    path.write_text("Analyzer export\nDate,2026-11-30\n\ntime [s],tip [mm/s]\n0,1\n0.001,2\n")
+    proc = cli("import", str(path), "-o", str(tmp_path / "out.h5"), "--header-line", line)
+    assert proc.returncode == 2
+    assert fragment.format(path=path) in proc.stderr, proc.stderr
+    assert not (tmp_path / "out.h5").exists()
