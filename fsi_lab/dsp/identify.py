@@ -251,6 +251,9 @@ FREQUENCY_TARGET = 0.002
 #: STIFFNESS_SEEN or more (heavy damping moves a damped frequency with amplitude too: 2.2 %
 #: over a 5 Hz decay with 9.5 % linear damping and the wet C_f, no stiffness in it).
 STIFFNESS_Z, STIFFNESS_Z_SEEN, STIFFNESS_SEEN = 5.0, 2.0, 0.04
+#: A stiffness is kept only where the half periods move that way with amplitude by this many
+#: of their standard errors or more (and by half the model's movement there or more).
+STIFFNESS_SEEN_Z = 2.0
 #: Dropouts filled (:func:`_dropouts_filled`): those up to this many periods of the record's
 #: dominant oscillation (a longer gap is beyond prediction).
 DROPOUT_PERIODS = 1.0
@@ -2270,22 +2273,30 @@ def _frequency_step(mode: _Mode, quantity: str, seed: bool = False) -> None:
         # ... and only when the measured frequencies themselves move that way with amplitude
         # (a model with a misfitting damping law can ask for a stiffness the data do not show)
         halves = [h for h in (_half_periods(d) for _, d in pairs) if h is not None]
-        visible, seeded, seen = False, 0.0, 0.0
+        visible, clear, seeded, seen = False, False, 0.0, 0.0
         if halves:
             p_data = np.concatenate([h[0] for h in halves])
             amp = np.concatenate([h[2] for h in halves])
             if p_data.size >= 3:
                 x_amp = amp / mode.w0 if quantity == "velocity" else amp
                 seen, seen_se = _data_stiffening(p_data, x_amp, x_amp / np.max(x_amp))
-                resolved = abs(seen) > 5.0 * seen_se
-                visible = resolved and seen * shift > 0 and abs(seen) >= 0.5 * abs(shift)
-                if resolved and abs(seen) >= STIFFNESS_SHIFT:
+                clear = abs(seen) > 5.0 * seen_se
+                # Compared with the model's shift where the half periods end: their first
+                # ones, in the filters' smear, are left out, and under strong damping the
+                # cycles left hold a fifth of the release (there a 12 % softening is 0.7 %,
+                # seen by 2.6 to 4 of its standard errors at 1 % noise; taken at the release,
+                # and asked for 5, the stiffness was left out, the frequency read 0.17 % low).
+                shift_seen = 0.375 * alpha_new * float(np.max(x_amp)) ** 2 / mode.w0 ** 2
+                visible = abs(seen) > STIFFNESS_SEEN_Z * seen_se and seen * shift_seen > 0 \
+                    and abs(seen) >= 0.5 * abs(shift_seen)
+                if clear and abs(seen) >= STIFFNESS_SHIFT:
                     seeded = seen * mode.w0 ** 2 / (0.375 * float(np.max(x_amp)) ** 2)
-        # (visible: the half periods' own stiffening is resolved and agrees; where it is
-        # large, the step's crossings, whitened and widened for their correlation, may
-        # resolve it less: on a 10 % softening decay 4.5 standard errors, and the stiffness
-        # left out read the linear frequency 2 % low)
-        z = STIFFNESS_Z_SEEN if visible and abs(seen) >= STIFFNESS_SEEN else STIFFNESS_Z
+        # (visible: the half periods' own stiffening agrees; where it is large and clear, the
+        # step's crossings, whitened and widened for their correlation, may resolve it less:
+        # on a 10 % softening decay 4.5 standard errors, and the stiffness left out read the
+        # linear frequency 2 % low)
+        z = STIFFNESS_Z_SEEN if visible and clear and abs(seen) >= STIFFNESS_SEEN \
+            else STIFFNESS_Z
         if abs(alpha_new) <= z * se_alpha or abs(shift) < STIFFNESS_SHIFT or not visible:
             # The model's stiffness left out: the frequency's step is taken with its removal's
             # effect on the crossings (to first order) taken off them.
