@@ -262,6 +262,8 @@ SPIKES_NAMED = 5
 #: A free decay's half cycles last this range of the mode's half period: beyond it the decay
 #: has ended (:func:`_extrema`).
 HALF_CYCLE_RANGE = (0.5, 2.0)
+#: ... but the first ones out of it, up to this many, are the band filter settling.
+SETTLING_HALF_CYCLES = 2
 #: A spectral peak whose every decay falls at the rate of the base's motion in its band
 #: (within FOLLOW_RATE of it, the base falling FOLLOW_FALL-fold or more over the decay) at a
 #: gain of FOLLOW_GAIN or less (its acceleration over the base's in the band) is the base's:
@@ -1408,12 +1410,19 @@ def _extrema(signal: np.ndarray, fs: float, frequency: float, start: int, free: 
     run = int(np.argmin(above)) if not above.all() else above.size
     # A half cycle far longer or shorter than the mode's is no cycle of its free decay: the
     # motion has stopped (dry friction sticks) and what is left is the band filter's ringing
-    # and the noise, above a floor that a quiet record sets low.
+    # and the noise, above a floor that a quiet record sets low. The first
+    # :data:`SETTLING_HALF_CYCLES` may be the band filter settling on the window's start (a
+    # short first half cycle, under another mode's release): the decay begins after them
+    # (ended there, a 26 Hz mode under a 5 Hz one was said to have no free decay at all).
     steps = np.diff(t[:run]) * 2.0 * frequency
-    off = np.flatnonzero((steps < HALF_CYCLE_RANGE[0]) | (steps > HALF_CYCLE_RANGE[1]))
-    if off.size:
-        run = int(off[0]) + 1
-    return t[:run], v[:run], hc.crossings + start / fs
+    off = (steps < HALF_CYCLE_RANGE[0]) | (steps > HALF_CYCLE_RANGE[1])
+    begin = 0
+    while begin < min(SETTLING_HALF_CYCLES, off.size) and off[begin]:
+        begin += 1
+    later = np.flatnonzero(off[begin:])
+    if later.size:
+        run = begin + int(later[0]) + 1
+    return t[begin:run], v[begin:run], hc.crossings + start / fs
 
 
 def _band_quiet(parts: np.ndarray, fs: float) -> list[np.ndarray]:
