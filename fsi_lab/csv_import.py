@@ -586,21 +586,20 @@ def _number(path: Path, line: int, column: Column, cell: str, text: str,
             commas: bool) -> float:
     """The finite value of ``cell`` (read as ``text``) on file line ``line`` of a file whose
     columns are separated by commas (``commas``) or not."""
+    where = f"{path}: line {line}, column {column.number} ({column.written})"
     try:
         value = float(text)
     except ValueError:
-        where = f"{path}: line {line}, column {column.number} ({column.written})"
         if not text or text.upper() in _MISSING_MARKS:
             _missing_value(where, cell)
         hint = (" (a decimal comma in a comma-separated file? separate the columns with "
                 "semicolons)" if commas and "," in cell else "")
         raise InputFileError(f"{where}: {cell!r} is not a number{hint}") from None
     if math.isnan(value):
-        _missing_value(f"{path}: line {line}, column {column.number} ({column.written})", cell)
+        _missing_value(where, cell)
     if not math.isfinite(value):
-        raise InputFileError(
-            f"{path}: line {line}, column {column.number} ({column.written}): {cell!r} (an "
-            "overflow of the recorder?); expected a finite number")
+        raise InputFileError(f"{where}: {cell!r} (an overflow of the recorder?); expected a "
+                             "finite number")
     return value
 
 

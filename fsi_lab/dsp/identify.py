@@ -1466,11 +1466,11 @@ def _match(times: np.ndarray, reference: np.ndarray) -> np.ndarray:
 
 
 def _match_drifting(times: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """:func:`_match` for two sequences of events one apart (``times``: a model's extrema or
-    zero crossings, s; ``reference``: the record's, s, in order) whose offset drifts: where the
-    nearest entries' offsets slip by half the events' spacing or more between neighbours (the
+    """:func:`_match` for two sequences of like events (``times``: a model's extrema or zero
+    crossings, s; ``reference``: the record's, s, in order) whose offset drifts: where the
+    nearest entries' offsets jump by half the events' spacing or more between neighbours (the
     offset wrapped past the midpoint between two events), each reference is paired instead
-    with the entry nearest to it less the offset of its last pair that kept to the drift.
+    with the entry nearest to it less the offset of the last pair that kept to the drift.
 
     A strongly softening model whose frequency is still a few per cent off drifts by a half
     period in twenty cycles (a 10 % softening 40 Hz decay: 6 ms in 40 crossings of 12.5 ms
