@@ -804,11 +804,11 @@ def cmd_model(args) -> int:
     from fsi_lab.modelling import beam_model, model_summary
 
     _, profile = _model_profile(args)
-    summary = model_summary(beam_model(profile.specimen, profile.model, args.modes))
+    model = beam_model(profile.specimen, profile.model, args.modes)
+    summary = model_summary(model)
     if args.json:
         _emit_json(summary)
         return 0
-    damping = summary["damping"]
     print(f"fluid: {summary['fluid']}; added mass ratio M/mu = {summary['added_mass_ratio']:.2f}; "
           f"theoretical C_f = {summary['c_f_theory']:.3g} kg/m^2 (rho_f C_d H / 2, C_d = "
           f"{summary['drag_coefficient']:g}: a steady drag estimate)")
@@ -816,7 +816,7 @@ def cmd_model(args) -> int:
           f"{summary['mass_per_length']:.4g}, added fluid mass {summary['added_mass']:.4g}): "
           "the --mass-per-length of this beam's records imported from elsewhere")
     print(f"damping the model runs with ([model]; simulate and the simulated bench): "
-          f"C_i = {damping['c_i']:g} kg/(m s), C_f = {damping['c_f']:g} kg/m^2")
+          f"C_i = {model.damping.c_i:g} kg/(m s), C_f = {model.damping.c_f:g} kg/m^2")
     for n, f in enumerate(summary["natural_frequencies_hz"], start=1):
         print(f"  mode {n}: {f:.4f} Hz")
     return 0
