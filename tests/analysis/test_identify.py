@@ -889,9 +889,10 @@ def test_three_close_modes_released_together_are_found_in_one_free_decay():
     frequencies = sorted(m.frequency_hz for m in found.modes)
     assert len(frequencies) == 3
     np.testing.assert_allclose(frequencies, [WET_F, 21.0, 25.5], rtol=0.01)
-    # On this record the three modes' joint fit does not converge (its model decays run where
-    # they explode): it is refused (band fits kept, with a note), and the solver's overflow
-    # reaches nobody's terminal as numpy's RuntimeWarnings.
+    # On this record the three modes' joint fit does not converge: it is refused (band fits
+    # kept, with a note), and nothing the solver meets on its way (model decays that explode,
+    # as on seed 0 before its band fits were mended) reaches the terminal as numpy's
+    # RuntimeWarnings.
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
         found = identify(trial(case, 3), case.fs)
