@@ -1111,9 +1111,7 @@ def _peak_area(freqs: np.ndarray, amp: np.ndarray, f: float) -> float:
     spectrum ``amp`` at ``f`` (Hz), on the spectrum smoothed over +-2 % of ``f`` as
     :func:`_col` smooths it (the bins of a noisy spectrum fall under a low peak's half power
     next to it: a 2 % damped 228 Hz mode read 3 Hz wide, not 5); smoothing keeps the area."""
-    df = freqs[1] - freqs[0]
-    width = max(1, int(0.02 * f / df))
-    smooth = np.convolve(amp, np.ones(2 * width + 1) / (2 * width + 1), mode="same")
+    smooth = _smoothed_around(freqs, amp, f)
     k = int(np.argmin(np.abs(freqs - f)))
     height = float(smooth[k])
     below = smooth < height / math.sqrt(2.0)
@@ -1381,6 +1379,13 @@ def _noise_rms(x: np.ndarray, fs: float, peaks: np.ndarray) -> float:
     return float(np.sqrt(np.mean(kept ** 2)))
 
 
+def _smoothed_around(freqs: np.ndarray, amp: np.ndarray, f: float) -> np.ndarray:
+    """The spectrum ``amp`` (on the evenly spaced ``freqs``, Hz) smoothed by a running mean
+    over +-2 % of ``f`` (Hz): a peak's surroundings without its bins' noise."""
+    width = max(1, int(0.02 * f / (freqs[1] - freqs[0])))
+    return np.convolve(amp, np.ones(2 * width + 1) / (2 * width + 1), mode="same")
+
+
 def _col(f: float, amplitude: float, others: np.ndarray, freqs: np.ndarray,
          amp: np.ndarray) -> float:
     """How far the spectral peak at ``f`` (Hz, of height ``amplitude``) stands out, as its col
@@ -1389,9 +1394,7 @@ def _col(f: float, amplitude: float, others: np.ndarray, freqs: np.ndarray,
     none. A mode of its own has a col below :data:`VALLEY`; a bump on the flank of a heavily
     damped mode has none (about 1), a weak mode on the tail of a strong one has. Infinite
     when no bin lies between."""
-    df = freqs[1] - freqs[0]
-    width = max(1, int(0.02 * f / df))
-    smooth = np.convolve(amp, np.ones(2 * width + 1) / (2 * width + 1), mode="same")
+    smooth = _smoothed_around(freqs, amp, f)
     cols = []
     for side in (-1.0, 1.0):
         beyond = others[(others - f) * side > 0]
