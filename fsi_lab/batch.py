@@ -173,8 +173,11 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     dict
         ``summary`` (the object ``fsi-lab analyze --json`` prints for one file),
         ``refused`` (why the input was not what the analyses need although they ran, or None:
-        :func:`fsi_lab.summary.uncalibrated`) and ``worker`` (``pid`` and ``peak_rss_mib``,
-        the process's peak memory so far, MiB).
+        :func:`fsi_lab.summary.uncalibrated`), ``messages`` (``[level, sentence]`` pairs on
+        the file as a whole: the mass kept from the stored analysis, a stored analysis with
+        C_i and C_f replaced by one without; logged on ``bus`` as they come, and returned
+        for a batch's workers, which have none) and ``worker`` (``pid`` and
+        ``peak_rss_mib``, the process's peak memory so far, MiB).
 
     Raises
     ------
@@ -192,14 +195,20 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     require_mass_per_length(task.mass_per_length)
     require_no_specimen(run, profile, task.mass_per_length)
     require_something_to_analyse(run, profile)
+    messages: list[list[str]] = []
+
+    def say(level: str, sentence: str) -> None:
+        messages.append([level, sentence])
+        if bus is not None:
+            bus.log(level, sentence)
+
     if task.mass_per_length is None and profile.specimen is None:
         mass = stored_mass_per_length(Path(task.path))
         if mass is not None:
             task = replace(task, mass_per_length=mass)
-            if bus is not None:
-                bus.log("INFO", f"{task.path}: mu + M = {mass:g} kg/m, the --mass-per-length "
-                                "the analysis stored in the file was given (give "
-                                "--mass-per-length to change it)")
+            say("INFO", f"{task.path}: mu + M = {mass:g} kg/m, the --mass-per-length the "
+                        "analysis stored in the file was given (give --mass-per-length to "
+                        "change it)")
     earlier = stored_identification(Path(task.path), registry)
 
     def lost(summary: dict[str, Any]) -> str | None:
@@ -217,13 +226,14 @@ def analyse_file(task: AnalyseTask, registry=None, bus=None) -> dict[str, Any]:
     if keep_earlier(summary):
         summary["not_stored"] = KEPT if nothing_identified(summary, registry) else \
             KEPT_COEFFICIENTS
-    elif earlier is not None and bus is not None:
+    elif earlier is not None:
         dropped = sorted(set(with_coefficients(earlier)) - set(with_coefficients(summary)))
         if dropped:
-            bus.log("WARNING", f"{task.path}: the analysis stored before, with C_i and C_f on "
-                               f"channel {', '.join(dropped)}, is replaced by this one, "
-                               "which has none there (its chain gives none: run fsi-lab "
-                               "analyze again with the chain that gave them to get them back)")
+            say("WARNING", f"{task.path}: the analysis stored before, with C_i and C_f on "
+                           f"channel {', '.join(dropped)}, is replaced by this one, which has "
+                           "none there (its chain gives none: run fsi-lab analyze again with "
+                           "the chain that gave them to get them back)")
     quantities = {name: channel.quantity for name, channel in run.channels.items()}
     return {"summary": summary, "refused": uncalibrated(summary, quantities) or lost(summary),
+            "messages": messages,
             "worker": {"pid": os.getpid(), "peak_rss_mib": peak_rss_mib()}}

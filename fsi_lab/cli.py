@@ -313,7 +313,10 @@ def _analyze_batch(args) -> int:
                 if result.ok:
                     summary = result.value["summary"]
                     problems = strict_problems(summary)
+                    for level, sentence in result.value["messages"]:
+                        bus.log(level, sentence)
                     entry.update(status="analysed", analysis=summary, problems=problems,
+                                 messages=result.value["messages"],
                                  worker=result.value["worker"],
                                  exit_code=EXIT_STRICT if args.strict and problems else 0)
                     refused = nothing_identified(summary, _loaded_plugins()) \

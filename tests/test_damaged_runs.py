@@ -349,3 +349,28 @@ def test_the_full_scale_is_read_from_a_range_list_as_from_the_configured_ranges(
     run = SimpleNamespace(channel_attrs={"tip": {**attrs["tip"], "input": 0}},
                           instruments={"acquisition": {"settings": {"ranges_v": [10.0]}}})
     assert recorded_full_scale(run, "tip") is None
+
+
+def test_a_batch_says_what_a_single_file_says_of_its_stored_analysis(tmp_path):
+    """The workers of a batch have no event bus: the mass kept from the stored analysis and a
+    stored analysis with C_i and C_f replaced by one without them went unsaid there. They are
+    printed, and kept in each file's JSON entry."""
+    from support import write_decay_run
+
+    paths = [write_decay_run(tmp_path / f"decay{k}.h5") for k in range(2)]
+    code, out, err = run_main("analyze", *map(str, paths), "--mass-per-length", "0.1")
+    assert code == 0, err
+    code, out, err = run_main("analyze", *map(str, paths))
+    assert code == 0, err
+    kept = "mu + M = 0.1 kg/m, the --mass-per-length the analysis stored in the file was given"
+    for path in paths:
+        assert f"{path}: {kept}" in err, err
+    code, out, err = run_main("analyze", *map(str, paths), "--set", "analysis.chain=spectrum",
+                              "--json")
+    assert code == 0, err
+    for path, entry in zip(paths, json.loads(out)["files"]):
+        levels = {level: sentence for level, sentence in entry["messages"]}
+        assert sorted(levels) == ["INFO", "WARNING"], entry["messages"]
+        assert kept in levels["INFO"] and levels["WARNING"].startswith(
+            f"{path}: the analysis stored before, with C_i and C_f on channel tip, is replaced "
+            "by this one"), entry["messages"]
