@@ -498,3 +498,22 @@ def test_analyses_that_failed_for_want_of_hvd_are_named_once_after_it(qtbot, mak
     (wanting,) = [f for f in failures if "for want of" in f]
     assert wanting.endswith("on tip_velocity: no result, for want of hvd's (hvd failed, above)")
     assert "backbone" in wanting and "equivalent-damping" in wanting
+
+
+def test_an_imported_file_s_title_names_it_once_and_says_where_it_came_from(
+        qtbot, make_window, registry, tmp_path):
+    """An imported file's run name is its file's: the title named it twice, and gave the
+    import's time as the run's start."""
+    from fsi_lab.csv_import import import_csv
+
+    t = np.arange(4000) / 1000.0
+    v = 0.01 * np.exp(-0.5 * t) * np.sin(2 * np.pi * 12.0 * t)
+    source = tmp_path / "decay.csv"
+    source.write_text("Time (s),Tip velocity (m/s)\n"
+                      + "".join(f"{a:.4f},{b:.6e}\n" for a, b in zip(t, v)))
+    path = import_csv(source, tmp_path / "decay.h5", None)
+    window = make_window(registry)
+    title = _open(qtbot, window, path).title.text()
+    assert title.count("decay.h5") == 1, title
+    assert "imported from decay.csv at " in title and "UTC" in title, title
+    assert "not computed" in window.analysis.state.text()

@@ -209,10 +209,7 @@ class AnalysisViews(QWidget):
         self.results = results
         self._generic_views(results)
         self._show_a_view_with_results(results)
-        status = results.exit_status
-        started = results.attrs.get("start_time", "")
-        self.title.setText(f"<b>{results.name}</b> — {results.path.name} — {status}"
-                           + (f" — {started[:19]}" if started else ""))
+        self.title.setText(" — ".join(_title_parts(results)))
         channels = results.analysed_channels() or [
             n for n, c in results.channels.items() if c.quantity in ("velocity", "displacement")
         ] or list(results.channels)
@@ -225,8 +222,8 @@ class AnalysisViews(QWidget):
             self.channel.setCurrentIndex(channels.index(current))
         self.channel.blockSignals(False)
         if not results.analysis:
-            self.state.setText("not computed: this run file has no analysis results "
-                               f"(exit status {status}); set the parameters and re-run")
+            self.state.setText("not computed: this run file has no analysis results (exit "
+                               f"status {results.exit_status}); set the parameters and re-run")
         else:
             errors = _failures(results)
             self.state.setText("failed: " + "; ".join(errors) if errors else "")
@@ -340,3 +337,20 @@ def _failures(results: RunResults) -> list[str]:
     lines.extend(f"{', '.join(plugins)} on {channel}: {for_want_of(provider)}"
                  for (channel, provider), plugins in wanting.items())
     return lines
+
+
+def _title_parts(results) -> list[str]:
+    """The run's name (and its file's, when another), its status and when it started; for
+    imported data, the file it was imported from and when (a CSV holds no start time)."""
+    parts = [f"<b>{results.name}</b>"]
+    if results.path.name != results.name:
+        parts.append(results.path.name)
+    parts.append(results.exit_status)
+    started = str(results.attrs.get("start_time", ""))[:19].replace("T", " ")
+    if results.attrs.get("kind") == "imported":
+        source = Path(str(results.attrs.get("source_file", ""))).name
+        parts.append(f"imported{f' from {source}' if source else ''}"
+                     f"{f' at {started} UTC' if started else ''}")
+    elif started:
+        parts.append(f"started {started} UTC")
+    return parts
