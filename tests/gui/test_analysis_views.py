@@ -284,6 +284,8 @@ def test_stepper_gives_the_event_loop_back_between_slices(qtbot):
 def test_time_and_model_curves_land_where_the_plugins_put_them(qtbot, tmp_path):
     import h5py
 
+    from fsi_lab.plugins.analysis.views.amplitude_views import model_trend
+
     path = write_run(tmp_path / "shifted.h5")
     amp = np.linspace(0.004, 0.0005, 30)
     model_curves = {"backbone_amplitude_model": amp[None, :],
@@ -321,12 +323,33 @@ def test_time_and_model_curves_land_where_the_plugins_put_them(qtbot, tmp_path):
                      if item.name() == "modal model"]
             assert len(model) == 1, (cls.__name__, cell)
             x, y = model[0].getData()
-            order = np.argsort(model_curves[x_name][0])
-            expected = model_curves[y_name][0][order]
+            expected = model_curves[y_name][0]
             if cls is BackboneView:  # relative to the component's frequency (17 Hz), in %
                 expected = 100 * (expected - 17.0) / 17.0
-            np.testing.assert_allclose(x, model_curves[x_name][0][order])
-            np.testing.assert_allclose(y, expected)
+            # drawn as its trend (test_a_model_curve_of_many_half_cycles_is_drawn_as_its_trend)
+            trend = model_trend(model_curves[x_name][0], expected)
+            np.testing.assert_allclose(x, trend[0])
+            np.testing.assert_allclose(y, trend[1])
+
+
+def test_a_model_curve_of_many_half_cycles_is_drawn_as_its_trend():
+    """A modal model's backbone holds one point per half cycle, scattered about its trend: a
+    line through them by amplitude zig-zagged across the plot. It is drawn as the medians of
+    groups of neighbouring amplitudes; a curve of too few points as it is, by amplitude."""
+    from fsi_lab.plugins.analysis.views.amplitude_views import MODEL_BINS, model_trend
+
+    rng = np.random.default_rng(0)
+    amp = rng.uniform(0.0, 100.0, 4000)
+    trend = 17.0 + 0.01 * amp
+    a, v = model_trend(amp, trend + 0.05 * rng.standard_normal(amp.size))
+    assert MODEL_BINS - 2 <= a.size <= MODEL_BINS and np.all(np.diff(a) > 0)
+    # a bin's medians of 100 points err by about 0.01 together: within 4 of that, where
+    # the points scatter by 0.05
+    np.testing.assert_allclose(v, 17.0 + 0.01 * a, atol=0.04)
+    a, v = model_trend(amp[:12], trend[:12])
+    order = np.argsort(amp[:12])
+    np.testing.assert_array_equal(a, amp[:12][order])
+    np.testing.assert_array_equal(v, trend[:12][order])
 
 
 def test_rows_are_components_however_short():

@@ -129,10 +129,33 @@ class _AmplitudeView(View):
                 continue
             shown = [self.shown(k, row) for k, row in enumerate(y)]
             for k, (a, b) in enumerate(finite_pairs(zip(per_component(model, name), shown))):
-                order = np.argsort(a)
-                draw_line(plot, a[order], b[order], "#000000",
+                a, b = model_trend(a, b)
+                draw_line(plot, a, b, COLOURS[k % len(COLOURS)],
                           "modal model" if k == 0 else None, 1.6, Qt.PenStyle.DashLine)
                 yield
+
+
+#: A model curve is drawn as the medians of groups of MODEL_GROUP or more of its points of
+#: neighbouring amplitudes, at most MODEL_BINS groups.
+MODEL_GROUP, MODEL_BINS = 8, 40
+
+
+def model_trend(amplitude: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A modal model's curve (``values`` against ``amplitude``, one point per half cycle) as a
+    line: the medians of both in groups of :data:`MODEL_GROUP` or more points of neighbouring
+    amplitudes, of equal counts (a decay's half cycles crowd its small amplitudes, and its
+    largest stay drawn), :data:`MODEL_BINS` at most; by increasing amplitude when there are
+    fewer than two groups' worth. Its half cycles scatter (the other modes and the base's
+    last motion beat with it, most at the smallest amplitudes), and a line through them by
+    amplitude zig-zagged across the plot."""
+    order = np.argsort(amplitude)
+    a, v = amplitude[order], values[order]
+    count = min(a.size // MODEL_GROUP, MODEL_BINS)
+    if count < 2:
+        return a, v
+    groups = np.array_split(np.arange(a.size), count)
+    return (np.array([np.median(a[g]) for g in groups]),
+            np.array([np.median(v[g]) for g in groups]))
 
 
 class BackboneView(_AmplitudeView):
