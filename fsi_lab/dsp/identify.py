@@ -27,7 +27,9 @@ number. The steps:
    cannot hold (fewer than :data:`MIN_CYCLES` cycles), and steady lines (mains hum: a peak
    that keeps :data:`STEADY_SHARE` of its amplitude from the decays' first third to their
    last and is there before the excitation), are left out with a note, each keeping a band
-   of its own. A candidate
+   of its own. Heavily damped modes under those peaks' threshold or the whole decays' noise
+   are noted, with the band that identifies them (:func:`_broad_small_peaks`,
+   :func:`_early_peaks`: the spectra of the decays' first parts). A candidate
    becomes a mode when one of its decays keeps :data:`MIN_CYCLES` cycles above the noise floor:
    a spectral bump without a free decay is no mode (no phantom components).
 3. **Separation.** Each window is split into one band per mode (:mod:`.bands`, a partition of
@@ -188,6 +190,16 @@ MODE_THRESHOLD = 0.01
 BROAD_HEIGHT, BROAD_AREA = 1e-3, 0.1
 #: A candidate's spectral peak must stand this many times above the spectrum's noise level.
 NOISE_MARGIN = 10.0
+#: A heavily damped mode rings for a few tens of cycles, and the spectrum of whole decays
+#: dilutes it under their noise (a 2 % damped 400 Hz mode rings for 0.1 s of a 5 s decay). It
+#: is looked for in the spectra of the decays' first EARLY_SHARES of the longest: a peak there
+#: NOISE_MARGIN times above that spectrum's noise, with EARLY_CYCLES cycles or more in the
+#: stretch, that falls to EARLY_FALL of its height or less over the next stretch of that
+#: length, and lies off the candidates' harmonics up to EARLY_ORDER and their sums and
+#: differences (f_i +- f_j, 2 f_i +- f_j: the faster falling waveform of nonlinear modes) by
+#: EARLY_APART of its frequency or two of that spectrum's bins.
+EARLY_SHARES = (1 / 4, 1 / 8, 1 / 16, 1 / 32, 1 / 64, 1 / 128)
+EARLY_CYCLES, EARLY_FALL, EARLY_ORDER, EARLY_APART = 10, 0.5, 5, 0.03
 #: The record's white noise is measured in blocks of at least this many samples
 #: (:func:`_noise_rms`), at most :data:`NOISE_BLOCKS` of them.
 NOISE_BLOCK = 1024
@@ -1044,13 +1056,17 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                               >= MODE_THRESHOLD * float(np.max(peaks.amplitudes[inside])))
     f, a = peaks.frequencies[high], peaks.amplitudes[high]
     level = _spectrum_level(freqs, amp, f, a)
-    notes.extend(_broad_small_peaks(freqs, amp, peaks.frequencies[~high],
-                                    peaks.amplitudes[~high], f, a, level))
+    broad = _broad_small_peaks(freqs, amp, peaks.frequencies[~high], peaks.amplitudes[~high],
+                               f, a, level)
+    notes.extend(note for _, note in broad)
     keep = np.ones(f.size, dtype=bool)
+    flanks = []
     for i, fi in enumerate(f):
         col = _col(fi, float(a[i]), f[:i][keep[:i]], freqs, amp)
         if col > VALLEY or a[i] < NOISE_MARGIN * level:
             keep[i] = False                 # a flank of a larger peak, or noise
+            if col > VALLEY:
+                flanks.append(fi)
             if i == 0 and a[i] >= NOISE_MARGIN * level and f_dom * longest >= MIN_CYCLES:
                 notes.append(f"the largest spectral peak, at {fi:.4g} Hz, does not stand out "
                              f"of the spectrum around it (it falls only to {100 * col:.0f} % "
@@ -1095,6 +1111,22 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                      "that hardly decays within the record); left out, and subtracted from "
                      "each free decay (fitted on its second half)")
     f, a = f[keep], a[keep]
+    known = np.concatenate([f, flanks, guards, [fi for fi, _ in broad]])
+    for fi, height, fall, seconds in _early_peaks(x, fs, segs, known, f):
+        if band is not None and band[0] <= fi <= band[1]:
+            # asked for: a candidate, at the peak of the whole decays' spectrum nearest it
+            close = np.abs(peaks.frequencies - fi) <= EARLY_APART * fi
+            at = peaks.frequencies[close][np.argmax(peaks.amplitudes[close])] if close.any() \
+                else fi
+            f = np.append(f, at)
+            a = np.append(a, float(np.interp(at, freqs, amp)))
+            continue
+        lo, hi = _band_around(fi, f)
+        notes.append(f"the decays' first {seconds:.3g} s show a spectral peak at {fi:.4g} Hz, "
+                     f"{height:.0f} times the noise there, that falls to {100 * fall:.0f} % of "
+                     f"its height over the next {seconds:.3g} s: a heavily damped mode, lost "
+                     "in the whole decays' spectrum under its noise; not reported; "
+                     f"--set analysis.hvd.band_hz={lo:.3g},{hi:.3g} identifies it alone")
     if f_dom * longest < MIN_CYCLES:
         notes.append(f"the free decays last at most {longest:.3g} s, fewer than {MIN_CYCLES} "
                      f"cycles of the record's dominant oscillation at {f_dom:.4g} Hz"
@@ -1122,9 +1154,18 @@ def _peak_area(freqs: np.ndarray, amp: np.ndarray, f: float) -> float:
     return height * float(hi - lo)
 
 
+def _band_around(f: float, modes: np.ndarray) -> tuple[float, float]:
+    """A band (Hz) around a mode at ``f`` (Hz) for ``band_hz``: +-25 %, or up to the
+    geometric mean with the nearest of the other ``modes`` (Hz) on either side."""
+    below, above = modes[modes < f], modes[modes > f]
+    lo = max(f / 1.25, math.sqrt(f * float(below.max()))) if below.size else f / 1.25
+    hi = min(f * 1.25, math.sqrt(f * float(above.min()))) if above.size else f * 1.25
+    return lo, hi
+
+
 def _broad_small_peaks(freqs: np.ndarray, amp: np.ndarray, small_f: np.ndarray,
                        small_a: np.ndarray, f: np.ndarray, a: np.ndarray, level: float
-                       ) -> list[str]:
+                       ) -> list[tuple[float, str]]:
     """Notes on spectral peaks (``small_f``, Hz, heights ``small_a``) under
     :data:`MODE_THRESHOLD` of the largest of the candidates (``f``, ``a``) that still look
     like a mode's: at least :data:`BROAD_HEIGHT` of it, standing out of the spectrum and its
@@ -1132,7 +1173,8 @@ def _broad_small_peaks(freqs: np.ndarray, amp: np.ndarray, small_f: np.ndarray,
     half-power width) is :data:`BROAD_AREA` of the largest peak's or more. A heavily damped
     mode's peak is low for its amplitude (its height goes as amplitude over damping): a
     316 Hz mode at 2 % damping whose release was 1.4 times a lightly damped 17 Hz mode's left
-    a peak at 0.98 % of that mode's, and it was left out without a word."""
+    a peak at 0.98 % of that mode's, and it was left out without a word. Returns each noted
+    peak's frequency (Hz) with its note."""
     if not a.size or not small_f.size:
         return []
     top = int(np.argmax(a))
@@ -1144,14 +1186,57 @@ def _broad_small_peaks(freqs: np.ndarray, amp: np.ndarray, small_f: np.ndarray,
             continue
         share = _peak_area(freqs, amp, float(fi)) / area
         if share >= BROAD_AREA:
-            notes.append(
+            notes.append((float(fi),
                 f"the spectral peak at {fi:.4g} Hz stands out of the spectrum as a mode's, but "
                 f"its height is {100 * ai / a[top]:.2g} % of the largest, under the "
                 f"{100 * MODE_THRESHOLD:g} % a component needs, while its area (height times "
                 f"width) is {100 * share:.0f} % of the largest's: a heavily damped mode, not "
                 "reported; band_hz (e.g. --set analysis.hvd.band_hz=LOW,HIGH around it) "
-                "identifies it alone")
+                "identifies it alone"))
     return notes
+
+
+def _early_peaks(x: np.ndarray, fs: float, segments: list[tuple[int, int]], known: np.ndarray,
+                 modes: np.ndarray) -> list[tuple[float, float, float, float]]:
+    """Heavily damped modes the spectrum of whole decays dilutes under its noise, found in
+    the spectra of the decays' first parts (:data:`EARLY_SHARES` of the longest; ``segments``,
+    sample ranges of ``x``): each as ``(frequency Hz, height over that spectrum's noise, the
+    share of that height left over the next stretch of the same length, the stretch's length
+    s)``, from the longest stretch that shows it, away from the ``known`` peaks (Hz: the
+    candidates, those left out, and those already noted) and from the harmonics, sums and
+    differences of the ``modes`` (Hz, the candidates kept; see :data:`EARLY_ORDER`)."""
+    longest = max(c - a for a, c in segments)
+    products = [k * f for f in modes for k in range(2, EARLY_ORDER + 1)]
+    for fi, fj in itertools.permutations(modes, 2):
+        products += [fi + fj, abs(fi - fj), 2.0 * fi + fj, abs(2.0 * fi - fj)]
+    near = np.concatenate([np.asarray(known, dtype=np.float64), products])
+    found: list[tuple[float, float, float, float]] = []
+    for share in EARLY_SHARES:
+        n = int(share * longest)
+        first = [(a, a + n) for a, c in segments if c - a >= 2 * n]
+        if n < MIN_WINDOW or not first:
+            continue
+        freqs, amp = averaged_spectrum(x, fs, first)
+        _, after = averaged_spectrum(x, fs, [(a + n, a + 2 * n) for a, _ in first])
+        peaks = find_peaks_interpolated(freqs, amp, min_relative=1e-4, smoothing=PEAK_SMOOTHING,
+                                        fmin=EARLY_CYCLES * fs / n, _func="identify")
+        level = _spectrum_level(freqs, amp, peaks.frequencies, peaks.amplitudes)
+        step = float(freqs[1] - freqs[0])
+        for fi, ai in zip(peaks.frequencies, peaks.amplitudes):
+            fi, ai = float(fi), float(ai)
+            apart = max(EARLY_APART * fi, 2.0 * step)
+            if ai < NOISE_MARGIN * level or fs / fi < MIN_SAMPLES_PER_CYCLE \
+                    or (near.size and float(np.min(np.abs(near - fi))) <= apart) \
+                    or _col(fi, ai, peaks.frequencies[peaks.amplitudes > ai], freqs,
+                            amp) > VALLEY:
+                continue
+            k = int(round(fi / step))
+            fall = float(np.max(after[max(k - 1, 0):k + 2])) / ai
+            if fall > EARLY_FALL:
+                continue
+            if not any(abs(seen[0] - fi) <= apart for seen in found):
+                found.append((fi, ai / level, fall, n / fs))    # (the finest resolution)
+    return found
 
 
 def _too_few_peaks(components: Any, f: np.ndarray, band: tuple[float, float] | None,
