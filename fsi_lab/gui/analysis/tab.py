@@ -339,7 +339,7 @@ def _failures(results: RunResults) -> list[str]:
     return lines
 
 
-def _title_parts(results) -> list[str]:
+def _title_parts(results: RunResults) -> list[str]:
     """The run's name (and its file's, when another), its status and when it started; for
     imported data, the file it was imported from and when (a CSV holds no start time)."""
     parts = [f"<b>{results.name}</b>"]
