@@ -1092,7 +1092,8 @@ def build_parser(json_requested: bool = False, registry=None) -> argparse.Argume
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override an analysis parameter, analysis.ANALYSIS.PARAMETER=VALUE "
                         "(fsi-lab plugins -v lists them), or the specimen's, "
-                        "specimen.KEY=VALUE (e.g. specimen.fluid=water)")
+                        "specimen.KEY=VALUE (e.g. specimen.fluid=water); "
+                        "analysis.chain+=NAME appends an analysis to the chain")
     p.add_argument("--strict", action="store_true",
                    help="exit 3 when a result was refused or carries a warning")
     p.add_argument("--mass-per-length", type=float, metavar="KG_PER_M",

@@ -250,19 +250,27 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], registry: Registr
     ``excitation.plugin=NAME`` is applied first, whatever its place: it replaces the
     ``[excitation]`` table by that plugin with its default parameters (the profile's are another
     plugin's), and the other ``excitation.*`` overrides then set the new plugin's parameters.
+    ``analysis.chain+=NAME,...`` appends analyses to the chain in force (the profile's, an
+    earlier override's, or the default chain of data without one), each that is not in it.
     """
     raw = copy.deepcopy(raw)
     parsed = []
     for item in overrides:
         key, sep, text = item.partition("=")
-        path = [part for part in key.strip().split(".") if part]
+        key = key.strip()
+        append = key.endswith("+")
+        path = [part for part in key.removesuffix("+").strip().split(".") if part]
         if not sep or len(path) < 2:
             raise ParameterError(
                 f"--set {item!r}: expected key.path=value, e.g. excitation.amplitude=0.5"
             )
-        parsed.append((path, text))
+        if append and path != ["analysis", "chain"]:
+            raise ParameterError(
+                f"--set {item!r}: += appends to the analysis chain only "
+                "(analysis.chain+=NAME); expected key.path=value")
+        parsed.append((path, text, append))
     parsed.sort(key=lambda entry: entry[0] != ["excitation", "plugin"])
-    for path, text in parsed:
+    for path, text, append in parsed:
         if path == ["excitation", "plugin"]:
             name = text.strip()
             _plugin(registry, "excitation", name, "excitation")
@@ -274,6 +282,11 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], registry: Registr
         node = raw
         for part in path[:-1]:
             node = node.setdefault(part, {})
+        if append:
+            from fsi_lab.chain import default_chain
+
+            chain = list(node.get(path[-1]) or default_chain(registry))
+            value = chain + [name for name in value if name not in chain]
         node[path[-1]] = value
     return raw
 

@@ -103,6 +103,23 @@ def test_set_overrides_any_parameter_by_path(registry):
     assert profile.overrides[0] == "excitation.height=0.02"
 
 
+def test_set_appends_to_the_analysis_chain(registry):
+    """analysis.chain+=NAME adds analyses to the chain in force (adding one meant typing the
+    whole chain), each once; to the default chain where nothing gave one."""
+    from fsi_lab.chain import default_chain
+
+    shipped = load_profile(GOOD, registry).analysis["chain"]
+    profile = load_profile(GOOD, registry, ["analysis.chain+=frf,hvd", "analysis.chain+=frf"])
+    assert profile.analysis["chain"] == shipped + ["frf"]
+    profile = load_profile(GOOD, registry, ["analysis.chain=spectrum", "analysis.chain+=hvd"])
+    assert profile.analysis["chain"] == ["spectrum", "hvd"]
+    bare = parse_profile("", "imported", registry, ["analysis.chain+=frf"],
+                         sections=("analysis", "specimen"))
+    assert bare.analysis["chain"] == default_chain(registry) + ["frf"]
+    with pytest.raises(ProfileError, match=r"\+= appends to the analysis chain only"):
+        load_profile(GOOD, registry, ["run.duration+=5"])
+
+
 def test_set_excitation_plugin_starts_from_its_defaults(registry):
     # the plugin switch applies first wherever it stands; the profile's ramp parameters go
     profile = load_profile(GOOD, registry, ["excitation.count=4",
