@@ -47,11 +47,12 @@ screenshots: $(VENV)/.installed-gui
 
 # ruff first: a lint error stops the run before the tests start. The tests run in
 # TEST_WORKERS processes (pytest-xdist), a test file to a worker so that each file's fixtures
-# are built once; TEST_WORKERS=0 runs them in this process.
+# are built once; TEST_WORKERS=0 runs them in this process. The 20 slowest tests are listed
+# at the end: the suite must stay under 15 minutes on two cores.
 TEST_WORKERS ?= 2
 test: $(VENV)/.installed-dev,gui h5dump-tool
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile --durations=20
 
 # ruff with the rule set stated in pyproject.toml ([tool.ruff.lint]); LINT narrows it to some
 # paths (make lint LINT="fsi_lab/testing tests/test_hooks.py").
