@@ -2535,8 +2535,14 @@ def _backbone_foot(bb: Backbone, w0: float, alpha: float, damped: float, noise: 
     # and last crossings; the standard error from the scatter of block means, not of points.
     low = np.sort(usable[np.argsort(bb.amplitude[usable], kind="stable")[:n]])
     amp, freq = bb.amplitude[low], bb.frequency[low]
-    model = (w0 / (2.0 * math.pi)) * damped * np.sqrt(
-        np.maximum(1.0 + 0.75 * alpha * amp ** 2 / w0 ** 2, 1e-12))
+    stiffness = 1.0 + 0.75 * alpha * amp ** 2 / w0 ** 2
+    # A softening fitted so strong that the model's frequency falls by half or more there is
+    # beyond what harmonic balance describes, and a damping that halves it beyond a free
+    # decay's: no model to compare with (a phantom mode's fit, its damping rate above its
+    # frequency, put the model's at 1e-150 of it, and the difference printed 150 digits).
+    if not (damped >= 0.5 and np.all(stiffness > 0.25)):
+        return None
+    model = (w0 / (2.0 * math.pi)) * damped * np.sqrt(stiffness)
     diff = freq / model - 1.0
     blocks = diff[:n // BACKBONE_FOOT_BLOCK * BACKBONE_FOOT_BLOCK].reshape(
         -1, BACKBONE_FOOT_BLOCK).mean(axis=1)

@@ -92,3 +92,22 @@ def test_a_stiffness_the_cubic_term_cannot_follow_is_warned_of_its_foot(shift):
     assert abs(foot / F0 - 1.0) < abs(mode.frequency_hz / F0 - 1.0)
     (said,) = [w for w in mode.warnings if w.startswith("the natural frequency (")]
     assert "the backbone measured at the decays' smallest amplitudes" in said
+
+
+def test_the_foot_check_needs_a_model_that_still_oscillates():
+    """A phantom mode's fit (a swept sine's forced cycles taken for a decay) had its damping
+    rate above its frequency: the model's frequency at the foot came out 1e-150 of it, and
+    the warning printed a difference of 150 digits. Where the fitted damping or a softening
+    halves the model's frequency, there is no model to compare the backbone with."""
+    from fsi_lab.dsp.identify import Backbone, _backbone_foot
+
+    n = 200
+    bb = Backbone(times=np.arange(n) / 100.0, frequency=np.full(n, 100.0),
+                  amplitude=np.linspace(1e-4, 1e-6, n), decay=np.zeros(n, dtype=int))
+    w0 = 2 * math.pi * 100.0
+    found = _backbone_foot(bb, w0, 0.0, 1.0, 1e-9, "displacement")
+    assert found is not None and abs(found[0]) < 1e-12      # the check runs on a free decay
+    assert _backbone_foot(bb, w0, 0.0, 1e-150, 1e-9, "displacement") is None
+    # the foot is the smaller half of the amplitudes, up to 5e-5: w^2 below zero there
+    softening = -2.0 * w0 ** 2 / 5e-5 ** 2
+    assert _backbone_foot(bb, w0, softening, 1.0, 1e-9, "displacement") is None
