@@ -1221,7 +1221,9 @@ def _early_peaks(x: np.ndarray, fs: float, segments: list[tuple[int, int]], know
     found: list[tuple[float, float, float, float]] = []
     for share in EARLY_SHARES:
         n = int(share * longest)
-        first = [(a, a + n) for a, c in segments if c - a >= 2 * n]
+        # (both stretches must move: a gap left as recorded, or an exporter's fill, does not)
+        first = [(a, a + n) for a, c in segments if c - a >= 2 * n
+                 and np.ptp(x[a:a + n]) > 0.0 and np.ptp(x[a + n:a + 2 * n]) > 0.0]
         if n < MIN_WINDOW or not first:
             continue
         freqs, amp = averaged_spectrum(x, fs, first)
