@@ -179,7 +179,8 @@ RISE_SETTLE = 5.0
 #: HOLD_STILL times the noise of their sample-to-sample steps) at more than HOLD_OFFSET times
 #: that noise from where the record comes to rest (its last REST_SHARE) hold a static
 #: deflection; the hold ends where the record first moves HOLD_DEPARTURE times that noise
-#: away from it (:func:`_static_hold`).
+#: away from the median of the HOLD_SHARE of samples before (:func:`_static_hold`: a
+#: sensor's slow drift is followed).
 HOLD_SHARE, HOLD_STILL, HOLD_OFFSET, HOLD_DEPARTURE, REST_SHARE = 0.02, 2.0, 10.0, 6.0, 0.1
 #: ... and the deflection held reaches at least this share of the largest excursion after it.
 HOLD_REACH = 0.5
