@@ -370,7 +370,7 @@ def test_a_long_drifting_hold_before_a_fast_release_does_not_hide_its_oscillatio
     decay = simulate_decay("quadratic", [0.02 * w0, 30.0], w0, x0, 0.0, t,
                            quantity="displacement", output="displacement")
     x = np.concatenate([np.full(int(hold * fs), x0), decay])
-    x = x + 0.026 * x0 * np.sin(2 * np.pi * np.arange(x.size) / fs / 29.0)   # the sensor's
+    x = x + 0.026 * x0 * np.sin(2 * np.pi * np.arange(x.size) / fs / 29.0)   # drift
     x = x + 0.0035 * x0 * np.random.default_rng(0).standard_normal(x.size)
     mode = identify(x, fs, quantity="displacement").modes[0]
     assert mode.frequency_hz == pytest.approx(f0, rel=5e-4)
