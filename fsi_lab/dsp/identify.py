@@ -1188,21 +1188,21 @@ def _broad_small_peaks(freqs: np.ndarray, amp: np.ndarray, small_f: np.ndarray,
         return []
     top = int(np.argmax(a))
     area = _peak_area(freqs, amp, float(f[top]))
-    notes = []
+    noted = []
     for fi, ai in zip(small_f, small_a):
         if ai < BROAD_HEIGHT * a[top] or ai < NOISE_MARGIN * level \
                 or _col(float(fi), float(ai), f, freqs, amp) > VALLEY:
             continue
         share = _peak_area(freqs, amp, float(fi)) / area
         if share >= BROAD_AREA:
-            notes.append((float(fi),
+            noted.append((float(fi),
                 f"the spectral peak at {fi:.4g} Hz stands out of the spectrum as a mode's, but "
                 f"its height is {100 * ai / a[top]:.2g} % of the largest, under the "
                 f"{100 * MODE_THRESHOLD:g} % a component needs, while its area (height times "
                 f"width) is {100 * share:.0f} % of the largest's: a heavily damped mode, not "
                 "reported; band_hz (e.g. --set analysis.hvd.band_hz=LOW,HIGH around it) "
                 "identifies it alone"))
-    return notes
+    return noted
 
 
 def _early_peaks(x: np.ndarray, fs: float, segments: list[tuple[int, int]], known: np.ndarray,
