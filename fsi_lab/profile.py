@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
-from fsi_lab.chain import check_chain
+from fsi_lab.chain import check_chain, default_chain
 from fsi_lab.contract import ROLES
 from fsi_lab.errors import ParameterError, PluginError, ProfileError
 from fsi_lab.inputfiles import MAX_PROFILE_BYTES, nesting, read_text
@@ -283,8 +283,6 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], registry: Registr
         for part in path[:-1]:
             node = node.setdefault(part, {})
         if append:
-            from fsi_lab.chain import default_chain
-
             chain = list(node.get(path[-1]) or default_chain(registry))
             value = chain + [name for name in value if name not in chain]
         node[path[-1]] = value
