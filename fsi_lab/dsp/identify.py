@@ -351,10 +351,11 @@ FORCED_CYCLES, FORCED_Z, FORCED_PRECISION, FORCED_SHIFT = 2.0, 2.0, 3.0, 5e-4
 #: 190 on random forcing that ends inside the record; 3.5 to 4 with 1/f noise) is identified
 #: again from FORCED_PERIODS periods after its last decay's start, each start judged against
 #: the last one kept. On 821 records of four earlier hunts for faults, 102 were identified
-#: again and 11 taken from later: 10 random forcings or sine dwells ending inside the
-#: record, read 0.23 to 4.5 % off and then within 0.03 %, their intervals covering the truth;
-#: and a swept sine whose forced cycles after the mode read as one at 1.54 times its
-#: frequency, and then at 1.77 (warned either way).
+#: again and 11 taken from later. Eight random forcings and a sine dwell ending inside the
+#: record, and two modes 8 % apart beating (read as one), read 0.23 to 4.5 % off and then
+#: within 0.03 %, their intervals covering the truth (both beating modes found); a swept
+#: sine whose forced cycles after the mode read as one at 1.54 times its frequency read at
+#: 1.77 (warned either way).
 FORCED_SCATTER = 10.0
 FORCED_PERIODS = (4, 8, 16, 32)
 #: The larger and the smaller half's laws (step 8b) are warned of as not one law beyond this
@@ -3401,10 +3402,11 @@ def _forced_start_note(mode: ModeIdentification, other: ModeIdentification,
     return (f"the mode at {mode.frequency_hz:.4g} Hz (+-{q * se_with:.2g} Hz) reads "
             f"{other.frequency_hz:.5g} Hz (+-{q * se_without:.2g} Hz) from {when} s on, "
             f"{_times(se_with / se_without)} as precisely from fewer cycles: its "
-            "cycles before were no free decay, still forced (a random excitation or a sweep "
-            "that ends inside the record); the record is analysed from there (a start given "
-            "for a decay, analysis.hvd.start_s or identify's decay_starts, turns this check "
-            "off)")
+            "cycles before were no free decay of one mode (still forced, as by a random "
+            "excitation or a sweep that ends inside the record, or beating with a close mode "
+            "the first reading did not separate); the record is analysed from there (a start "
+            "given for a decay, analysis.hvd.start_s or identify's decay_starts, turns this "
+            "check off)")
 
 
 def _identify_once(x: Any, fs: float, quantity: str, components: Any,
