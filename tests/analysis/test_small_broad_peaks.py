@@ -15,6 +15,7 @@ import math
 import re
 
 import numpy as np
+import pytest
 
 from fsi_lab.dsp.identify import identify
 from fsi_lab.dsp.laws import simulate_decay
@@ -110,3 +111,17 @@ def test_a_mode_whose_band_starts_with_a_short_half_cycle_keeps_its_decay():
     assert not [n for n in found.notes if "25.7" in n]
     # the 491 Hz mode, under the whole decay's noise, is noted from its first cycles
     assert [n for n in found.notes if "first" in n and "spectral peak at 49" in n], found.notes
+
+
+def test_a_decay_shorter_than_the_earliest_stretch_looked_at_is_identified():
+    """A record of 120 samples (12 ms of a 1 kHz decay at 10 kHz): the decays' first 1/128 is
+    no sample at all, and the early spectra's search failed on it with numpy's "zero-size
+    array" (a ValueError, not a refusal) before it asked whether the stretch was long enough.
+    Now it looks no earlier than a stretch of its shortest window allows: the mode is
+    identified."""
+    t = np.arange(120) / FS
+    rng = np.random.default_rng(1)
+    v = np.exp(-30.0 * t) * np.sin(2.0 * math.pi * 1000.0 * t) \
+        + 1e-3 * rng.standard_normal(t.size)
+    (mode,) = identify(v, FS).modes
+    assert mode.frequency_hz == pytest.approx(1000.0, rel=1e-3)
