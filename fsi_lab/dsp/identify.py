@@ -3334,6 +3334,7 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
                            min_frequency)
     if decay_starts is not None:
         return first
+
     def again(starts: list[float], after: float | None) -> Identification | None:
         try:
             return _identify_once(x, fs, quantity, components, band, starts, reference, laws,
@@ -3345,20 +3346,19 @@ def identify(x: Any, fs: float, *, quantity: str = "velocity", components: Any =
     for starts, after in _forced_starts(first, float(fs)):
         if (later := again(starts, after)) is None:
             continue
-        other = min(later.modes, key=lambda m: abs(m.frequency_hz - mode.frequency_hz))
+        other = _nearest(later.modes, mode)
         if _more_free(mode, other):     # (each later start judged against the last kept)
             kept, mode, taken = later, other, (starts, after)
     if taken is None:
         return first
     # A free decay reads the same from later still; two close modes' beat, which the first
     # reading took for one, reads another frequency at each phase of the beat.
+    starts, after = taken
     shift = FORCED_CONFIRM / mode.damped_frequency_hz
-    if (check := again([s + shift for s in taken[0]],
-                       None if taken[1] is None else taken[1] + shift)) is not None:
-        other = min(check.modes, key=lambda m: abs(m.frequency_hz - mode.frequency_hz))
-        if _moved(mode, other):
-            return first
-    note = _forced_start_note(first.modes[0], mode, taken[0])
+    check = again([s + shift for s in starts], None if after is None else after + shift)
+    if check is not None and _moved(mode, _nearest(check.modes, mode)):
+        return first
+    note = _forced_start_note(first.modes[0], mode, starts)
     return dataclasses.replace(kept, notes=[note, *kept.notes])
 
 
@@ -3388,6 +3388,11 @@ def _forced_starts(found: Identification, fs: float
             and 2 * last.amplitude.size >= sum(d.amplitude.size for d in mode.decays)):
         tries += [([free + k * period], free + k * period) for k in FORCED_PERIODS]
     return tries
+
+
+def _nearest(modes: list[ModeIdentification], mode: ModeIdentification) -> ModeIdentification:
+    """The one of ``modes`` whose natural frequency lies nearest ``mode``'s."""
+    return min(modes, key=lambda m: abs(m.frequency_hz - mode.frequency_hz))
 
 
 def _standard_error(mode: ModeIdentification) -> float:
@@ -3421,12 +3426,12 @@ def _forced_start_note(mode: ModeIdentification, other: ModeIdentification,
                        starts: list[float]) -> str:
     """The note that the record's first identification, of ``mode``, is replaced by the one
     from ``starts`` (s), of ``other``."""
-    q = float(sstats.norm.ppf(0.5 + 0.5 * LEVEL))
-    se_with, se_without = _standard_error(mode), _standard_error(other)
+    half_with = 0.5 * (mode.frequency_ci[1] - mode.frequency_ci[0])
+    half_without = 0.5 * (other.frequency_ci[1] - other.frequency_ci[0])
     when = ", ".join(f"{s:.4g}" for s in starts)
-    return (f"the mode at {mode.frequency_hz:.4g} Hz (+-{q * se_with:.2g} Hz) reads "
-            f"{other.frequency_hz:.5g} Hz (+-{q * se_without:.2g} Hz) from {when} s on, "
-            f"{_times(se_with / se_without)} as precisely from fewer cycles: its "
+    return (f"the mode at {mode.frequency_hz:.4g} Hz (+-{half_with:.2g} Hz) reads "
+            f"{other.frequency_hz:.5g} Hz (+-{half_without:.2g} Hz) from {when} s on, "
+            f"{_times(half_with / half_without)} as precisely from fewer cycles: its "
             "cycles before were no free decay of one mode (still forced, as by a random "
             "excitation or a sweep that ends inside the record, or beating with a close mode "
             "the first reading did not separate); the record is analysed from there (a start "
