@@ -265,6 +265,18 @@ EIGEN_FLOOR = 1e-13
 RIDGE = 1e-9
 
 
+def normal_inverse(design: np.ndarray) -> np.ndarray:
+    """``(A^T A)^+`` of a design matrix ``A`` (rows: observations, columns: parameters),
+    computed on its columns scaled to unit norm and scaled back: parameters whose sizes span
+    many decades (a frequency in rad/s beside a time offset in s on a kHz decay, a cubic
+    stiffness beside a damping rate) would otherwise fall under the pseudo-inverse's cut-off
+    and come out with no variance at all."""
+    norms = np.linalg.norm(design, axis=0)
+    norms[norms == 0.0] = 1.0
+    unit = design / norms
+    return np.linalg.pinv(unit.T @ unit) / np.outer(norms, norms)
+
+
 def _lstsq_normal(basis: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Least squares by the normal equations (columns of ``basis`` normalised), tiny ridge."""
     gram = basis.conj().T @ basis

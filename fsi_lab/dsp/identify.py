@@ -103,7 +103,15 @@ import scipy.stats as sstats
 from scipy.ndimage import median_filter
 from scipy.signal import butter, hilbert, sosfiltfilt
 
-from fsi_lab.dsp._signal import _band_limited, as_record, check_rate, fail, smooth_step, true_runs
+from fsi_lab.dsp._signal import (
+    _band_limited,
+    as_record,
+    check_rate,
+    fail,
+    normal_inverse,
+    smooth_step,
+    true_runs,
+)
 from fsi_lab.dsp.bands import ModeBands, reduce_rate, reduction_factor, split
 from fsi_lab.dsp.crest import TOP_SHARE as CREST_SHARE
 from fsi_lab.dsp.crest import half_cycle_harmonics, pooled_crest
@@ -249,8 +257,11 @@ MIN_SAMPLES_PER_CYCLE = 6.0
 MIN_CYCLES = 3
 #: Extrema are used down to FLOOR times the noise RMS in the band ...
 FLOOR = 5.0
-#: ... judged on the fitted envelope, after a first fit on those above FIRST_FLOOR times it.
+#: ... judged on the fitted envelope, after a first fit on those above FIRST_FLOOR times it;
 FIRST_FLOOR = 3.0
+#: and no lower than where the noise's lift of an extremum (``_Mode.lift``) is this share of
+#: it. The lift's first-order correction holds below it; near 1/4 it takes an extremum to 0.
+LIFT_SHARE = 0.1
 #: A coefficient whose 95 % interval is wider than +- this share of it gets a warning: at such
 #: a precision the estimates also carry a bias of a third of a standard error or more (at 3 %
 #: noise and 500 Hz, intervals of +-15 to 35 % came with biases of +6 % (C_i) and -7 % (C_f),
@@ -761,7 +772,12 @@ def _bursts(high: np.ndarray, low: np.ndarray, floor: float) -> np.ndarray:
     loud = (high > floor) & (high > low)
     for first, stop in zip(*true_runs(loud)):
         before = low[first - 1] if first else 0.0
-        if np.any(low[stop:stop + 2] > 2.0 * before):
+        # A burst starts: the content above the split band rises out of what it was. A high
+        # mode decaying beside the dominant one only falls (at fs / 6 and as large, it was
+        # taken for a burst at every other block, and no decay was left).
+        risen = first == 0 or float(np.max(high[first:stop])) \
+            > 2.0 * float(np.min(high[max(0, first - 3):first]))
+        if np.any(low[stop:stop + 2] > 2.0 * before) or not risen:
             loud[first:stop] = False
     return loud
 
@@ -1551,6 +1567,13 @@ def _extrema(signal: np.ndarray, fs: float, frequency: float, start: int, free: 
     sel = t >= (free - 1) / fs
     t, v = t[sel], hc.values[sel]
     above = np.abs(v) >= floor
+    # The band filter settling on the window's start can leave its first extrema under the
+    # floor too (a weak mode near fs/8 under a large low one): the decay begins after them.
+    settling = 0
+    while settling < min(SETTLING_HALF_CYCLES, above.size - 1) and not above[settling]:
+        settling += 1
+    if above[settling:settling + 1].all() and settling:
+        t, v, above = t[settling:], v[settling:], above[settling:]
     run = int(np.argmin(above)) if not above.all() else above.size
     # A half cycle far longer or shorter than the mode's is no cycle of its free decay: the
     # motion has stopped (dry friction sticks) and what is left is the band filter's ringing
@@ -2406,7 +2429,9 @@ def _frequency_step(mode: _Mode, quantity: str, seed: bool = False) -> None:
         step, *_ = np.linalg.lstsq(sub, r, rcond=None)
         resid = r - sub @ step
         dof = max(n - len(names), 1)
-        cov = np.linalg.pinv(sub.T @ sub) * float(resid @ resid) / dof
+        # (the frequency column, s per rad/s, is 1e-8 of the offsets' on a 2 kHz decay of a
+        # few ms: unscaled, its interval came out 1e-14 Hz wide)
+        cov = normal_inverse(sub) * float(resid @ resid) / dof
         # What the band's noise correlation leaves correlated (a drift, a close mode's slow
         # beat) makes neighbouring residuals alike: the variance of a rate fitted to them
         # grows by (1 + rho) / (1 - rho) (rho: their lag-1 correlation, as for AR(1) errors).
@@ -3581,7 +3606,10 @@ def _identify_once(x: Any, fs: float, quantity: str, components: Any,
         # square angular frequency). Taken off each extremum (``lift``).
         lift = noise_k ** 2 * bands.mean_square_frequency(k, integrate) \
             / (2.0 * (2.0 * math.pi * f_k) ** 2)
-        modes.append(_Mode(band=k, frequency=f_k, floor=max(FLOOR * noise_k, 1e-300),
+        # A band far wider than its mode (a lone high mode beside it) lifts extrema by more
+        # than that first-order share near FLOOR: they are read only where it is LIFT_SHARE.
+        floor = max(FLOOR * noise_k, math.sqrt(lift / LIFT_SHARE), 1e-300)
+        modes.append(_Mode(band=k, frequency=f_k, floor=floor,
                            correlation=bands.correlation(k), lift=lift, noise=noise_k))
     # A record sampled far above its highest band is analysed at a reduced rate: the bands see
     # the same signals, at a fraction of the cost. Its white noise keeps its density (the RMS

@@ -147,7 +147,8 @@ def _run_bands(context: AnalysisContext, params: dict[str, Any]) -> Components:
         decomposition=res, method="bands",
         unit=ch.unit if quantity != "acceleration" else "m/s", channel_unit=ch.unit,
         relative_to=relative_to,
-        start_rule="each free decay from its largest sample"
+        start_rule="each free decay from its largest sample, or from the end of a forced "
+        "response that holds it (the channel's notes name each later start and why)"
         + ("" if params["start_s"] is None else f", not before {params['start_s']:g} s")
         + (f", and not before the base has calmed down ({QUIET_LEVEL:g} of its peak "
            f"envelope) at {', '.join(f'{s:.4g}' for s in quiet)} s" if len(quiet) else ""),
