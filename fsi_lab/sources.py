@@ -264,7 +264,8 @@ def _clipping(data: Any, n: int, lo: float, hi: float) -> str | None:
 
     long_run = max(8, n // 1000)
     for label, value in (("maximum", hi), ("minimum", lo)):
-        runs = _runs_at(data, n, value)
+        hold = _leading_hold(data, value, hi - lo)
+        runs = [(max(a, hold), b) for a, b in _runs_at(data, n, value) if b > hold]
         if sum(b - a for a, b in runs) < 3:
             continue
         flagged = [(a, b) for a, b in runs if b - a >= 3]
@@ -275,6 +276,18 @@ def _clipping(data: Any, n: int, lo: float, hi: float) -> str | None:
             continue
         return flat_message(label, value, flat)
     return None
+
+
+def _leading_hold(data: Any, value: float, span: float) -> int:
+    """:func:`fsi_lab.dsp._signal.leading_hold` of a source at its extreme ``value``, a chunk
+    at a time."""
+    from fsi_lab.dsp._signal import leading_hold
+
+    for start, chunk in chunks(data):
+        held = leading_hold(np.abs(chunk - value), span)
+        if held < chunk.size:
+            return start + held
+    return int(len(data))
 
 
 def _runs_at(data: Any, n: int, value: float) -> list[tuple[int, int]]:

@@ -97,13 +97,17 @@ def clipping(x: np.ndarray) -> str | None:
     neighbours at the extreme betray a converter or amplifier at the end of its range. A
     record on a converter's grid holds its extreme over the samples the oscillation spends
     within one step of its crest: runs no longer than :func:`_crest_hold` allows (a slow mode
-    sampled fast by a coarse converter) are not clipping.
+    sampled fast by a coarse converter) are not clipping. Nor are runs in a record's lead-in
+    at its extreme (:func:`leading_hold`: a displacement held at its deflection before the
+    release, on a coarse grid or printed to a few digits).
     """
     n = x.size
     long_run = max(8, n // 1000)
     step = None
+    span = float(x.max() - x.min())
     for label, value in (("maximum", x.max()), ("minimum", x.min())):
         at = x == value
+        at[:leading_hold(np.abs(x - value), span)] = False
         if at.sum() < 3:
             continue
         starts, stops = true_runs(at)
@@ -117,6 +121,19 @@ def clipping(x: np.ndarray) -> str | None:
                 continue
             return flat_message(label, float(value), flat)
     return None
+
+
+#: A record's lead-in at its extreme stays within this share of its range of it.
+HOLD_BAND = 0.1
+
+
+def leading_hold(distance: np.ndarray, span: float) -> int:
+    """Samples a record starts with at one of its extremes: the length of its lead-in whose
+    ``distance`` from that extreme (unit of the record) stays within :data:`HOLD_BAND` of the
+    record's ``span`` (its range). 0 when the record starts elsewhere; the whole length when
+    it never leaves (a caller reading a record in chunks carries on in the next)."""
+    away = distance > HOLD_BAND * span
+    return int(np.argmax(away)) if away.any() else distance.size
 
 
 def flat_message(label: str, value: float, flat: np.ndarray) -> str:

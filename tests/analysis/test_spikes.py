@@ -286,3 +286,35 @@ def test_runs_are_found_across_chunk_ends(monkeypatch):
         x = (rng.random(int(rng.integers(1, 60))) < 0.6).astype(float)
         firsts, lasts = true_runs(x == 1.0)
         assert sources._runs_at(x, x.size, 1.0) == list(zip(firsts.tolist(), lasts.tolist()))
+
+
+@pytest.mark.parametrize("chunk", [997, 1 << 12])
+def test_a_deflection_held_before_the_release_is_not_taken_for_clipping(monkeypatch, chunk):
+    """A laser's displacement record of the wet 17 Hz mode held at 1 mm for 0.5 s, then
+    released (5 kHz, 0.02 um of noise), printed to 1 um: the hold repeats the record's
+    largest value over hundreds of samples, and it was refused as clipped ("the maximum 0.001
+    is held flat over 2502 samples"). It is identified (C_i within 2 %, C_f within 5 %) and
+    passes the chunked check; the same record cut at 50 % of the deflection after the
+    release is still refused by both."""
+    from fsi_lab import sources
+    from fsi_lab.dsp.laws import simulate_decay
+
+    monkeypatch.setattr(sources, "CHUNK", chunk)
+    fs, w, x0 = 5000.0, 2.0 * np.pi * WET_F, 1e-3
+    t = np.arange(int(3.0 * fs)) / fs
+    decay_x = simulate_decay("quadratic", [WET_C_I / (2 * WET_MASS), WET_C_F / WET_MASS], w,
+                             x0, 0.0, t, quantity="displacement", output="displacement")
+    rng = np.random.default_rng(3)
+    x = np.concatenate((np.full(int(0.5 * fs), x0), decay_x))
+    x = np.round((x + 2e-8 * rng.standard_normal(x.size)) / 1e-6) * 1e-6
+    found = identify(x, fs, quantity="displacement")
+    a, beta = found.modes[0].quadratic.params
+    assert 2 * WET_MASS * a == pytest.approx(WET_C_I, rel=0.02)
+    assert WET_MASS * beta == pytest.approx(WET_C_F, rel=0.05)
+    assert sources.check_source(x, "frf") == x.size
+    cut = x.copy()
+    cut[int(0.5 * fs):] = np.clip(cut[int(0.5 * fs):], -0.5 * x0, 0.5 * x0)
+    with pytest.raises(AnalysisError, match="looks clipped: the m"):
+        identify(cut, fs, quantity="displacement")
+    with pytest.raises(AnalysisError, match="looks clipped: the m"):
+        sources.check_source(cut, "frf")
