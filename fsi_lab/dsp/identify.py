@@ -159,6 +159,11 @@ HIDDEN_RATIO = 1.5
 HIDDEN_SHARE = 0.1
 #: The decays are split on the record low-passed at this multiple of its dominant frequency.
 SPLIT_BAND = 8.0
+#: Each window of a release split at its modes' beating nodes (:func:`_beat_split`) peaks
+#: below this share of the one before.
+BEAT_FALL = 0.9
+#: How the note on a largest spectral peak that stands out of nothing begins.
+UNRESOLVED_PEAK = "the largest spectral peak, at"
 #: A burst of broadband noise in a decay (a knock on the table, a vibrometer losing its
 #: signal): the record's content above the split band, RMS over blocks of BURST_BLOCK periods
 #: of the dominant oscillation (at least BURST_SAMPLES samples), rising BURST_RISE times above
@@ -1085,6 +1090,17 @@ def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
     return here if here < half + reach else peak
 
 
+def _beat_split(x: np.ndarray, windows: list[tuple[int, int, int]]) -> bool:
+    """Whether the free-decay ``windows`` (samples) could be one release split at the nodes
+    of its modes' beating: several windows, each one's largest value under the one before's
+    (:data:`BEAT_FALL`), no gap between them. A train of impulses restarts each decay near
+    the first's height."""
+    if len(windows) < 2:
+        return False
+    tops = [float(np.max(np.abs(x[a:c]))) for a, _, c in windows]
+    return all(later < BEAT_FALL * earlier for earlier, later in zip(tops, tops[1:]))
+
+
 def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
                 band: tuple[float, float] | None, f_dom: float, sigma: float
                 ) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray, np.ndarray]:
@@ -1128,7 +1144,7 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
             if col > VALLEY:
                 flanks.append(fi)
             if i == 0 and a[i] >= NOISE_MARGIN * level and f_dom * longest >= MIN_CYCLES:
-                notes.append(f"the largest spectral peak, at {fi:.4g} Hz, does not stand out "
+                notes.append(f"{UNRESOLVED_PEAK} {fi:.4g} Hz, does not stand out "
                              f"of the spectrum around it (it falls only to {100 * col:.0f} % "
                              f"of its height within an octave; a mode falls below "
                              f"{100 * VALLEY:.0f} %): no mode rings freely in the decays (one "
@@ -3532,6 +3548,16 @@ def _identify_once(x: Any, fs: float, quantity: str, components: Any,
         windows = _unforced(windows, reference, fs, f_dom)
     cand_f, cand_a, notes, guards, steady = _candidates(record, fs, windows, band_t, f_dom,
                                                         sigma)
+    if any(note.startswith(UNRESOLVED_PEAK) for note in notes) and _beat_split(record, windows):
+        # Modes released together whose sum dips and swells within a cycle or two (three at
+        # 1.3, 2 and 6 times the lowest) are split at each deep node: the spectrum of the
+        # first short window, the largest, merged them into one hump that stands out of
+        # nothing. One decay, then, if the whole stands out.
+        merged = [(windows[0][0], windows[0][1], windows[-1][2])]
+        whole = _candidates(record, fs, merged, band_t, f_dom, sigma)
+        if not any(note.startswith(UNRESOLVED_PEAK) for note in whole[2]):
+            windows = merged
+            cand_f, cand_a, notes, guards, steady = whole
     for a, b in plateaus:
         notes.insert(0, f"the record holds a steady oscillation from {a / fs:.4g} to "
                         f"{b / fs:.4g} s before it decays (a forcing such as a sine dwell "
