@@ -786,6 +786,28 @@ def _check_analysis_inputs(path: Path, columns: list[Column], reference: str | N
                                  f"{MAX_DELAY_S:g} s")
 
 
+#: A time column left out whose mean rate differs from --rate by more than this share (or its
+#: printed digits' share of its span) gets a note.
+TIME_RATE_NOTE = 0.005
+
+
+def _note_time_rate(path: Path, time: np.ndarray, rounding: np.ndarray, rate: float,
+                    notes: list[str]) -> None:
+    """Note that a time column left out (``--ignore-time``) runs at another mean rate than
+    ``rate`` (Hz): every frequency read from the record moves by their ratio. ``time`` in s,
+    ``rounding`` how far each value may lie from the time it stands for (s)."""
+    span = float(time[-1] - time[0]) if time.size > 1 else 0.0
+    if not (math.isfinite(span) and span > 0.0):
+        return
+    mean_rate = (time.size - 1) / span
+    slack = float(rounding[0] + rounding[-1]) / span
+    if abs(mean_rate / rate - 1.0) > max(TIME_RATE_NOTE, slack):
+        notes.append(f"{path}: the time column left out (--ignore-time) runs at {mean_rate:.6g} "
+                     f"Hz on average, not the {rate:g} Hz given with --rate, which is used: "
+                     "were the rate wrong, every frequency read from the record would be "
+                     f"{rate / mean_rate:.4g} times the true one")
+
+
 def import_csv(path: str | Path, out: str | Path, rate: float | None,
                reference: str | None = None, delays: Mapping[str, float] | None = None,
                sensitivities: Mapping[str, str] | None = None,
@@ -887,6 +909,10 @@ def import_csv(path: str | Path, out: str | Path, rate: float | None,
         raise InputFileError(f"{path}: no 'time [s]' column; give the sample rate with --rate HZ")
     else:
         _check_rate(rate, f"--rate {rate:g}")
+        if times and notes is not None:
+            factor = columns[times[0]].factor
+            _note_time_rate(path, data[:, times[0]] * factor, table.time_rounding * factor,
+                            rate, notes)
     values = {}
     for col, column in enumerate(columns):
         if column.is_time:

@@ -1,6 +1,7 @@
 """`fsi-lab import`: CSV files recorded elsewhere become run files."""
 
 import json
+import re
 
 import h5py
 import numpy as np
@@ -372,10 +373,33 @@ def test_a_time_column_refused_is_left_out_with_ignore_time(tmp_path):
     assert not out.exists()
     proc = cli("import", str(path), "-o", str(out), "--rate", "2000", "--ignore-time")
     assert proc.returncode == 0, proc.stderr
+    assert "time column left out" not in proc.stderr      # (within its printed digits)
     run = read_run(out)
     assert list(run.channels) == ["v"]
     assert (run.channels["v"].sample_rate, run.channels["v"].t0) == (2000.0, 0.0)
     np.testing.assert_array_equal(run.channels["v"].data, np.arange(8.0))
+
+
+def test_a_time_column_left_out_that_disagrees_with_the_rate_given_is_named(tmp_path):
+    """Stamps of an analyser at 2048 Hz (to 0.1 ms, with jitter) imported at --rate 2000 with
+    --ignore-time: the record is read at 2000 Hz, as asked, and a note says the column ran at
+    2048 Hz and by how much every frequency would be off (it was imported without a word,
+    and a 17 Hz mode read 16.6 Hz)."""
+    rng = np.random.default_rng(1)
+    t = np.arange(400) / 2048 + 2e-5 * rng.standard_normal(400)
+    path = tmp_path / "jitter.csv"
+    path.write_text("time [s],v [m/s]\n" + "".join(f"{ti:.4f},{i}\n" for i, ti in enumerate(t)))
+    out = tmp_path / "jitter.h5"
+    proc = cli("import", str(path), "-o", str(out), "--rate", "2000", "--ignore-time")
+    assert proc.returncode == 0, proc.stderr
+    said = re.search(r"the time column left out \(--ignore-time\) runs at (\S+) Hz on average, "
+                     r"not the 2000 Hz given with --rate, which is used: were the rate wrong, "
+                     r"every frequency read from the record would be (\S+) times the true one",
+                     proc.stderr)
+    assert said, proc.stderr
+    assert float(said[1]) == pytest.approx(2048.0, rel=2e-4)
+    assert float(said[2]) == pytest.approx(2000.0 / 2048.0, rel=2e-4)
+    assert read_run(out).channels["v"].sample_rate == 2000.0
 
 
 def test_a_windows_1252_export_is_read_and_says_so(tmp_path):
