@@ -349,6 +349,11 @@ HARMONIC_ORDER = 3
 HARMONIC_TOLERANCE = 0.03
 HARMONIC_SHARE = 0.1
 HARMONIC_POWER = 1.0
+#: ... and, for a mode without a cubic stiffness, at three times its frequency within
+#: HARMONIC_Z standard errors of the two and HARMONIC_EXACT of the frequency (a chain's
+#: harmonic of a 17 Hz mode lay 0.3 to 4.3 of them off, its few crossings' errors larger
+#: than their scatter says; a mode at 3.03 times, 17).
+HARMONIC_Z, HARMONIC_EXACT = 8.0, 1e-3
 #: Moves of the coefficients beyond this many standard errors widen their intervals.
 DRIFT_Z = 2.5
 #: Step 9: a mode whose start search leaves out FORCED_CYCLES cycles or more of each decay
@@ -2999,7 +3004,13 @@ def _harmonic_of(mode: _Mode, modes: list[_Mode]) -> tuple[_Mode, float] | None:
                 or np.max(y - x) > math.log(HARMONIC_SHARE):
             continue
         power = float(np.polyfit(x, y, 1)[0])
-        if power > HARMONIC_POWER:
+        # Without a stiffness that moves the mode's frequency with amplitude, its harmonic
+        # lies at three times its frequency to within their noise: a mode of the structure
+        # at 3.03 times, 17 standard errors off, was said to be one.
+        off = abs(mode.w0 - HARMONIC_ORDER * other.w0)
+        noise = math.hypot(mode.w0_se, HARMONIC_ORDER * other.w0_se)
+        if power > HARMONIC_POWER and (other.alpha != 0.0 or off <= HARMONIC_Z * noise
+                                       + HARMONIC_EXACT * mode.w0):
             return other, power
     return None
 
