@@ -20,7 +20,9 @@ number. The steps:
    build-up. Decays whose base (the reference) still moves
    are left out, and a record with none is refused (random excitation through the record), as
    is one excited too often to split (its spectrum a comb of harmonic lines: :data:`COMB_LINES`),
-   with the impulse spacing it would need.
+   with the impulse spacing it would need. A release split at its modes' beating nodes,
+   whose first short window's spectrum merges them into a hump that stands out of nothing,
+   is read as one decay (:func:`_beat_split`).
 2. **Modes.** The peaks of the decays' averaged spectrum (:func:`.spectrum.averaged_spectrum`)
    of at least :data:`MODE_THRESHOLD` of the largest are candidate modes; those the sampling
    cannot resolve (fewer than :data:`MIN_SAMPLES_PER_CYCLE` samples per cycle) or the windows
@@ -1098,8 +1100,7 @@ def _walk_back(x: np.ndarray, fs: float, f_dom: float, peak: int) -> int:
 def _beat_split(x: np.ndarray, windows: list[tuple[int, int, int]]) -> bool:
     """Whether the free-decay ``windows`` (samples) could be one release split at the nodes
     of its modes' beating: several windows, each one's largest value under the one before's
-    (:data:`BEAT_FALL`), no gap between them. A train of impulses restarts each decay near
-    the first's height."""
+    (:data:`BEAT_FALL`). A train of impulses restarts each decay near the first's height."""
     if len(windows) < 2:
         return False
     tops = [float(np.max(np.abs(x[a:c]))) for a, _, c in windows]
