@@ -3104,7 +3104,7 @@ def _off_peak(m: ModeIdentification) -> str:
     the frequency's 95 % half-interval, the peak's half-power half-width (decay rate / 2 pi)
     and half the spectral resolution of the longest decay (1 / (2 T)): a frequency off by
     more was pulled away by something else in the mode's band."""
-    ci = 0.5 * (m.frequency_ci[1] - m.frequency_ci[0])
+    ci = _half_width(m)
     a = max(m.laws.fits[m.laws.preferred].value("a"), 0.0)
     span = max((float(d.times[-1] - d.times[0]) for d in m.decays), default=0.0)
     tol = max(ci if math.isfinite(ci) else math.inf, a / (2.0 * math.pi),
@@ -3448,10 +3448,14 @@ def _nearest(modes: list[ModeIdentification], mode: ModeIdentification) -> ModeI
     return min(modes, key=lambda m: abs(m.frequency_hz - mode.frequency_hz))
 
 
+def _half_width(mode: ModeIdentification) -> float:
+    """The half-width (Hz) of ``mode``'s natural frequency's 95 % interval."""
+    return 0.5 * (mode.frequency_ci[1] - mode.frequency_ci[0])
+
+
 def _standard_error(mode: ModeIdentification) -> float:
     """The standard error (Hz) of ``mode``'s natural frequency, from its 95 % interval."""
-    return 0.5 * (mode.frequency_ci[1] - mode.frequency_ci[0]) \
-        / float(sstats.norm.ppf(0.5 + 0.5 * LEVEL))
+    return _half_width(mode) / float(sstats.norm.ppf(0.5 + 0.5 * LEVEL))
 
 
 def _moved(mode: ModeIdentification, other: ModeIdentification) -> bool:
@@ -3479,8 +3483,7 @@ def _forced_start_note(mode: ModeIdentification, other: ModeIdentification,
                        starts: list[float]) -> str:
     """The note that the record's first identification, of ``mode``, is replaced by the one
     from ``starts`` (s), of ``other``."""
-    half_with = 0.5 * (mode.frequency_ci[1] - mode.frequency_ci[0])
-    half_without = 0.5 * (other.frequency_ci[1] - other.frequency_ci[0])
+    half_with, half_without = _half_width(mode), _half_width(other)
     when = ", ".join(f"{s:.4g}" for s in starts)
     return (f"the mode at {mode.frequency_hz:.4g} Hz (+-{half_with:.2g} Hz) reads "
             f"{other.frequency_hz:.5g} Hz (+-{half_without:.2g} Hz) from {when} s on, "
