@@ -159,6 +159,19 @@ def run_main(*args: str) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
+def cli_here(*args: str) -> subprocess.CompletedProcess:
+    """:func:`cli` in this process (:func:`run_main`): the same exit code, stdout and stderr,
+    without a Python start-up per call (half a second of the tests that import many files)."""
+    code, out, err = run_main(*args)
+    return subprocess.CompletedProcess(["fsi-lab", *args], code, out, err)
+
+
+def cli_json_here(*args: str) -> tuple[dict, subprocess.CompletedProcess]:
+    """:func:`cli_json` in this process."""
+    proc = cli_here(*args, "--json")
+    return json.loads(proc.stdout), proc
+
+
 def write_decay_run(path: Path, a: float = 0.5, beta: float = 2.0, frequency: float = 20.0,
                     start: float = 0.3, noise: float = 1e-3, seed: int = 0,
                     duration: float = 4.0, rate: float = 1000.0,

@@ -6,7 +6,7 @@ import re
 import h5py
 import numpy as np
 import pytest
-from support import cli, cli_json, run_main
+from support import cli_here, cli_json_here, run_main
 
 from fsi_lab.runfile import read_run
 from fsi_lab.units import STANDARD_GRAVITY
@@ -24,7 +24,7 @@ def test_import_with_rate(tmp_path):
     csv_path = _write(tmp_path / "rec.csv", ["tip [m/s]", "base [g]", "drive [V]"],
                       zip(v, a, np.ones_like(t)))
     out = tmp_path / "rec.h5"
-    data, proc = cli_json("import", str(csv_path), "--rate", "1000", "-o", str(out))
+    data, proc = cli_json_here("import", str(csv_path), "--rate", "1000", "-o", str(out))
     assert proc.returncode == 0, proc.stderr
     # (the column in volts without a sensitivity is said to stay so)
     assert data == {"run": str(out), "notes": [
@@ -48,7 +48,7 @@ def test_time_column_replaces_rate(tmp_path):
     t = 2.0 + np.arange(100) / 250.0
     csv_path = _write(tmp_path / "t.csv", ["time [s]", "x [m]"], zip(t, np.sin(t)))
     out = tmp_path / "t.h5"
-    assert cli("import", str(csv_path), "-o", str(out)).returncode == 0
+    assert cli_here("import", str(csv_path), "-o", str(out)).returncode == 0
     run = read_run(out)
     assert run.channels["x"].sample_rate == pytest.approx(250.0)
     assert run.channels["x"].t0 == pytest.approx(2.0)
@@ -114,7 +114,7 @@ def test_time_column_replaces_rate(tmp_path):
 def test_bad_csv_is_refused_with_file_and_place(tmp_path, header, rows, args, fragment):
     csv_path = _write(tmp_path / "bad.csv", header, rows)
     out = tmp_path / "bad.h5"
-    proc = cli("import", str(csv_path), "-o", str(out), *args)
+    proc = cli_here("import", str(csv_path), "-o", str(out), *args)
     assert proc.returncode == 2
     assert fragment in proc.stderr
     assert not out.exists()
@@ -122,7 +122,7 @@ def test_bad_csv_is_refused_with_file_and_place(tmp_path, header, rows, args, fr
 
 def _imported(csv_path, *args):
     out = csv_path.with_suffix(".h5")
-    proc = cli("import", str(csv_path), "-o", str(out), *args)
+    proc = cli_here("import", str(csv_path), "-o", str(out), *args)
     assert proc.returncode == 0, proc.stderr
     return read_run(out)
 
@@ -204,7 +204,7 @@ def test_a_time_column_printed_to_a_few_digits_gives_the_rate_it_was_written_at(
 def test_a_rate_the_time_column_contradicts_is_refused(tmp_path):
     path = _write(tmp_path / "t.csv", ["time [s]", "x [m]"],
                   [[f"{k / 5000:.6f}", k] for k in range(50)])
-    proc = cli("import", str(path), "-o", str(tmp_path / "t.h5"), "--rate", "1000")
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "t.h5"), "--rate", "1000")
     assert proc.returncode == 2
     assert f"--rate 1000: the time column of {path} gives 5000 Hz; leave out --rate" \
         in proc.stderr
@@ -275,7 +275,7 @@ def test_a_utf16_export_with_its_byte_order_mark_is_read(tmp_path):
 def test_an_export_read_wrong_is_refused_naming_why(tmp_path, text, fragment):
     path = tmp_path / "bad.csv"
     path.write_text(text)
-    proc = cli("import", str(path), "-o", str(tmp_path / "bad.h5"), "--rate", "10")
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "bad.h5"), "--rate", "10")
     assert proc.returncode == 2
     assert fragment in proc.stderr
     assert not (tmp_path / "bad.h5").exists()
@@ -313,7 +313,7 @@ def test_a_blank_line_among_the_rows_is_refused_as_a_missing_sample(tmp_path, he
     path = tmp_path / "gap.csv"
     path.write_bytes(end.join([header, *rows[:after], blank, *rows[after:], ""]).encode())
     out = tmp_path / "gap.h5"
-    proc = cli("import", str(path), "-o", str(out), "--rate", "1000")
+    proc = cli_here("import", str(path), "-o", str(out), "--rate", "1000")
     assert proc.returncode == 2, proc.stderr
     assert f"{path}: line {after + 2} {fragment}: a sample is missing there" in proc.stderr
     assert ("expected a row of values on every line from the first row to the last: blank "
@@ -326,7 +326,7 @@ def test_a_blank_line_in_a_time_column_names_its_line(tmp_path):
     lines = ["time [s],tip [m/s]"] + [f"{k / 1000:.3f},{v}" for k, v in enumerate(SAMPLES)]
     path = tmp_path / "timed.csv"
     path.write_text("\n".join([*lines[:21], "", *lines[22:]]) + "\n")
-    proc = cli("import", str(path), "-o", str(tmp_path / "timed.h5"))
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "timed.h5"))
     assert proc.returncode == 2
     assert f"{path}: line 22 is blank: a sample is missing there" in proc.stderr
     assert not (tmp_path / "timed.h5").exists()
@@ -355,7 +355,7 @@ def test_blank_lines_above_the_first_row_and_after_the_last_are_accepted(tmp_pat
 def test_utf16_without_its_byte_order_mark_is_refused_naming_it(tmp_path):
     path = tmp_path / "u16.csv"
     path.write_bytes("x [m]\n1\n2\n".encode("utf-16-le"))
-    proc = cli("import", str(path), "-o", str(tmp_path / "u16.h5"), "--rate", "10")
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "u16.h5"), "--rate", "10")
     assert proc.returncode == 2
     assert "holds NUL characters (UTF-16 text without its byte-order mark?)" in proc.stderr
 
@@ -365,13 +365,13 @@ def test_a_time_column_refused_is_left_out_with_ignore_time(tmp_path):
     path = tmp_path / "scope.csv"
     path.write_text("time [s],v [m/s]\n" + "".join(f"{i / 2000:.3f},{i}\n" for i in range(8)))
     out = tmp_path / "scope.h5"
-    proc = cli("import", str(path), "-o", str(out), "--rate", "2000")
+    proc = cli_here("import", str(path), "-o", str(out), "--rate", "2000")
     assert proc.returncode == 2 and "--rate HZ --ignore-time" in proc.stderr
-    proc = cli("import", str(path), "-o", str(out), "--ignore-time")
+    proc = cli_here("import", str(path), "-o", str(out), "--ignore-time")
     assert proc.returncode == 2
     assert "--ignore-time: the sample rate is then --rate's; expected --rate HZ" in proc.stderr
     assert not out.exists()
-    proc = cli("import", str(path), "-o", str(out), "--rate", "2000", "--ignore-time")
+    proc = cli_here("import", str(path), "-o", str(out), "--rate", "2000", "--ignore-time")
     assert proc.returncode == 0, proc.stderr
     assert "time column left out" not in proc.stderr      # (within its printed digits)
     run = read_run(out)
@@ -390,7 +390,7 @@ def test_a_time_column_left_out_that_disagrees_with_the_rate_given_is_named(tmp_
     path = tmp_path / "jitter.csv"
     path.write_text("time [s],v [m/s]\n" + "".join(f"{ti:.4f},{i}\n" for i, ti in enumerate(t)))
     out = tmp_path / "jitter.h5"
-    proc = cli("import", str(path), "-o", str(out), "--rate", "2000", "--ignore-time")
+    proc = cli_here("import", str(path), "-o", str(out), "--rate", "2000", "--ignore-time")
     assert proc.returncode == 0, proc.stderr
     said = re.search(r"the time column left out \(--ignore-time\) runs at (\S+) Hz on average, "
                      r"not the 2000 Hz given with --rate, which is used: were the rate wrong, "
@@ -410,7 +410,7 @@ def test_a_windows_1252_export_is_read_and_says_so(tmp_path):
                       for i in range(6)))
     path.write_bytes(text.encode("cp1252"))
     out = tmp_path / "excel.h5"
-    data, proc = cli_json("import", str(path), "-o", str(out))
+    data, proc = cli_json_here("import", str(path), "-o", str(out))
     assert proc.returncode == 0, proc.stderr
     note = (f"{path}: not UTF-8; read as Windows-1252 (the text of Excel and analysers on "
             "Western European Windows), which gives the header 'Geschwindigkeit [µm/s]', "
@@ -441,7 +441,7 @@ def test_files_that_are_not_csv_text_are_refused_as_what_they_are(tmp_path, cont
     path = tmp_path / "export.csv"
     path.write_bytes(content)
     out = tmp_path / "export.h5"
-    proc = cli("import", str(path), "-o", str(out), "--rate", "10")
+    proc = cli_here("import", str(path), "-o", str(out), "--rate", "10")
     assert proc.returncode == 2
     assert f"fsi-lab: error: {path}: " in proc.stderr and fragment in proc.stderr
     assert not out.exists()
@@ -450,7 +450,7 @@ def test_files_that_are_not_csv_text_are_refused_as_what_they_are(tmp_path, cont
 def test_a_column_of_numbers_under_minus_one_is_not_taken_for_a_universal_file(tmp_path):
     path = tmp_path / "numbers.csv"
     path.write_text("-1\n2\n3\n")
-    proc = cli("import", str(path), "-o", str(tmp_path / "n.h5"), "--rate", "10")
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "n.h5"), "--rate", "10")
     assert proc.returncode == 2 and "line 1 holds numbers, not a header row" in proc.stderr
 
 
@@ -458,7 +458,7 @@ def test_existing_output_is_never_overwritten(tmp_path):
     csv_path = _write(tmp_path / "a.csv", ["x [m]"], [[1], [2]])
     out = tmp_path / "a.h5"
     out.write_bytes(b"precious")
-    proc = cli("import", str(csv_path), "--rate", "10", "-o", str(out))
+    proc = cli_here("import", str(csv_path), "--rate", "10", "-o", str(out))
     assert proc.returncode == 2 and "already exists" in proc.stderr
     assert out.read_bytes() == b"precious"
 
@@ -476,14 +476,14 @@ def test_a_record_with_nothing_to_identify_exits_2_and_keeps_its_analysis(tmp_pa
     runs = []
     for csv_path in (noise, decay):
         out = csv_path.with_suffix(".h5")
-        assert cli("import", str(csv_path), "--rate", "1000", "-o", str(out)).returncode == 0
+        assert cli_here("import", str(csv_path), "--rate", "1000", "-o", str(out)).returncode == 0
         runs.append(out)
-    proc = cli("analyze", str(runs[0]), "--mass-per-length", "0.1")
+    proc = cli_here("analyze", str(runs[0]), "--mass-per-length", "0.1")
     assert proc.returncode == 2, proc.stderr
     assert f"{runs[0]}: nothing was identified: channel tip: " in proc.stderr
     with h5py.File(runs[0], "r") as stored:
         assert stored["analysis/tip/spectrum/peak_frequencies"].size > 0
-    data, proc = cli_json("analyze", str(runs[0]), str(runs[1]), "--mass-per-length", "0.1")
+    data, proc = cli_json_here("analyze", str(runs[0]), str(runs[1]), "--mass-per-length", "0.1")
     assert proc.returncode == 2 and data["exit_code"] == 2
     bad, good = data["files"]
     assert (bad["exit_code"], good["exit_code"]) == (2, 0)
@@ -557,7 +557,7 @@ def test_a_column_in_volts_is_calibrated_with_its_sensor_s_sensitivity(tmp_path)
     path = _write(tmp_path / "volts.csv", ["tip velocity [mV]", "base [V]"],
                   zip(millivolts, volts))
     out = tmp_path / "volts.h5"
-    proc = cli("import", str(path), "--rate", "1000", "-o", str(out), "--reference", "base",
+    proc = cli_here("import", str(path), "--rate", "1000", "-o", str(out), "--reference", "base",
                "--sensitivity", "tip_velocity=200mV/(mm/s)", "--sensitivity", "base=100 mV/g")
     assert proc.returncode == 0, proc.stderr
     run = read_run(out)
@@ -582,7 +582,7 @@ def test_a_decoder_s_scale_factor_and_its_sensitivity_calibrate_alike(tmp_path, 
     millivolts = [10.0, -20.0, 5.0]
     path = _write(tmp_path / "decoder.csv", ["tip [mV]"], [(v,) for v in millivolts])
     out = tmp_path / "decoder.h5"
-    proc = cli("import", str(path), "--rate", "100", "-o", str(out),
+    proc = cli_here("import", str(path), "--rate", "100", "-o", str(out),
                "--sensitivity", f"tip={written}")
     assert proc.returncode == 0, proc.stderr
     run = read_run(out)
@@ -606,7 +606,7 @@ def test_a_decoder_s_scale_factor_and_its_sensitivity_calibrate_alike(tmp_path, 
 def test_a_sensitivity_that_cannot_calibrate_its_column_is_refused(tmp_path, given, fragment):
     path = _write(tmp_path / "rec.csv", ["tip [mV]", "base [g]"], [(1, 2), (2, 3), (3, 4)])
     out = tmp_path / "rec.h5"
-    proc = cli("import", str(path), "--rate", "100", "-o", str(out), "--sensitivity", given)
+    proc = cli_here("import", str(path), "--rate", "100", "-o", str(out), "--sensitivity", given)
     assert proc.returncode == 2
     assert fragment in proc.stderr
     assert not out.exists()
@@ -619,14 +619,14 @@ def test_a_record_in_volts_alone_is_refused_saying_how_to_calibrate_it(tmp_path)
     path = _write(tmp_path / "volts.csv", ["tip [V]"],
                   [(v,) for v in np.exp(-t) * np.sin(2 * np.pi * 17 * t)])
     run = tmp_path / "volts.h5"
-    assert cli("import", str(path), "--rate", "1000", "-o", str(run)).returncode == 0
-    proc = cli("analyze", str(run))
+    assert cli_here("import", str(path), "--rate", "1000", "-o", str(run)).returncode == 0
+    proc = cli_here("analyze", str(run))
     assert proc.returncode == 2
     assert "nothing to analyse" in proc.stderr
     assert "--sensitivity NAME=200mV/(mm/s)" in proc.stderr
     # named, it gives its spectrum and frequencies (stored); C_i and C_f are refused with the
     # same advice, and the exit code says the input was not what they need
-    proc = cli("analyze", str(run), "--set", "analysis.channels=tip",
+    proc = cli_here("analyze", str(run), "--set", "analysis.channels=tip",
                "--mass-per-length", "0.1346")
     refused = [line for line in proc.stdout.splitlines() if "failed equivalent-damping" in line]
     assert refused and "--sensitivity NAME=200mV/(mm/s)" in refused[0], proc.stdout
@@ -640,9 +640,9 @@ def test_a_record_in_volts_alone_is_refused_saying_how_to_calibrate_it(tmp_path)
     assert stored and abs(stored[0]["frequency_hz"] - 17.0) < 0.05
     # the same record calibrated is analysed (exit 0 or 3 with --strict, not 2)
     calibrated = tmp_path / "calibrated.h5"
-    assert cli("import", str(path), "--rate", "1000", "-o", str(calibrated),
+    assert cli_here("import", str(path), "--rate", "1000", "-o", str(calibrated),
                "--sensitivity", "tip=200mV/(mm/s)").returncode == 0
-    proc = cli("analyze", str(calibrated), "--mass-per-length", "0.1346")
+    proc = cli_here("analyze", str(calibrated), "--mass-per-length", "0.1346")
     assert proc.returncode == 0 and "holds volts" not in proc.stderr, proc.stderr
 
 
@@ -696,7 +696,7 @@ def test_an_export_that_would_be_read_wrong_is_refused_saying_what_to_change(tmp
     path = tmp_path / "bad.csv"
     path.write_text(text)
     args = ["--decimal-mark", ","] if "decimal comma only" in fragment else []
-    proc = cli("import", str(path), "-o", str(tmp_path / "bad.h5"), "--rate", "1000", *args)
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "bad.h5"), "--rate", "1000", *args)
     assert proc.returncode == 2
     assert fragment in proc.stderr
     assert not (tmp_path / "bad.h5").exists()
@@ -722,7 +722,7 @@ def test_exports_read_as_meant(tmp_path, text, args, values):
     path = tmp_path / "good.csv"
     path.write_text(text, newline="")
     out = tmp_path / "good.h5"
-    proc = cli("import", str(path), "-o", str(out), "--rate", "1000", *args)
+    proc = cli_here("import", str(path), "-o", str(out), "--rate", "1000", *args)
     assert proc.returncode == 0, proc.stderr
     channels = read_run(out).channels
     np.testing.assert_allclose(channels["x" if "x" in channels else "Abstand"].data, values,
@@ -736,7 +736,7 @@ def test_a_time_column_in_double_precision_keeps_its_tolerance(tmp_path):
     t[150000:] += 4e-6
     path = tmp_path / "double.csv"
     path.write_text("time [s],v [m/s]\n" + "".join(f"{v:.9f},1\n" for v in t))
-    proc = cli("import", str(path), "-o", str(tmp_path / "double.h5"))
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "double.h5"))
     assert proc.returncode == 2
     assert "the time column is not uniformly sampled" in proc.stderr
 
@@ -750,7 +750,7 @@ def test_a_time_column_with_samples_missing_is_refused_as_a_gap_not_as_jitter(tm
     path = tmp_path / "gap.csv"
     path.write_text("time [s],v [m/s]\n" + "".join(f"{v:.6f},{np.sin(v)}\n" for v in t))
     out = tmp_path / "gap.h5"
-    proc = cli("import", str(path), "-o", str(out))
+    proc = cli_here("import", str(path), "-o", str(out))
     assert proc.returncode == 2
     assert ("the time column jumps from 1.19950 s to 1.25000 s at line 2402, where its steps are "
             "0.0005 s: about 100 samples are missing there") in proc.stderr
@@ -764,7 +764,7 @@ def test_the_sensitivity_the_delay_and_the_reference_take_the_names_as_written(t
     path = _write(tmp_path / "rec.csv", ["Fußpunkt [mV]", "tip velocity [m/s]"],
                   [(100, 1), (200, 2), (300, 3)])
     out = tmp_path / "rec.h5"
-    proc = cli("import", str(path), "--rate", "100", "-o", str(out), "--sensitivity",
+    proc = cli_here("import", str(path), "--rate", "100", "-o", str(out), "--sensitivity",
                "Fußpunkt=100mV/g", "--reference", "Fußpunkt", "--delay", "tip velocity=0.001")
     assert proc.returncode == 0, proc.stderr
     run = read_run(out)
@@ -772,7 +772,7 @@ def test_the_sensitivity_the_delay_and_the_reference_take_the_names_as_written(t
     np.testing.assert_allclose(run.channels["Fusspunkt"].data,
                                [STANDARD_GRAVITY, 2 * STANDARD_GRAVITY, 3 * STANDARD_GRAVITY])
     assert run.channel_attrs["tip_velocity"]["sensor_delay_s"] == 0.001
-    proc = cli("import", str(path), "--rate", "100", "-o", str(tmp_path / "twice.h5"),
+    proc = cli_here("import", str(path), "--rate", "100", "-o", str(tmp_path / "twice.h5"),
                "--sensitivity", "Fusspunkt=100mV/g", "--sensitivity", "Fusspunkt=10mV/g")
     assert proc.returncode == 2
     assert "'Fusspunkt' is given twice; expected one sensitivity per column" in proc.stderr
@@ -784,7 +784,7 @@ def test_a_time_column_kept_in_single_precision_is_read(tmp_path):
     t = (np.arange(20000) / 5000.0).astype(np.float32)
     path = tmp_path / "single.csv"
     path.write_text("time [s],v [m/s]\n" + "".join(f"{float(v):.9g},1\n" for v in t))
-    proc = cli("import", str(path), "-o", str(tmp_path / "single.h5"))
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "single.h5"))
     assert proc.returncode == 0, proc.stderr
     # (the rate from the column's ends, to single precision)
     assert read_run(tmp_path / "single.h5").channels["v"].sample_rate == pytest.approx(
@@ -812,11 +812,11 @@ def test_lines_about_an_export_above_its_names_and_units_are_named(tmp_path, bet
     path = tmp_path / "lms.txt"
     path.write_text(f"Section\tSection1\nSampling frequency\t5120\n\nTime\tv\n{between}s\tm/s\n"
                     "0\t1\n0.0001953125\t2\n")
-    proc = cli("import", str(path), "-o", str(tmp_path / "lms.h5"))
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "lms.h5"))
     assert proc.returncode == 2
     assert "line 4 ('Time\\tv') is one: begin lines 1 to 3 with '#'" in proc.stderr
     # the way out it names: the names and units rows read once their line is given
-    proc = cli("import", str(path), "-o", str(tmp_path / "lms.h5"), "--header-line", "4")
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "lms.h5"), "--header-line", "4")
     assert proc.returncode == 0, proc.stderr
     tip = read_run(tmp_path / "lms.h5").channels["v"]
     assert (tip.unit, tip.sample_rate) == ("m/s", 5120.0)
@@ -833,7 +833,7 @@ def test_lines_about_an_export_above_its_names_and_units_are_named(tmp_path, bet
 def test_a_header_line_that_holds_no_header_row_is_refused(tmp_path, line, fragment):
     path = tmp_path / "export.csv"
     path.write_text("Analyzer export\nDate,2026-11-30\n\ntime [s],tip [mm/s]\n0,1\n0.001,2\n")
-    proc = cli("import", str(path), "-o", str(tmp_path / "out.h5"), "--header-line", line)
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "out.h5"), "--header-line", line)
     assert proc.returncode == 2
     assert fragment.format(path=path) in proc.stderr, proc.stderr
     assert not (tmp_path / "out.h5").exists()

@@ -80,13 +80,15 @@ def _reanalyse_in_place(path):
         handle.move("analysis.new", "analysis")
 
 
-def test_ten_analyses_keep_the_file_size_and_the_record(analysed, tmp_path):
+def test_repeated_analyses_keep_the_file_size_and_the_record(analysed, tmp_path):
+    """Five analyses of the 2 s record: modified in place, each added its results' size to
+    the file (measured: 1.7, 2.4, 3.1 and 3.8 times the size after the first)."""
     original, first = analysed  # analysed once
     path = tmp_path / "run.h5"
     shutil.copy(original, path)
     before = _content(path)
     sizes = []
-    for _ in range(9):
+    for _ in range(4):
         code, _, err = run_main("analyze", str(path), "--quiet")
         assert code == 0, err
         sizes.append(path.stat().st_size)

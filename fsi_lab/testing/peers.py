@@ -40,6 +40,8 @@ class _Peer:
     def _run(self) -> None:
         try:
             self._accept()
+            if self._stop.is_set():     # stopped before anything connected
+                return
             for step, (expected, reply) in enumerate(self.script):
                 got = self._read(len(expected))
                 self.received += got
@@ -98,7 +100,17 @@ class ScriptedPeer(_Peer):
         self._conn = None
 
     def _accept(self) -> None:
-        self._conn, _ = self._server.accept()
+        # In short waits, so that stop() ends a peer nothing connects to at once (a driver
+        # that never opens its socket), not after the whole timeout.
+        deadline = time.monotonic() + self.timeout
+        while not self._stop.is_set():
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise TimeoutError(f"nothing connected within {self.timeout:g} s")
+            readable, _, _ = select.select([self._server], [], [], min(remaining, 0.05))
+            if readable:
+                self._conn, _ = self._server.accept()
+                return
 
     def _recv(self, count: int, wait: float) -> bytes | None:
         readable, _, _ = select.select([self._conn], [], [], wait)

@@ -6,6 +6,7 @@ over part of its amplitudes is not."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -13,7 +14,6 @@ from scipy import signal as sps
 from scipy.integrate import solve_ivp
 
 from fsi_lab.dsp.identify import _identify_once, identify
-from fsi_lab.dsp.laws import LAWS
 
 MASS = 0.1346           # kg/m, the wet beam's modal mass per length
 BURST_F = 40.0          # Hz
@@ -60,8 +60,8 @@ def _burst_record(seed: int) -> np.ndarray:
     return v + 0.004 * float(np.max(np.abs(v))) * rng.standard_normal(v.size)
 
 
-@pytest.mark.parametrize("seed, windows", [(904097, 1), (2, 2)])
-def test_a_decay_whose_first_cycles_were_still_forced_is_taken_from_later(seed, windows):
+@pytest.mark.parametrize("seed", [904097, 2])
+def test_a_decay_whose_first_cycles_were_still_forced_is_taken_from_later(seed):
     """The largest sample lies inside the burst, and the amplitude does not rise again after
     it, so step 1 takes the decay from there. Read with those forced cycles, the frequency
     comes out 4.5 % low (the start search leaves 10.5 cycles out, but the band stays around
@@ -72,19 +72,19 @@ def test_a_decay_whose_first_cycles_were_still_forced_is_taken_from_later(seed, 
     times more precisely: within 0.05 %, its interval covering 40 Hz, one decay taken from the
     forcing's end, and a note says why."""
     v = _burst_record(seed)
-    first = _identify_once(v, FS, "velocity", "auto", None, None, None, tuple(LAWS), None)
-    assert abs(first.modes[0].frequency_hz / BURST_F - 1.0) > 0.03
-    assert not first.modes[0].frequency_ci[0] <= BURST_F <= first.modes[0].frequency_ci[1]
-    assert len(first.free_windows) == windows
     found = identify(v, FS)
     mode = found.modes[0]
     assert mode.frequency_hz == pytest.approx(BURST_F, rel=5e-4)
     assert mode.frequency_ci[0] <= BURST_F <= mode.frequency_ci[1]
     assert len(found.free_windows) == 1
     assert mode.decays[0].times[0] >= 1.0 - 0.25 / BURST_F
+    # the first reading, as the note names it: 3 % off or more, its interval excluding 40 Hz
     (note,) = [n for n in found.notes if "the record is analysed from there" in n]
-    assert f"the mode at {first.modes[0].frequency_hz:.4g} Hz" in note
     assert "analysis.hvd.start_s" in note
+    first_hz, first_half = map(float, re.match(r"the mode at ([\d.]+) Hz \(\+-([\d.e-]+) Hz\)",
+                                               note).groups())
+    assert abs(first_hz / BURST_F - 1.0) > 0.03
+    assert abs(first_hz - BURST_F) > first_half
 
 
 def test_a_decay_whose_law_holds_over_part_of_its_amplitudes_keeps_its_start():

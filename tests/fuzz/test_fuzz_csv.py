@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from fsi_lab.runfile import read_run
 
-CASES = 500
+CASES = 400
 GOOD_NAMES = ["tip", "base", "drive", "tip_velocity", "x-2"]
 BAD_NAMES = ["a b", "x/y", "", "1st", "\u00e9", "Time", "tip"]
 GOOD_UNITS = ["m", "m/s", "m/s^2", "g", "V"]

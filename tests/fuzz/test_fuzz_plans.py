@@ -33,7 +33,7 @@ set = ["bench.amplifier.gain=1"]
 "excitation.amplitude" = [0.25, 0.5]
 "bench.amplifier.gain" = { from = 1, to = 2, points = 2, scale = "log" }
 """
-STRUCTURAL_CASES = 150
+STRUCTURAL_CASES = 100
 BYTE_CASES = 60
 
 

@@ -14,7 +14,7 @@ BASES = {path.name: path.read_text() for path in sorted(PROFILES.glob("*.toml"))
 BASES["in-process.toml"] = SIM_PROFILE.format(
     duration=0.5, realtime="false", amplitude=0.5, amplifier_extra="", acquisition_extra="",
     analysis='[analysis]\nchain = ["spectrum", "hvd"]\nchannels = ["tip_velocity"]\n')
-STRUCTURAL_CASES = 450
+STRUCTURAL_CASES = 350
 BYTE_CASES = 250
 
 

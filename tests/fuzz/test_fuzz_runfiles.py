@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from support import SIM_PROFILE, run_main
 
-EDIT_CASES = 200
-BYTE_CASES = 120
+EDIT_CASES = 120
+BYTE_CASES = 80
 
 
 @pytest.fixture(scope="module")
