@@ -1,7 +1,7 @@
 """Profiles: every kind of bad profile is refused with one clear message and exit code 2."""
 
 import pytest
-from support import PROFILES, cli, cli_json
+from support import PROFILES, cli, cli_here, cli_json
 
 from fsi_lab.errors import ProfileError
 from fsi_lab.profile import load_profile, parse_profile
@@ -66,7 +66,7 @@ BAD_CASES = [
 def test_bad_profile_is_refused_and_nothing_is_written(tmp_path, case, old, new, fragment):
     path = _variant(tmp_path, old, new)
     out = tmp_path / "runs"
-    proc = cli("run", str(path), "--out", str(out))
+    proc = cli_here("run", str(path), "--out", str(out))
     assert proc.returncode == 2, proc.stderr
     assert str(path) in proc.stderr
     assert fragment in proc.stderr
@@ -74,7 +74,7 @@ def test_bad_profile_is_refused_and_nothing_is_written(tmp_path, case, old, new,
     assert "Traceback" not in proc.stderr
     assert not out.exists()
 
-    check = cli("profile", "check", str(path))
+    check = cli_here("profile", "check", str(path))
     assert check.returncode == 2 and fragment in check.stderr
 
 
