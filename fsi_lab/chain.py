@@ -188,6 +188,19 @@ def channels_to_analyse(channels: Mapping[str, ChannelData], wanted: list[str]) 
     return [n for n, c in channels.items() if c.quantity in ANALYSED_QUANTITIES]
 
 
+def left_out_note(channels: Mapping[str, ChannelData], wanted: list[str],
+                  reference: str | None) -> str | None:
+    """The note that the record's acceleration channels (other than the reference) are not
+    analysed, when the chain picks its channels by quantity (none named); else None."""
+    left = [n for n, c in channels.items() if c.quantity == "acceleration" and n != reference]
+    if wanted or not left:
+        return None
+    return (f"{', '.join(left)} (acceleration): not analysed; with no channel named only the "
+            "velocity and displacement channels are; an acceleration channel is analysed "
+            f"(integrated to velocity) when named, --set analysis.channels={left[0]}, or is "
+            f"the base's motion as the reference, --set analysis.reference={left[0]}")
+
+
 def cut_quiet_tail(channels: Mapping[str, ChannelData], used: list[str]
                    ) -> tuple[dict[str, ChannelData], QuietTail]:
     """The channels up to where the analysis of the record stops (:func:`fsi_lab.tails.
@@ -245,6 +258,7 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
     summary: dict[str, Any] = {}
     names = channels_to_analyse(channels, analysis.get("channels", []))
     reference = analysis.get("reference")
+    left_out = left_out_note(channels, analysis.get("channels", []), reference)
     channels, tail = cut_quiet_tail(channels, names + ([reference] if reference else []))
     chain = list(analysis.get("chain", []))
     total = max(1, len(names) * len(chain))
@@ -317,6 +331,8 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
             channel_summary["notes"] = [tail.note(), *channel_summary.get("notes", [])]
         if (said := defaults_note(specimen)) is not None:
             channel_summary["notes"] = [said, *channel_summary.get("notes", [])]
+        if left_out is not None:
+            channel_summary["notes"] = [*channel_summary.get("notes", []), left_out]
         summary[channel_name] = channel_summary
         if keep_typed is not None:
             keep_typed[channel_name] = provided

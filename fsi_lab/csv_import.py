@@ -593,7 +593,7 @@ def _number(path: Path, line: int, column: Column, cell: str, text: str,
         if not text or text.upper() in _MISSING_MARKS:
             _missing_value(where, cell)
         hint = (" (a decimal comma in a comma-separated file? separate the columns with "
-                "semicolons)" if commas and "," in cell else "")
+                "semicolons)" if commas and "," in cell else _grouping_hint(cell))
         raise InputFileError(f"{where}: {cell!r} is not a number{hint}") from None
     if math.isnan(value):
         _missing_value(where, cell)
@@ -605,6 +605,22 @@ def _number(path: Path, line: int, column: Column, cell: str, text: str,
 
 #: What spreadsheets and analysers write for a value they do not have (besides an empty cell
 #: and NaN, which read as missing too).
+#: A number whose digits are grouped by thousands (1.234,5 or 1,234.5, 1 234,5, 1'234.5).
+_DIGIT_GROUPS = re.compile(r"[+-]?\d{1,3}(?P<group>[.,' \u00a0])\d{3}(?:(?P=group)\d{3})*"
+                      r"(?P<decimal>[.,]\d*)?")
+
+
+def _grouping_hint(cell: str) -> str:
+    """A hint naming the thousands separator when ``cell`` is a number grouped by thousands
+    (a spreadsheet's display format exported as is), else ''."""
+    found = _DIGIT_GROUPS.fullmatch(cell.strip())
+    if found is None or (found["decimal"] or "x")[0] == found["group"]:
+        return ""
+    group = found["group"]
+    return (f" (its digits are grouped by thousands with {group!r}: export the numbers "
+            f"without thousands separators, e.g. {cell.strip().replace(group, '')!r})")
+
+
 _MISSING_MARKS = {"#NV", "#N/A", "#NA", "N/A", "NA", "--", "-", "?", "NULL", "NONE"}
 
 

@@ -241,7 +241,8 @@ def test_a_utf16_export_with_its_byte_order_mark_is_read(tmp_path):
      "line 3 has '1,234' (a decimal comma) and line 3 '0.0002' (a point"),
     ("x [m],y [m]\n\"1,5\",2\n1,2\n", "'1,5' is not a number (a decimal comma in a "
      "comma-separated file? separate the columns with semicolons)"),
-    ("x [m];y [m]\n1.234,5;2\n1;2\n", "'1.234,5' is not a number\n"),
+    ("x [m];y [m]\n1.234,5;2\n1;2\n", "'1.234,5' is not a number (its digits are grouped by "
+     "thousands with '.': export the numbers without thousands separators, e.g. '1234,5')\n"),
     ("v [m/s];Kraft [N]\n0;1\n1;2\n",
      "unit 'N' is not accepted; expected m, m/s, m/s^2, g or V, with a prefix m, u (µ) or n on "
      "m, m/s, m/s^2 and V (mm/s, um, mV), or s or ms for the time column"),
@@ -358,6 +359,46 @@ def test_utf16_without_its_byte_order_mark_is_refused_naming_it(tmp_path):
     proc = cli_here("import", str(path), "-o", str(tmp_path / "u16.h5"), "--rate", "10")
     assert proc.returncode == 2
     assert "holds NUL characters (UTF-16 text without its byte-order mark?)" in proc.stderr
+
+
+@pytest.mark.parametrize("cells, group", [(["164,807", "-1.292,940"], "'.'"),
+                                          (["164.807", "-1 292.940"], "' '")])
+def test_digits_grouped_by_thousands_are_refused_naming_the_separator(tmp_path, cells, group):
+    """A spreadsheet's display format exported as is: the samples below 1000 read, the first
+    one above is refused, and the message says why and what to export instead."""
+    path = tmp_path / "grouped.csv"
+    path.write_text("tip velocity [um/s]\n" + "\n".join(cells) + "\n")
+    proc = cli_here("import", str(path), "-o", str(tmp_path / "grouped.h5"), "--rate", "5000")
+    assert proc.returncode == 2
+    expected = cells[1].replace(group.strip("'"), "")
+    assert (f"line 3, column 1 (tip velocity): {cells[1]!r} is not a number (its digits are "
+            f"grouped by thousands with {group}: export the numbers without thousands "
+            f"separators, e.g. {expected!r})") in proc.stderr
+    assert not (tmp_path / "grouped.h5").exists()
+
+
+def test_an_acceleration_column_beside_the_velocity_is_said_to_be_left_out(tmp_path):
+    """Picked by quantity, the velocity is analysed and the acceleration beside it is not: a
+    note on the analysed channel says so and how to have it analysed; none once it is the
+    reference."""
+    t = np.arange(2000) / 1000.0
+    v = 0.01 * np.exp(-t) * np.sin(2 * np.pi * 17 * t)
+    path = _write(tmp_path / "both.csv", ["tip [m/s]", "tip_acc [m/s^2]"],
+                  zip(v, np.gradient(v, t)))
+    run = tmp_path / "both.h5"
+    assert cli_here("import", str(path), "--rate", "1000", "-o", str(run)).returncode == 0
+    data, proc = cli_json_here("analyze", str(run), "--set", "analysis.chain=spectrum")
+    assert proc.returncode == 0, proc.stderr
+    assert list(data["channels"]) == ["tip"]
+    assert data["channels"]["tip"]["notes"] == [
+        "tip_acc (acceleration): not analysed; with no channel named only the velocity and "
+        "displacement channels are; an acceleration channel is analysed (integrated to "
+        "velocity) when named, --set analysis.channels=tip_acc, or is the base's motion as "
+        "the reference, --set analysis.reference=tip_acc"]
+    data, proc = cli_json_here("analyze", str(run), "--set", "analysis.chain=spectrum",
+                               "--set", "analysis.reference=tip_acc")
+    assert proc.returncode == 0, proc.stderr
+    assert "notes" not in data["channels"]["tip"]
 
 
 def test_a_time_column_refused_is_left_out_with_ignore_time(tmp_path):

@@ -253,10 +253,11 @@ def test_a_record_without_quiet_stretches_is_cut_at_fixed_lengths():
 
 
 def test_peak_memory_does_not_grow_with_the_record(period, tmp_path, monkeypatch):
-    """The segmented analysis of 1 and of 3 periods (a budget of 12 000 samples of the two used
-    channels: 3 s; the longer record is 4 times it), the reads' chunks and the spectra's caches
-    made small: the traced peak of the longer is within 25 % of the shorter's, and no step
-    reads more than a segment's samples of a channel at once (the guard refuses it)."""
+    """The segmented analysis of 1 and of 2 periods (a budget of 12 000 samples of the two used
+    channels: 3 s; the longer record is 2.7 times it), the reads' chunks and the spectra's
+    caches made small: the traced peak of the longer is within 25 % of the shorter's (a peak
+    that grew with the record would double), and no step reads more than a segment's samples
+    of a channel at once (the guard refuses it)."""
     from fsi_lab import segmented, sources
     from fsi_lab.dsp import envelope, spectrum
 
@@ -267,7 +268,7 @@ def test_peak_memory_does_not_grow_with_the_record(period, tmp_path, monkeypatch
     monkeypatch.setattr(spectrum, "CACHED_SAMPLES", 1 << 8)
     monkeypatch.setattr(segmented, "WELCH_S", 0.5)
     peaks = {}
-    for repeats in (1, 3):
+    for repeats in (1, 2):
         path = _train(tmp_path / f"train{repeats}.h5", period, repeats)
         tracemalloc.start()
         try:
@@ -280,7 +281,7 @@ def test_peak_memory_does_not_grow_with_the_record(period, tmp_path, monkeypatch
         info = summary["channels"]["tip_velocity"]
         assert "errors" not in info
         assert info["segmented"]["segments"] == repeats
-    assert peaks[3] <= 1.25 * peaks[1]
+    assert peaks[2] <= 1.25 * peaks[1], peaks
 
 
 def test_per_sample_results_are_stored_every_stride_th_sample(period, analysed, tmp_path,

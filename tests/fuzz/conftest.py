@@ -9,7 +9,7 @@ from fsi_lab.registry import load_registry
 #: s: the time a damaged file's read may take in its child before the file is refused. Some
 #: damage makes the HDF5 library loop; each such case would take the whole minute allowed for
 #: a real file, while an undamaged small file reads in milliseconds.
-READ_TIMEOUT_S = 10.0
+READ_TIMEOUT_S = 3.0
 
 
 @pytest.fixture(autouse=True)
