@@ -603,11 +603,9 @@ def _number(path: Path, line: int, column: Column, cell: str, text: str,
     return value
 
 
-#: What spreadsheets and analysers write for a value they do not have (besides an empty cell
-#: and NaN, which read as missing too).
 #: A number whose digits are grouped by thousands (1.234,5 or 1,234.5, 1 234,5, 1'234.5).
 _DIGIT_GROUPS = re.compile(r"[+-]?\d{1,3}(?P<group>[.,' \u00a0])\d{3}(?:(?P=group)\d{3})*"
-                      r"(?P<decimal>[.,]\d*)?")
+                           r"(?P<decimal>[.,]\d*)?")
 
 
 def _grouping_hint(cell: str) -> str:
@@ -621,6 +619,8 @@ def _grouping_hint(cell: str) -> str:
             f"without thousands separators, e.g. {cell.strip().replace(group, '')!r})")
 
 
+#: What spreadsheets and analysers write for a value they do not have (besides an empty cell
+#: and NaN, which read as missing too).
 _MISSING_MARKS = {"#NV", "#N/A", "#NA", "N/A", "NA", "--", "-", "?", "NULL", "NONE"}
 
 

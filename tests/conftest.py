@@ -18,7 +18,7 @@ os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 # One BLAS and one numba thread in each test process (the workers of `make test`, started after
 # this, inherit it; a user's own setting is kept): two worker processes of two busy threads
 # each on two cores run slower than two of one (fsi_lab.workers; measured: test_identify.py
-# in two workers took 325 s of CPU unpinned, 244 s pinned).
+# in two workers, twice each way, 321 and 305 s of CPU unpinned, 251 and 220 s pinned).
 for _name, _value in PINNED_ENV.items():
     os.environ.setdefault(_name, _value)
 
