@@ -256,9 +256,10 @@ def run_chain(channels: Mapping[str, ChannelData], analysis: Mapping[str, Any],
     bus = bus or EventBus()
     groups: dict[str, dict] = {}
     summary: dict[str, Any] = {}
-    names = channels_to_analyse(channels, analysis.get("channels", []))
+    wanted = analysis.get("channels", [])
+    names = channels_to_analyse(channels, wanted)
     reference = analysis.get("reference")
-    left_out = left_out_note(channels, analysis.get("channels", []), reference)
+    left_out = left_out_note(channels, wanted, reference)
     channels, tail = cut_quiet_tail(channels, names + ([reference] if reference else []))
     chain = list(analysis.get("chain", []))
     total = max(1, len(names) * len(chain))

@@ -612,9 +612,11 @@ def _grouping_hint(cell: str) -> str:
     """A hint naming the thousands separator when ``cell`` is a number grouped by thousands
     (a spreadsheet's display format exported as is), else ''."""
     found = _DIGIT_GROUPS.fullmatch(cell.strip())
-    if found is None or (found["decimal"] or "x")[0] == found["group"]:
+    if found is None:
         return ""
-    group = found["group"]
+    group, decimal = found["group"], found["decimal"]
+    if decimal and decimal[0] == group:     # one mark for both: not a grouped number
+        return ""
     return (f" (its digits are grouped by thousands with {group!r}: export the numbers "
             f"without thousands separators, e.g. {cell.strip().replace(group, '')!r})")
 
