@@ -346,7 +346,9 @@ CREST_Z = 2.5
 #: mode's to a power above HARMONIC_POWER (faster than the mode: a waveform's harmonic falls
 #: as its amplitude cubed, though a short one's few extrema in noise give 1.4 to 3) is taken
 #: for its third harmonic (step 8f): a chain compressing an accelerometer's largest cycles by
-#: 8 to 15 % shows one at 1 to 2 % of a 17 Hz mode, found as a mode at 51 Hz.
+#: 8 to 15 % shows one at 1 to 2 % of a 17 Hz mode, found as a mode at 51 Hz; so does the
+#: quadratic damping of a 17 Hz mode recorded as acceleration (its harmonic falls as the
+#: mode's amplitude squared).
 HARMONIC_ORDER = 3
 HARMONIC_TOLERANCE = 0.03
 HARMONIC_SHARE = 0.1
@@ -1220,11 +1222,12 @@ def _candidates(x: np.ndarray, fs: float, windows: list[tuple[int, int, int]],
     return f, a, notes, np.array(guards, dtype=np.float64), np.array(steady, dtype=np.float64)
 
 
-def _peak_area(freqs: np.ndarray, amp: np.ndarray, f: float) -> float:
-    """The area (height times half-power width, spectrum unit times Hz) of the peak of the
-    spectrum ``amp`` at ``f`` (Hz), on the spectrum smoothed over +-2 % of ``f`` as
-    :func:`_col` smooths it (the bins of a noisy spectrum fall under a low peak's half power
-    next to it: a 2 % damped 228 Hz mode read 3 Hz wide, not 5); smoothing keeps the area."""
+def _half_power_band(freqs: np.ndarray, amp: np.ndarray, f: float
+                     ) -> tuple[float, float, float]:
+    """The height (spectrum unit) and half-power edges (Hz) of the peak of the spectrum
+    ``amp`` at ``f`` (Hz), on the spectrum smoothed over +-2 % of ``f`` as :func:`_col`
+    smooths it (the bins of a noisy spectrum fall under a low peak's half power next to it: a
+    2 % damped 228 Hz mode read 3 Hz wide, not 5)."""
     smooth = _smoothed_around(freqs, amp, f)
     k = int(np.argmin(np.abs(freqs - f)))
     height = float(smooth[k])
@@ -1233,7 +1236,15 @@ def _peak_area(freqs: np.ndarray, amp: np.ndarray, f: float) -> float:
     right = np.flatnonzero(below[k:])
     lo = freqs[left[-1]] if left.size else freqs[0]
     hi = freqs[k + right[0]] if right.size else freqs[-1]
-    return height * float(hi - lo)
+    return height, float(lo), float(hi)
+
+
+def _peak_area(freqs: np.ndarray, amp: np.ndarray, f: float) -> float:
+    """The area (height times half-power width, spectrum unit times Hz) of the peak of the
+    spectrum ``amp`` at ``f`` (Hz), from :func:`_half_power_band` (smoothing keeps the
+    area)."""
+    height, lo, hi = _half_power_band(freqs, amp, f)
+    return height * (hi - lo)
 
 
 def _band_around(f: float, modes: np.ndarray) -> tuple[float, float]:
@@ -1255,8 +1266,13 @@ def _broad_small_peaks(freqs: np.ndarray, amp: np.ndarray, small_f: np.ndarray,
     half-power width) is :data:`BROAD_AREA` of the largest peak's or more. A heavily damped
     mode's peak is low for its amplitude (its height goes as amplitude over damping): a
     316 Hz mode at 2 % damping whose release was 1.4 times a lightly damped 17 Hz mode's left
-    a peak at 0.98 % of that mode's, and it was left out without a word. Returns each noted
-    peak's frequency (Hz) with its note."""
+    a peak at 0.98 % of that mode's, and it was left out without a word. A peak whose
+    half-power band (widened by :data:`EARLY_APART` of its frequency) holds a harmonic of a
+    candidate, up to :data:`EARLY_ORDER`, may be that harmonic instead: the waveform of a
+    mode with a nonlinear damping or stiffness has harmonics, broad where the damping is
+    large (a 17 Hz quadratically damped decay, recorded as acceleration, showed one at 54 Hz
+    with 10 % of the mode's area); its note says so. Returns each noted peak's frequency (Hz)
+    with its note."""
     if not a.size or not small_f.size:
         return []
     top = int(np.argmax(a))
@@ -1266,15 +1282,29 @@ def _broad_small_peaks(freqs: np.ndarray, amp: np.ndarray, small_f: np.ndarray,
         if ai < BROAD_HEIGHT * a[top] or ai < NOISE_MARGIN * level \
                 or _col(float(fi), float(ai), f, freqs, amp) > VALLEY:
             continue
-        share = _peak_area(freqs, amp, float(fi)) / area
-        if share >= BROAD_AREA:
-            noted.append((float(fi),
-                f"the spectral peak at {fi:.4g} Hz stands out of the spectrum as a mode's, but "
+        height, lo, hi = _half_power_band(freqs, amp, float(fi))
+        share = height * (hi - lo) / area
+        if share < BROAD_AREA:
+            continue
+        said = (f"the spectral peak at {fi:.4g} Hz stands out of the spectrum as a mode's, but "
                 f"its height is {100 * ai / a[top]:.2g} % of the largest, under the "
                 f"{100 * MODE_THRESHOLD:g} % a component needs, while its area (height times "
-                f"width) is {100 * share:.0f} % of the largest's: a heavily damped mode, not "
-                "reported; band_hz (e.g. --set analysis.hvd.band_hz=LOW,HIGH around it) "
-                "identifies it alone"))
+                f"width) is {100 * share:.0f} % of the largest's")
+        apart = EARLY_APART * float(fi)
+        harmonic = [(order, float(fc)) for fc in f for order in range(2, EARLY_ORDER + 1)
+                    if lo - apart <= order * fc <= hi + apart]
+        if harmonic:
+            order, fc = min(harmonic, key=lambda h: abs(h[0] * h[1] - fi))
+            noted.append((float(fi),
+                f"{said}; its half-power band ({lo:.4g} to {hi:.4g} Hz) holds {order} times "
+                f"the {fc:.4g} Hz peak's frequency: the harmonic a nonlinear damping or "
+                "stiffness gives that mode's waveform, or a heavily damped mode; not "
+                "reported (if it is a mode, band_hz, e.g. --set "
+                "analysis.hvd.band_hz=LOW,HIGH around it, identifies it alone)"))
+        else:
+            noted.append((float(fi),
+                f"{said}: a heavily damped mode, not reported; band_hz (e.g. --set "
+                "analysis.hvd.band_hz=LOW,HIGH around it) identifies it alone"))
     return noted
 
 
@@ -3022,9 +3052,11 @@ def harmonic_warning(fundamental_hz: float, ratio: float, power: float) -> list[
     extrema fall as that mode's to the ``power``."""
     return [f"this component lies at {ratio:.3f} times the frequency of the mode at "
             f"{fundamental_hz:.4g} Hz, and its extrema fall as that mode's to the power "
-            f"{power:.2f} (a harmonic's as its cube): it is most likely that mode's third "
-            "harmonic (a measuring chain that compresses the largest cycles, or a stiffness "
-            "that changes with amplitude), not a mode of the structure, and its frequency and "
+            f"{power:.2f} (a harmonic's as its cube, or as its square where a quadratic "
+            "damping makes it): it is most likely that mode's third harmonic (a damping or "
+            "stiffness that changes with amplitude, such as the fluid's quadratic damping, or "
+            "a measuring chain that compresses the largest cycles), not a mode of the "
+            "structure, and its frequency and "
             "damping describe the nonlinearity, not a mode (a mode of the structure at exactly "
             "three times the frequency, damped as much in proportion, would look the same)"]
 
