@@ -244,7 +244,7 @@ def test_leaving_out_a_decay_s_first_extrema_moves_its_model_s_anchor_with_them(
     assert _part(decay, slice(None, 3))["anchor"] == 0.098
 
 
-HARMONIC = "third harmonic (a measuring chain"
+HARMONIC = "most likely that mode's third harmonic"
 
 
 def test_a_chain_s_third_harmonic_found_as_a_component_is_said_to_be_one():
