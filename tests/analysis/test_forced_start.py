@@ -65,9 +65,10 @@ def test_a_decay_whose_first_cycles_were_still_forced_is_taken_from_later(seed):
     """The largest sample lies inside the burst, and the amplitude does not rise again after
     it, so step 1 takes the decay from there. Read with those forced cycles, the frequency
     comes out 4.5 % low (the start search leaves 10.5 cycles out, but the band stays around
-    the forced response's spectral peak) and 3.2 % high (a dip of the burst's amplitude splits
-    it into two decays, whose extrema scatter 95 times as far as the noise explains), its
-    interval excluding 40 Hz. Identified again from the cycles the start search kept (first)
+    the forced response's spectral peak) and about 3 % high (a dip of the burst's amplitude
+    splits it into two decays, whose extrema scatter 95 times as far as the noise explains;
+    2.9 to 3.2 % by the machine's rounding, the forced cycles' reading being no stable
+    quantity), its interval excluding 40 Hz. Identified again from the cycles the start search kept (first)
     or from the last decay's start 8 periods on (second), the frequency comes out tens of
     times more precisely: within 0.05 %, its interval covering 40 Hz, one decay taken from the
     forcing's end, and a note says why."""
@@ -78,12 +79,13 @@ def test_a_decay_whose_first_cycles_were_still_forced_is_taken_from_later(seed):
     assert mode.frequency_ci[0] <= BURST_F <= mode.frequency_ci[1]
     assert len(found.free_windows) == 1
     assert mode.decays[0].times[0] >= 1.0 - 0.25 / BURST_F
-    # the first reading, as the note names it: 3 % off or more, its interval excluding 40 Hz
+    # the first reading, as the note names it: 2 % off or more (40 times the second's
+    # tolerance), its interval excluding 40 Hz
     (note,) = [n for n in found.notes if "the record is analysed from there" in n]
     assert "analysis.hvd.start_s" in note
     first_hz, first_half = map(float, re.match(r"the mode at ([\d.]+) Hz \(\+-([\d.e-]+) Hz\)",
                                                note).groups())
-    assert abs(first_hz / BURST_F - 1.0) > 0.03
+    assert abs(first_hz / BURST_F - 1.0) > 0.02
     assert abs(first_hz - BURST_F) > first_half
 
 
