@@ -11,7 +11,7 @@ import re
 import numpy as np
 import pytest
 from scipy import signal as sps
-from scipy.integrate import solve_ivp
+from support import ode_path
 
 from fsi_lab.dsp.identify import _identify_once, identify
 
@@ -44,15 +44,12 @@ def _burst_record(seed: int) -> np.ndarray:
 
         t = np.arange(int(round(duration * FS))) / FS
         forced = t < off
-        out = np.empty(t.size)
-        first = solve_ivp(motion, (0.0, off), [0.0, 0.0], t_eval=t[forced], rtol=1e-9,
-                          atol=1e-12, max_step=1.0 / FS, dense_output=True)
-        out[forced] = first.y[1]
-        if not forced.all():
-            free = solve_ivp(motion, (off, t[-1]), first.sol(off), t_eval=t[~forced],
-                             rtol=1e-9, atol=1e-12)
-            out[~forced] = free.y[1]
-        return out
+        first = ode_path(motion, [0.0, 0.0], np.append(t[forced], off), rtol=1e-9, atol=1e-12,
+                         max_step=1.0 / FS)
+        if forced.all():
+            return first[:-1, 1]
+        free = ode_path(motion, first[-1], t[~forced], start=off, rtol=1e-9, atol=1e-12)
+        return np.concatenate((first[:-1, 1], free[:, 1]))
 
     linear = velocity(1.0, 0.0, off)
     scale = BURST_END_V / float(np.max(np.abs(linear[-int(0.2 * FS):])))
@@ -68,10 +65,10 @@ def test_a_decay_whose_first_cycles_were_still_forced_is_taken_from_later(seed):
     the forced response's spectral peak) and about 3 % high (a dip of the burst's amplitude
     splits it into two decays, whose extrema scatter 95 times as far as the noise explains;
     2.9 to 3.2 % by the machine's rounding, the forced cycles' reading being no stable
-    quantity), its interval excluding 40 Hz. Identified again from the cycles the start search kept (first)
-    or from the last decay's start 8 periods on (second), the frequency comes out tens of
-    times more precisely: within 0.05 %, its interval covering 40 Hz, one decay taken from the
-    forcing's end, and a note says why."""
+    quantity), its interval excluding 40 Hz. Identified again from the cycles the start
+    search kept (first) or from the last decay's start 8 periods on (second), the frequency
+    comes out tens of times more precisely: within 0.05 %, its interval covering 40 Hz, one
+    decay taken from the forcing's end, and a note says why."""
     v = _burst_record(seed)
     found = identify(v, FS)
     mode = found.modes[0]
@@ -106,8 +103,7 @@ def test_a_decay_whose_law_holds_over_part_of_its_amplitudes_keeps_its_start():
         x, v = state
         return [v, -2.0 * zeta * w * v - power * abs(v) ** 1.5 * np.sign(v) - w * w * x]
 
-    run = solve_ivp(motion, (0.0, t[-1]), [1e-3, 0.0], t_eval=t, rtol=1e-10, atol=1e-13)
-    v = run.y[1] + 0.0067 * v0 * rng.standard_normal(t.size)
+    v = ode_path(motion, [1e-3, 0.0], t)[:, 1] + 0.0067 * v0 * rng.standard_normal(t.size)
     first = _identify_once(v, fs, "velocity", "auto", None, None, None, ("quadratic",), None)
     assert first.modes[0].start_drift["dropped"] >= 4
     found = identify(v, fs, laws=("quadratic",))

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import scipy.fft as sfft
 from scipy.integrate import solve_ivp
+from support import ode_path
 
 from fsi_lab.dsp.bands import (
     REDUCED_SAMPLES_PER_CYCLE,
@@ -1386,8 +1387,6 @@ def test_a_sine_dwell_switched_off_inside_the_record_is_no_free_decay(ratio, see
     high (interval excluding the truth, no warning). The decay now starts where the flat
     response ends: the natural frequency within 0.03 %, C_i and C_f within 1 % and 3 % of
     what the record cut at the switch-off gives."""
-    from scipy.integrate import solve_ivp
-
     fs, off = 2000.0, 1.0
     forcing = 2.0 * W * W * 1e-3 * 0.02          # m/s^2
 
@@ -1397,11 +1396,14 @@ def test_a_sine_dwell_switched_off_inside_the_record_is_no_free_decay(ratio, see
         return [v, push - 2.0 * A_TRUE * v - BETA_TRUE * abs(v) * v - W * W * x]
 
     t = np.arange(int(3.5 * fs)) / fs
-    settle = solve_ivp(motion, (-6.0, 0.0), [0.0, 0.0], rtol=1e-9, atol=1e-12, max_step=1e-3)
-    run = solve_ivp(motion, (0.0, t[-1]), settle.y[:, -1], t_eval=t, rtol=1e-10, atol=1e-13,
-                    max_step=2e-4)
-    v = run.y[1] + 0.01 * np.max(np.abs(run.y[1])) * np.random.default_rng(seed).standard_normal(
-        t.size)
+    (settled,) = ode_path(motion, [0.0, 0.0], [0.0], start=-6.0, rtol=1e-9, atol=1e-12,
+                          max_step=1e-3)
+    on = t < off                      # (the forcing stops at ``off``: integrated apart)
+    forced = ode_path(motion, settled, np.append(t[on], off), max_step=2e-4)
+    free = ode_path(motion, forced[-1], t[~on], start=off)
+    velocity = np.concatenate((forced[:-1, 1], free[:, 1]))
+    v = velocity + 0.01 * np.max(np.abs(velocity)) * np.random.default_rng(
+        seed).standard_normal(t.size)
     found = identify(v, fs)
     (mode,) = found.modes
     (free,) = identify(v[int(off * fs):], fs).modes
@@ -1418,7 +1420,6 @@ def _random_burst(seed: int, off: float = 2.0, fs: float = 2000.0) -> np.ndarray
     times its frequency, three times the damping force of a 1 mm motion, from 4 s before the
     record) switched off at ``off`` s, 4.5 s at ``fs`` Hz with 1 % noise."""
     from scipy import signal as sps
-    from scipy.integrate import solve_ivp
 
     rng = np.random.default_rng(seed)
     grid = 80.0 * WET_F
@@ -1435,10 +1436,13 @@ def _random_burst(seed: int, off: float = 2.0, fs: float = 2000.0) -> np.ndarray
         return [v, f - 2.0 * A_TRUE * v - BETA_TRUE * abs(v) * v - W * W * x]
 
     t = np.arange(int(4.5 * fs)) / fs
-    settle = solve_ivp(motion, (-4.0, 0.0), [0.0, 0.0], rtol=1e-9, atol=1e-12, max_step=1e-3)
-    run = solve_ivp(motion, (0.0, t[-1]), settle.y[:, -1], t_eval=t, rtol=1e-10, atol=1e-13,
-                    max_step=2e-4)
-    return run.y[1] + 0.01 * np.max(np.abs(run.y[1])) * rng.standard_normal(t.size)
+    (settled,) = ode_path(motion, [0.0, 0.0], [0.0], start=-4.0, rtol=1e-9, atol=1e-12,
+                          max_step=1e-3)
+    on = t < off                      # (the forcing stops at ``off``: integrated apart)
+    forced = ode_path(motion, settled, np.append(t[on], off), max_step=2e-4)
+    free = ode_path(motion, forced[-1], t[~on], start=off)
+    velocity = np.concatenate((forced[:-1, 1], free[:, 1]))
+    return velocity + 0.01 * np.max(np.abs(velocity)) * rng.standard_normal(t.size)
 
 
 @pytest.mark.parametrize("seed", [11, 14])
