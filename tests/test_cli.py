@@ -5,7 +5,7 @@ import json
 import h5py
 import numpy as np
 import pytest
-from support import cli, cli_json
+from support import cli, cli_here, cli_json, cli_json_here
 
 from fsi_lab.runfile import read_run
 
@@ -17,7 +17,7 @@ def imported_run(tmp_path):
     csv_path = tmp_path / "rec.csv"
     csv_path.write_text("tip [m/s],flat [m/s]\n" + "\n".join(f"{a},{b}" for a, b in rows))
     out = tmp_path / "rec.h5"
-    assert cli("import", str(csv_path), "--rate", "1000", "-o", str(out)).returncode == 0
+    assert cli_here("import", str(csv_path), "--rate", "1000", "-o", str(out)).returncode == 0
     return out
 
 
@@ -58,18 +58,18 @@ def test_analyze_runs_the_chain_and_isolates_failures(imported_run, example_plug
 
 
 def test_analyze_refuses_settings_outside_analysis(imported_run):
-    proc = cli("analyze", str(imported_run), "--set", "run.duration=3")
+    proc = cli_here("analyze", str(imported_run), "--set", "run.duration=3")
     assert proc.returncode == 2
     assert "only analysis, specimen parameters can be set here" in proc.stderr
 
 
 def test_show_describes_a_run(imported_run):
-    data, proc = cli_json("show", str(imported_run))
+    data, proc = cli_json_here("show", str(imported_run))
     assert proc.returncode == 0
     assert data["channels"]["tip"]["samples"] == 2000
     assert data["channels"]["tip"]["quantity"] == "velocity"
     assert data["attrs"]["kind"] == "imported"
-    text = cli("show", str(imported_run)).stdout
+    text = cli_here("show", str(imported_run)).stdout
     assert "channel tip: velocity [m/s], 2000 samples at 1000 Hz (2.000 s)" in text
 
 
@@ -217,27 +217,27 @@ def test_strict_and_the_text_summary_see_the_frf_warnings(tmp_path):
     csv_path.write_text("base [m/s^2],tip [m/s]\n"
                         + "\n".join(f"{a!r},{b!r}" for a, b in zip(base.tolist(), tip.tolist())))
     run = tmp_path / "rec.h5"
-    proc = cli("import", str(csv_path), "--rate", "500", "--reference", "base", "-o", str(run))
+    proc = cli_here("import", str(csv_path), "--rate", "500", "--reference", "base", "-o", str(run))
     assert proc.returncode == 0, proc.stderr
     chain = ("--set", "analysis.chain=frf", "--set", "analysis.frf.segment=256")
-    data, proc = cli_json("analyze", str(run), *chain)
+    data, proc = cli_json_here("analyze", str(run), *chain)
     assert proc.returncode == 0, proc.stderr
     warnings = data["channels"]["tip"]["frf"]["warnings"]
     assert warnings and not data["channels"]["tip"].get("components")
-    proc = cli("analyze", str(run), *chain, "--strict")
+    proc = cli_here("analyze", str(run), *chain, "--strict")
     assert proc.returncode == 3, proc.stderr
     strict = [line for line in proc.stderr.splitlines() if line.startswith("[strict]")]
     assert strict == [f"[strict] channel tip frf: {w}" for w in warnings]
     assert [line for line in proc.stdout.splitlines() if "warning:" in line] == [
         f"  frf warning: {w}" for w in warnings]
     # the analysis stored in the run file fails `show --strict` the same way
-    proc = cli("show", str(run), "--strict")
+    proc = cli_here("show", str(run), "--strict")
     assert proc.returncode == 3
     assert [line for line in proc.stderr.splitlines() if line.startswith("[strict]")] == strict
 
 
 def test_show_strict_passes_a_clean_analysis_and_fails_none(imported_run, example_plugin_dir):
-    proc = cli("show", str(imported_run), "--strict")
+    proc = cli_here("show", str(imported_run), "--strict")
     assert proc.returncode == 3
     assert proc.stderr.splitlines() == [
         f"[strict] no analysis stored: fsi-lab analyze {imported_run}"]
@@ -247,7 +247,7 @@ def test_show_strict_passes_a_clean_analysis_and_fails_none(imported_run, exampl
     data, proc = cli_json("show", str(imported_run), "--strict", env=env)
     assert proc.returncode == 0, proc.stderr
     assert data["analysis"]["channels"]["tip"]["rms"] > 0
-    proc = cli("show", str(imported_run.parent), "--strict")
+    proc = cli_here("show", str(imported_run.parent), "--strict")
     assert proc.returncode == 2
     assert f"--strict: {imported_run.parent} is a sequence's record; expected a run file" \
         in proc.stderr
@@ -259,12 +259,12 @@ def test_show_gives_the_excitation_s_parameters_with_their_units(sim_profile, tm
     prints the excitation with them."""
     data, proc = cli_json("run", str(sim_profile()), "--out", str(tmp_path), "--no-analysis")
     assert proc.returncode == 0, proc.stderr
-    shown, proc = cli_json("show", data["run"])
+    shown, proc = cli_json_here("show", data["run"])
     assert proc.returncode == 0, proc.stderr
     excitation = shown["excitation"]
     assert excitation["params"]["amplitude"] == 0.5
     assert excitation["param_units"]["amplitude"] == "V"
-    (line,) = [ln for ln in cli("show", data["run"]).stdout.splitlines()
+    (line,) = [ln for ln in cli_here("show", data["run"]).stdout.splitlines()
                if ln.startswith("excitation:")]
     assert f"{excitation['plugin']} (" in line and "amplitude 0.5 V" in line
 
@@ -281,19 +281,20 @@ def test_analyze_keeps_the_runs_own_overrides(sim_profile, tmp_path):
 
     assert stored_max_peaks() == 2
     assert len(data["analysis"]["channels"]["tip_velocity"]["spectrum_peaks_hz"]) <= 2
-    again, proc = cli_json("analyze", data["run"])
+    again, proc = cli_json_here("analyze", data["run"])
     assert proc.returncode == 0, proc.stderr
     assert stored_max_peaks() == 2
     assert again["channels"]["tip_velocity"]["spectrum_peaks_hz"] == \
         data["analysis"]["channels"]["tip_velocity"]["spectrum_peaks_hz"]
     # a new --set still wins over the recorded one
-    _, proc = cli_json("analyze", data["run"], "--set", "analysis.spectrum.max_peaks=5")
+    _, proc = cli_json_here("analyze", data["run"], "--set", "analysis.spectrum.max_peaks=5")
     assert proc.returncode == 0, proc.stderr
     assert stored_max_peaks() == 5
 
 
 def test_usage_and_file_system_errors_still_give_one_json_object(tmp_path):
-    data, proc = cli_json("simulate", "profiles/wet-beam-sim.toml", "-o", str(tmp_path / "x.h5"))
+    data, proc = cli_json_here("simulate", "profiles/wet-beam-sim.toml", "-o",
+                               str(tmp_path / "x.h5"))
     assert proc.returncode == 2
     assert data == {"error": "fsi-lab simulate: the following arguments are required: "
                              "--duration, --rate (see fsi-lab simulate --help)", "exit_code": 2}
@@ -302,7 +303,7 @@ def test_usage_and_file_system_errors_still_give_one_json_object(tmp_path):
     csv = tmp_path / "rec.csv"
     csv.write_text("time [s],tip [m/s]\n0,1\n0.001,2\n0.002,1\n")
     under_a_file = csv / "rec.h5"  # its folder is a file
-    data, proc = cli_json("import", str(csv), "-o", str(under_a_file))
+    data, proc = cli_json_here("import", str(csv), "-o", str(under_a_file))
     assert proc.returncode == 1 and "Traceback" not in proc.stderr
     assert data["exit_code"] == 1 and str(csv) in data["error"]
 
@@ -314,7 +315,7 @@ def test_analyze_with_a_shorter_chain_leaves_recorded_plugin_settings_aside(sim_
                           "--set", "analysis.spectrum.max_peaks=2")
     assert proc.returncode == 0, proc.stderr
     # the recorded spectrum setting must not block a chain without spectrum
-    again, proc = cli_json("analyze", data["run"], "--set", "analysis.chain=hvd")
+    again, proc = cli_json_here("analyze", data["run"], "--set", "analysis.chain=hvd")
     assert proc.returncode == 0, proc.stderr
     assert "spectrum_peaks_hz" not in again["channels"]["tip_velocity"]
     assert again["channels"]["tip_velocity"]["components"]
@@ -328,14 +329,14 @@ def test_a_run_file_without_the_channel_to_analyse_exits_2_and_says_so(sim_profi
     assert proc.returncode == 0, proc.stderr
     with h5py.File(data["run"], "r+") as f:
         del f["channels/tip_velocity"]
-    proc = cli("analyze", data["run"])
+    proc = cli_here("analyze", data["run"])
     assert proc.returncode == 2
     assert "  not analysed: channel 'tip_velocity' is not in the run; channels are " \
            in proc.stdout
     assert "None" not in proc.stdout
     assert f"{data['run']}: nothing was identified: channel tip_velocity: channel " \
            "'tip_velocity' is not in the run" in proc.stderr
-    again, proc = cli_json("analyze", data["run"])
+    again, proc = cli_json_here("analyze", data["run"])
     assert proc.returncode == 2
     assert again["channels"]["tip_velocity"]["errors"][0]["plugin"] is None
 
@@ -353,7 +354,7 @@ def test_a_run_whose_record_identifies_nothing_exits_2_as_analyze_does(tmp_path)
     assert f"fsi-lab: error: {path}: nothing was identified: channel tip_velocity: hvd " \
            in proc.stderr
     assert read_run(path).attrs["exit_status"] == "completed"
-    again = cli("analyze", str(path), timeout=300)
+    again = cli_here("analyze", str(path))
     assert again.returncode == 2
     # The refusal is said once; the analyses that needed hvd's result are named after it
     # (they repeated it, one line each and one log line each on stderr).
@@ -375,10 +376,10 @@ def test_a_noise_free_simulation_is_not_said_to_hold_coloured_noise(tmp_path):
     warned "the noise in this mode's band is 754943998.9 times the record's white noise".
     That residue is no noise: no such warning, and the paper's C_i and C_f."""
     path = tmp_path / "sim.h5"
-    made = cli("simulate", "profiles/wet-beam-sim.toml", "--duration", "10", "--rate", "10000",
-               "-o", str(path), timeout=300)
+    made = cli_here("simulate", "profiles/wet-beam-sim.toml", "--duration", "10", "--rate",
+                    "10000", "-o", str(path))
     assert made.returncode == 0, made.stderr
-    data, proc = cli_json("analyze", str(path), timeout=300)
+    data, proc = cli_json_here("analyze", str(path))
     assert proc.returncode == 0, proc.stderr
     comps = data["channels"]["tip_velocity"]["components"]
     assert comps and not any("times the record's white noise" in w

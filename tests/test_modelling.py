@@ -6,7 +6,7 @@ import time
 
 import numpy as np
 import pytest
-from support import PROFILES, cli, cli_json, start_cli
+from support import PROFILES, cli_here, cli_json_here, start_cli
 
 from fsi_lab.runfile import read_run
 
@@ -15,11 +15,11 @@ PAPER_DRY_HZ = [11.5328, 72.2747, 202.3712, 396.5668]
 
 
 def test_model_json_reproduces_the_paper():
-    data, proc = cli_json("model", str(WET), "--set", "specimen.fluid=air")
+    data, proc = cli_json_here("model", str(WET), "--set", "specimen.fluid=air")
     assert proc.returncode == 0, proc.stderr
     assert data["fluid"] == "air"
     np.testing.assert_allclose(data["natural_frequencies_hz"], PAPER_DRY_HZ, rtol=5e-4)
-    wet, _ = cli_json("model", str(WET), "--modes", "2")
+    wet, _ = cli_json_here("model", str(WET), "--modes", "2")
     assert wet["added_mass_ratio"] == pytest.approx(17.33, abs=0.01)
     assert wet["c_f_theory"] == pytest.approx(11.4, abs=0.05)
     assert len(wet["natural_frequencies_hz"]) == 2
@@ -28,15 +28,15 @@ def test_model_json_reproduces_the_paper():
     assert wet["total_mass_per_length"] == pytest.approx(0.1346, abs=1e-4)
     assert wet["total_mass_per_length"] == pytest.approx(
         wet["mass_per_length"] * (1.0 + wet["added_mass_ratio"]), rel=1e-9)
-    text = cli("model", str(WET))
+    text = cli_here("model", str(WET))
     assert "mu + M = 0.1346 kg/m (beam 0.007344, added fluid mass 0.1273): the " \
         "--mass-per-length of this beam's records" in text.stdout, text.stdout
 
 
 def test_simulate_writes_a_run_like_a_measured_one(tmp_path):
     out = tmp_path / "sim.h5"
-    data, proc = cli_json("simulate", str(WET), "--duration", "3", "--rate", "5000", "-o",
-                          str(out))
+    data, proc = cli_json_here("simulate", str(WET), "--duration", "3", "--rate", "5000", "-o",
+                               str(out))
     assert proc.returncode == 0, proc.stderr
     assert data == {"run": str(out), "exit_status": "completed"}
     run = read_run(out)
@@ -84,8 +84,8 @@ def test_bad_model_input_is_refused_before_integration(tmp_path, args, fragment)
     for flag in ("--duration", "--rate"):
         if flag in args:
             base.pop(flag)
-    proc = cli("simulate", str(WET), *[x for kv in base.items() for x in kv], *args,
-               "-o", str(out))
+    proc = cli_here("simulate", str(WET), *[x for kv in base.items() for x in kv], *args,
+                    "-o", str(out))
     assert proc.returncode == 2, proc.stderr
     assert fragment in proc.stderr
     assert not out.exists()
@@ -93,13 +93,14 @@ def test_bad_model_input_is_refused_before_integration(tmp_path, args, fragment)
 
 def test_simulate_records_its_overrides_and_analyze_uses_them(tmp_path):
     out = tmp_path / "sim.h5"
-    _, proc = cli_json("simulate", str(WET), "--duration", "4", "--rate", "5000", "-o", str(out),
-                       "--set", "analysis.hvd.components=1", "--set", "model.c_f=20")
+    _, proc = cli_json_here("simulate", str(WET), "--duration", "4", "--rate", "5000", "-o",
+                            str(out), "--set", "analysis.hvd.components=1", "--set",
+                            "model.c_f=20")
     assert proc.returncode == 0, proc.stderr
     attrs = read_run(out, load_data=False).attrs
     assert attrs["overrides"] == ["analysis.hvd.components=1", "model.c_f=20"]
     assert attrs["stop_time"] > attrs["start_time"] and attrs["error"] == ""
-    data, proc = cli_json("analyze", str(out))
+    data, proc = cli_json_here("analyze", str(out))
     assert proc.returncode == 0, proc.stderr
     # the wet profile asks for 2 HVD components; the simulation's override said 1
     assert [c["index"] for c in data["channels"]["tip_velocity"]["components"]] == [0]

@@ -1,7 +1,7 @@
 """Profiles: every kind of bad profile is refused with one clear message and exit code 2."""
 
 import pytest
-from support import PROFILES, cli, cli_here, cli_json
+from support import PROFILES, cli, cli_here, cli_json_here
 
 from fsi_lab.errors import ProfileError
 from fsi_lab.profile import load_profile, parse_profile
@@ -80,13 +80,13 @@ def test_bad_profile_is_refused_and_nothing_is_written(tmp_path, case, old, new,
 
 def test_json_error_is_one_object(tmp_path):
     path = _variant(tmp_path, "duration = 10.0", "duration = -1.0")
-    data, proc = cli_json("profile", "check", str(path))
+    data, proc = cli_json_here("profile", "check", str(path))
     assert proc.returncode == 2
     assert data["exit_code"] == 2 and "run.duration" in data["error"]
 
 
 def test_missing_file_is_named(tmp_path):
-    proc = cli("profile", "check", str(tmp_path / "nope.toml"))
+    proc = cli_here("profile", "check", str(tmp_path / "nope.toml"))
     assert proc.returncode == 2
     assert "nope.toml: no such file; expected a profile (TOML text)" in proc.stderr
 
@@ -173,7 +173,7 @@ def test_safety_limits_refuse_before_anything_is_written(tmp_path):
 
 
 def test_profile_check_reports_the_safety_verdict():
-    data, proc = cli_json("profile", "check", str(GOOD))
+    data, proc = cli_json_here("profile", "check", str(GOOD))
     assert proc.returncode == 0
     safety = data["safety"]
     assert safety["ok"] is True

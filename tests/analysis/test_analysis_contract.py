@@ -91,7 +91,7 @@ def test_a_chain_that_misses_what_an_analysis_needs_is_refused_naming_it(chain, 
 
 
 def test_the_profile_check_refuses_such_a_chain(registry):
-    from support import cli
+    from support import cli_here
 
     from fsi_lab.profile import load_profile
 
@@ -103,7 +103,8 @@ def test_the_profile_check_refuses_such_a_chain(registry):
                "the chain provides; add hvd before modal-model")
     with pytest.raises(ProfileError, match=re.escape(message)):
         load_profile(profile, registry, ["analysis.chain=spectrum,modal-model"])
-    proc = cli("profile", "check", str(profile), "--set", "analysis.chain=spectrum,modal-model")
+    proc = cli_here("profile", "check", str(profile), "--set",
+                    "analysis.chain=spectrum,modal-model")
     assert proc.returncode == 2 and message in proc.stderr, proc.stderr
 
 

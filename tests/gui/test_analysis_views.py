@@ -505,15 +505,15 @@ def test_analyses_that_failed_for_want_of_hvd_are_named_once_after_it(qtbot, mak
     """White noise holds no free decay: hvd is refused, and every analysis after it fails
     for want of its result. The state line gave each one's message in full, hvd's refusal
     repeated inside each; it names them together after hvd's, as fsi-lab analyze does."""
-    from support import cli
+    from support import cli_here
 
     rng = np.random.default_rng(3)
     csv_path = tmp_path / "noise.csv"
     csv_path.write_text("tip_velocity [m/s]\n" + "\n".join(
         f"{v:.6e}" for v in 1e-3 * rng.standard_normal(4000)) + "\n")
     run = tmp_path / "noise.h5"
-    assert cli("import", str(csv_path), "--rate", "2000", "-o", str(run)).returncode == 0
-    assert cli("analyze", str(run), "--mass-per-length", "0.1346").returncode == 2
+    assert cli_here("import", str(csv_path), "--rate", "2000", "-o", str(run)).returncode == 0
+    assert cli_here("analyze", str(run), "--mass-per-length", "0.1346").returncode == 2
     text = _open(qtbot, make_window(registry), run).state.text()
     failures = text.removeprefix("failed: ").split("; ")
     assert text.startswith("failed: hvd on tip_velocity: ")
