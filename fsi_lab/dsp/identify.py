@@ -3224,6 +3224,13 @@ def _warnings(m: ModeIdentification) -> list[str]:
         out.extend(_precision_warnings(quad, ""))
     if cmp.preferred != "quadratic":       # (its numbers are the ones the record supports)
         out.extend(_precision_warnings(cmp.fits[cmp.preferred], "the preferred law's "))
+    for law in dict.fromkeys(("quadratic", cmp.preferred)):
+        if law in cmp.fits and not cmp.fits[law].converged:
+            out.append(f"the least-squares fit of the {law} law (laws.{law} in the JSON) "
+                       "stopped at its limit of evaluations with its coefficients still "
+                       "moving: its numbers are not the law's best fit, nor are their "
+                       "intervals or the choice of law to be trusted (the extrema may hold "
+                       "too little of a term the law has, or follow no law well)")
     coloured = m.start_drift.get("band_noise", 0.0)
     scatter = m.start_drift.get("extrema_scatter", 0.0)
     if coloured > TAIL_EXCESS:

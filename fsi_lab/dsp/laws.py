@@ -695,6 +695,10 @@ class LawFit:
         their change when the decays' whitened extremum errors (each decay's errors put
         through its :class:`Whitener`, concatenated; U) change by ``e``. Shape
         ``(len(params), count)``; None when not computed.
+    converged
+        False when the least-squares search stopped at its limit of evaluations with the
+        parameters still moving: ``params`` are then not the best fit, nor ``cov`` its
+        covariance.
     """
 
     law: str
@@ -711,6 +715,7 @@ class LawFit:
     quantity: str = "velocity"
     names: tuple[str, ...] = field(default=())
     influence: np.ndarray | None = field(default=None, repr=False)
+    converged: bool = True
 
     @property
     def se(self) -> np.ndarray:
@@ -860,7 +865,8 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
             correlation: Callable[[np.ndarray], np.ndarray] | None = None,
             scales: Sequence[np.ndarray] | None = None,
             start: Sequence[float] | None = None,
-            whiteners: Sequence[Whitener | None] | None = None) -> LawFit:
+            whiteners: Sequence[Whitener | None] | None = None,
+            max_evaluations: int | None = None) -> LawFit:
     """Fit a damping law to the extrema of one or more free decays of a mode.
 
     Parameters
@@ -892,6 +898,10 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     whiteners
         Per decay, a :class:`Whitener` already built from ``times``, ``signs``,
         ``correlation`` and ``scales`` (several laws fitted to the same extrema share them).
+    max_evaluations
+        Most evaluations of the model the least-squares search may make (default: 200 per
+        parameter, law and start amplitudes together); a search stopped there returns a fit
+        whose :attr:`LawFit.converged` is False.
 
     Returns
     -------
@@ -901,7 +911,7 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     ------
     AnalysisError
         Unknown law, a decay with fewer than 3 extrema or non-positive or non-finite
-        amplitudes, no more extrema than parameters.
+        amplitudes, no more extrema than parameters, a ``max_evaluations`` below 1.
     """
     func = "fit_law"
     if law not in LAWS:
@@ -912,6 +922,10 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
                          f"{[int(np.size(d)) for d in decays]}")
     if any(not np.all(np.isfinite(d)) or np.any(d <= 0) for d in decays):
         raise fail(func, "extremum amplitudes must be finite and > 0")
+    if max_evaluations is not None and not (isinstance(max_evaluations, int)
+                                            and max_evaluations >= 1):
+        raise fail(func, f"max_evaluations = {max_evaluations!r}; expected a whole number >= 1 "
+                         "or None (200 per parameter)")
     p = len(LAWS[law])
     k = len(decays)
     n = sum(d.size for d in decays)
@@ -1008,7 +1022,7 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     upper = np.concatenate((np.full(p, np.inf), log_starts + 3.0))
     res = sopt.least_squares(residuals, x0, jac=jacobian, x_scale="jac", method="trf",
                              bounds=(lower, upper), xtol=1e-12, ftol=1e-12, gtol=1e-12,
-                             max_nfev=200 * (p + k))
+                             max_nfev=max_evaluations or 200 * (p + k))
     jac = res.jac * scale
     rss = float(res.fun @ res.fun) * scale * scale
     dof = n - p - k
@@ -1047,7 +1061,7 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
                   starts=np.exp(res.x[p:]), dof=dof, rss=rss, aicc=float(aicc),
                   residuals=[d - m for d, m in zip(decays, fitted)], model=fitted,
                   w0=float(w0), alpha=float(alpha), quantity=quantity, names=LAWS[law],
-                  influence=influence)
+                  influence=influence, converged=bool(res.status > 0))
 
 
 @dataclass(frozen=True)

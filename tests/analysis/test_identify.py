@@ -1290,6 +1290,39 @@ def test_a_frequency_that_disagrees_with_its_spectral_peak_is_warned():
     assert any("disagrees with the spectral peak" in w for w in _warnings(moved))
 
 
+def test_a_law_fit_stopped_at_its_limit_of_evaluations_says_so_and_is_warned():
+    """A least-squares search stopped at its limit of evaluations, its coefficients still
+    moving, returns a fit marked as not converged; the same extrema fitted with the default
+    limit converge on the law's truth (within 2 %). A component whose linear + quadratic fit
+    did not converge is warned, naming the law; the same component as identified is not."""
+    import dataclasses
+
+    from fsi_lab.dsp.identify import _warnings
+
+    w0 = 2.0 * math.pi * 17.0
+    amplitude, _ = extremum_sequence("quadratic", [1.0, 20.0], w0, 0.05, 40)
+    rng = np.random.default_rng(4)
+    noisy = amplitude * (1.0 + 0.001 * rng.standard_normal(amplitude.size))
+    stopped = fit_law("quadratic", [noisy], w0, start=[10.0, 1.0], max_evaluations=2)
+    full = fit_law("quadratic", [noisy], w0, start=[10.0, 1.0])
+    assert not stopped.converged and full.converged
+    assert abs(stopped.value("a") / 1.0 - 1.0) > 0.5
+    assert full.value("a") == pytest.approx(1.0, rel=0.02)
+    assert full.value("beta") == pytest.approx(20.0, rel=0.02)
+    with pytest.raises(AnalysisError, match="max_evaluations = 0; expected a whole number"):
+        fit_law("quadratic", [noisy], w0, max_evaluations=0)
+
+    case = release(noise=0.01)
+    mode = identify(trial(case, 3), case.fs).modes[0]
+    said = "the least-squares fit of the quadratic law (laws.quadratic in the JSON) stopped"
+    assert mode.laws.fits["quadratic"].converged
+    assert not any(w.startswith(said) for w in _warnings(mode))
+    fits = {**mode.laws.fits, "quadratic": dataclasses.replace(mode.laws.fits["quadratic"],
+                                                               converged=False)}
+    stuck = dataclasses.replace(mode, laws=dataclasses.replace(mode.laws, fits=fits))
+    assert sum(w.startswith(said) for w in _warnings(stuck)) == 1
+
+
 @pytest.mark.parametrize("pretrigger", [0.1, 1.5, 3.0])
 def test_the_noise_is_measured_where_the_record_is_quiet(pretrigger):
     """The record's white noise is measured in blocks along it, from the quietest: with one
