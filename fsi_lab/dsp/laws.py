@@ -922,7 +922,8 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
                          f"{[int(np.size(d)) for d in decays]}")
     if any(not np.all(np.isfinite(d)) or np.any(d <= 0) for d in decays):
         raise fail(func, "extremum amplitudes must be finite and > 0")
-    if max_evaluations is not None and not (isinstance(max_evaluations, int)
+    if max_evaluations is not None and not (isinstance(max_evaluations, (int, np.integer))
+                                            and not isinstance(max_evaluations, bool)
                                             and max_evaluations >= 1):
         raise fail(func, f"max_evaluations = {max_evaluations!r}; expected a whole number >= 1 "
                          "or None (200 per parameter)")
@@ -1022,7 +1023,7 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     upper = np.concatenate((np.full(p, np.inf), log_starts + 3.0))
     res = sopt.least_squares(residuals, x0, jac=jacobian, x_scale="jac", method="trf",
                              bounds=(lower, upper), xtol=1e-12, ftol=1e-12, gtol=1e-12,
-                             max_nfev=max_evaluations or 200 * (p + k))
+                             max_nfev=int(max_evaluations or 200 * (p + k)))
     jac = res.jac * scale
     rss = float(res.fun @ res.fun) * scale * scale
     dof = n - p - k
