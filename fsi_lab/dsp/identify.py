@@ -123,6 +123,7 @@ from fsi_lab.dsp.joint_fit import DecayStart, JointFit, JointMode, fit_decays_jo
 from fsi_lab.dsp.laws import (
     AICC_TIE,
     LAWS,
+    RESOLUTION,
     LawComparison,
     LawFit,
     Whitener,
@@ -1797,9 +1798,9 @@ def _noise_before(modes: list[_Mode], record: np.ndarray, fs: float, bands: Mode
 
 def _band_noise_ratio(mode: _Mode, fs: float) -> float | None:
     """A mode's band noise (RMS, measured before the excitation and after its decays) over
-    the white noise's share in its band, or None with fewer than :data:`TAIL_PERIODS`
-    periods to measure it on or a band noise below :data:`PRECISION` of the mode's largest
-    extremum."""
+    the white noise's share in its band (at least :data:`PRECISION` of the mode's largest
+    extremum), or None with fewer than :data:`TAIL_PERIODS` periods to measure it on or a band
+    noise below that share."""
     if mode.noise_samples * mode.frequency < TAIL_PERIODS * fs:
         return None
     band = math.sqrt(mode.noise_power / mode.noise_samples)
@@ -1808,7 +1809,8 @@ def _band_noise_ratio(mode: _Mode, fs: float) -> float | None:
                   default=0.0)
     if band < PRECISION * largest:
         return None
-    return band / max(mode.noise, 1e-300)
+    # (nor is a white noise below it measured: the ratio is to what could be)
+    return band / max(mode.noise, PRECISION * largest)
 
 
 def _follows_base(mode: _Mode, base_envelope: np.ndarray, fs: float, follow: str
@@ -3117,6 +3119,11 @@ def _residual_correlation(mode: _Mode, comparison: LawComparison) -> float:
              for whitener, resid in zip(_whiteners(mode), best.residuals)]
     r = np.concatenate(parts) if parts else np.empty(0)
     if r.size < 8 or not np.all(np.isfinite(r)):
+        return math.nan
+    # Residuals within the resolution extrema are measured to (a record without noise) are
+    # the integration's residue, whose correlation says nothing of the law.
+    largest = max((float(np.max(m)) for m in best.model if m.size), default=0.0)
+    if best.rss <= r.size * (RESOLUTION * largest) ** 2:
         return math.nan
     r = r - r.mean()
     return float(r[1:] @ r[:-1]) / max(float(r @ r), 1e-300)

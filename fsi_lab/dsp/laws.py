@@ -73,7 +73,8 @@ QUANTITIES = ("displacement", "velocity")
 STEPS_PER_HALF_CYCLE = 24
 #: Widest band (in extrema) of the whitened errors' correlation.
 MAX_BAND = 200
-#: Relative resolution of a measured extremum (the information criteria see no finer misfit).
+#: Relative resolution of a measured extremum: the information criteria see no finer misfit,
+#: and the covariance of a fit takes no smaller error.
 RESOLUTION = 1e-6
 #: Above this many elements (extrema x parameters), a fit's Jacobian is reduced decay by decay
 #: (:func:`_reduced`) rather than held whole.
@@ -675,7 +676,8 @@ class LawFit:
     params
         Fitted law parameters, in the order of :data:`LAWS`.
     cov
-        Covariance of ``params``.
+        Covariance of ``params`` (from the residuals' variance, at least that of an error of
+        :data:`RESOLUTION` of the largest extremum).
     starts
         Fitted first extremum of each decay (U or U/s).
     dof
@@ -1027,7 +1029,11 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     jac = res.jac * scale
     rss = float(res.fun @ res.fun) * scale * scale
     dof = n - p - k
-    s2 = rss / dof
+    # Extrema are not measured better than RESOLUTION of the largest: a record without noise
+    # leaves residuals of its integration's residue, a few 1e-9, whose variance would give
+    # intervals that narrow and exclude the truth (and make any other check's differences
+    # many of those standard errors). The error variance is at least that resolution's.
+    s2 = max(rss, n * (RESOLUTION * scale) ** 2) / dof
     try:
         normal_inv = np.linalg.inv(jac.T @ jac)
     except np.linalg.LinAlgError:
@@ -1036,10 +1042,9 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     # A model driven where its extrema explode (a negative damping that makes the decay grow)
     # has derivatives so large that the covariance underflows to zero: nothing is pinned down,
     # and a zero-width interval would pass for certainty. Its coefficients are undetermined.
-    # (An exact fit, with no residual at all, keeps its zero covariance.)
     unscaled, variances = np.diag(normal_inv)[:p], np.diag(cov_all)[:p]
     if not (np.all(np.isfinite(unscaled)) and np.all(unscaled > 0.0)
-            and (s2 == 0.0 or np.all(variances > 0.0))):
+            and np.all(variances > 0.0)):
         cov_all = np.diag(np.full(p + k, math.inf))
     # Gauss-Newton: the whitened residuals move by e / scale when the whitened errors move
     # by e, the parameters by -(J^T J)^-1 J^T (e / scale) with J = res.jac = jac / scale.
