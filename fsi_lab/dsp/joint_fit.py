@@ -323,8 +323,9 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
             jac[offsets[s]:offsets[s + 1], lines + 2 * s + 1] = t
         return jac
 
-    # A fit driven where the model decays explode overflows inside the solver; it is then
-    # reported as not converged or with a non-finite covariance, which the caller refuses.
+    # A fit driven where the model decays explode overflows inside the solver and in its
+    # covariance; it is then reported as not converged or with a non-finite covariance, which
+    # the caller refuses.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         try:
             sol = sopt.least_squares(residuals, theta0, jac=jacobian, x_scale=typical,
@@ -334,11 +335,12 @@ def fit_decays_jointly(x: np.ndarray, fs: float, spans: Sequence[tuple[int, int]
             theta = best["theta"]
             resid, converged = model(theta) - data, False
         jac = jacobian(theta)
-    white, hac = _covariances(jac, resid, [(b - a) // average for a, b in spans])
-    var_white = np.diag(white)
-    factor = np.sqrt(np.maximum(np.divide(np.diag(hac), var_white, out=np.ones_like(var_white),
-                                          where=var_white > 0.0), 1.0))
-    cov = white * np.outer(factor, factor)
+        white, hac = _covariances(jac, resid, [(b - a) // average for a, b in spans])
+        var_white = np.diag(white)
+        factor = np.sqrt(np.maximum(np.divide(np.diag(hac), var_white,
+                                              out=np.ones_like(var_white),
+                                              where=var_white > 0.0), 1.0))
+        cov = white * np.outer(factor, factor)
     params, w0, alpha, covs, widen, starts, start_times = [], [], [], [], [], [], []
     for k, m in enumerate(modes):
         sl = slice(first[k], first[k + 1])
