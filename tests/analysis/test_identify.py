@@ -1432,6 +1432,18 @@ def test_ratios_and_widenings_beyond_a_thousand_are_not_given_digits():
     assert _fold(999.96) == "more than 1000-fold" and _times(999.96) == "more than 1000 times"
 
 
+def _forced_then_free(motion, t: np.ndarray, off: float, settle: float) -> np.ndarray:
+    """Velocity (m/s) at the times ``t`` (s) of ``motion`` (``y' = motion(t, y)``, forced
+    before ``off`` s and free after), from rest ``settle`` s before the record; the forcing's
+    end is integrated apart (LSODA, steps of 0.2 ms or less while it is forced)."""
+    (settled,) = ode_path(motion, [0.0, 0.0], [0.0], start=-settle, rtol=1e-9, atol=1e-12,
+                          max_step=1e-3)
+    on = t < off
+    forced = ode_path(motion, settled, np.append(t[on], off), max_step=2e-4)
+    free = ode_path(motion, forced[-1], t[~on], start=off)
+    return np.concatenate((forced[:-1, 1], free[:, 1]))
+
+
 @pytest.mark.parametrize("ratio, seed", [(0.98, 0), (0.985, 1), (1.02, 2)])
 def test_a_sine_dwell_switched_off_inside_the_record_is_no_free_decay(ratio, seed):
     """A second of forcing 2 % off the mode's frequency (a sine dwell's steady response), then
@@ -1449,12 +1461,7 @@ def test_a_sine_dwell_switched_off_inside_the_record_is_no_free_decay(ratio, see
         return [v, push - 2.0 * A_TRUE * v - BETA_TRUE * abs(v) * v - W * W * x]
 
     t = np.arange(int(3.5 * fs)) / fs
-    (settled,) = ode_path(motion, [0.0, 0.0], [0.0], start=-6.0, rtol=1e-9, atol=1e-12,
-                          max_step=1e-3)
-    on = t < off                      # (the forcing stops at ``off``: integrated apart)
-    forced = ode_path(motion, settled, np.append(t[on], off), max_step=2e-4)
-    free = ode_path(motion, forced[-1], t[~on], start=off)
-    velocity = np.concatenate((forced[:-1, 1], free[:, 1]))
+    velocity = _forced_then_free(motion, t, off, 6.0)
     v = velocity + 0.01 * np.max(np.abs(velocity)) * np.random.default_rng(
         seed).standard_normal(t.size)
     found = identify(v, fs)
@@ -1489,12 +1496,7 @@ def _random_burst(seed: int, off: float = 2.0, fs: float = 2000.0) -> np.ndarray
         return [v, f - 2.0 * A_TRUE * v - BETA_TRUE * abs(v) * v - W * W * x]
 
     t = np.arange(int(4.5 * fs)) / fs
-    (settled,) = ode_path(motion, [0.0, 0.0], [0.0], start=-4.0, rtol=1e-9, atol=1e-12,
-                          max_step=1e-3)
-    on = t < off                      # (the forcing stops at ``off``: integrated apart)
-    forced = ode_path(motion, settled, np.append(t[on], off), max_step=2e-4)
-    free = ode_path(motion, forced[-1], t[~on], start=off)
-    velocity = np.concatenate((forced[:-1, 1], free[:, 1]))
+    velocity = _forced_then_free(motion, t, off, 4.0)
     return velocity + 0.01 * np.max(np.abs(velocity)) * rng.standard_normal(t.size)
 
 
