@@ -1029,11 +1029,13 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     jac = res.jac * scale
     rss = float(res.fun @ res.fun) * scale * scale
     dof = n - p - k
-    # Extrema are not measured better than RESOLUTION of the largest: a record without noise
-    # leaves residuals of its integration's residue, a few 1e-9, whose variance would give
-    # intervals that narrow and exclude the truth (and make any other check's differences
-    # many of those standard errors). The error variance is at least that resolution's.
-    s2 = max(rss, n * (RESOLUTION * scale) ** 2) / dof
+    # Extrema are not measured better than RESOLUTION of the largest: below that, a better fit
+    # is rounding, not evidence for a law (the AICc below), and a record without noise leaves
+    # residuals of its integration's residue, a few 1e-9, whose variance would give intervals
+    # that narrow and exclude the truth (and make any other check's differences many of those
+    # standard errors). The error variance is at least that resolution's.
+    rss_eff = max(rss, n * (RESOLUTION * scale) ** 2)
+    s2 = rss_eff / dof
     try:
         normal_inv = np.linalg.inv(jac.T @ jac)
     except np.linalg.LinAlgError:
@@ -1058,9 +1060,6 @@ def fit_law(law: str, decays: Sequence[np.ndarray], w0: float, *, alpha: float =
     else:
         influence = -(normal_inv @ res.jac.T)[:p] * scale
     kk = p + k + 1
-    # Extrema are not measured better than RESOLUTION of the largest: below that, a better fit
-    # is rounding, not evidence for a law.
-    rss_eff = max(rss, n * (RESOLUTION * scale) ** 2)
     aicc = n * math.log(rss_eff / n) + 2 * kk + 2 * kk * (kk + 1) / max(n - kk - 1, 1)
     fitted = model(res.x)
     return LawFit(law=law, params=res.x[:p].copy(), cov=cov_all[:p, :p].copy(),
